@@ -1,0 +1,72 @@
+"""Exceptions and warnings raised by clothsim.
+
+Every error about bad input is a :class:`InputError` whose message is one line that names
+the field (or index) and says what is wrong, so the command line can print it as is.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+
+class ClothsimError(Exception):
+    """Base class of clothsim's errors."""
+
+
+class InputError(ClothsimError, ValueError):
+    """Bad input: the message names the field and what is wrong with it."""
+
+
+class FactorizationError(ClothsimError):
+    """The system matrix could not be factored (for example, it is not positive definite)."""
+
+
+class ClothsimWarning(UserWarning):
+    """Base class of clothsim's warnings (the test suite turns them into errors)."""
+
+
+class ConvergenceWarning(ClothsimWarning):
+    """An iterative solve hit its iteration limit above the requested tolerance."""
+
+
+class ConditioningWarning(ClothsimWarning):
+    """The system matrix is badly conditioned; results may have lost digits."""
+
+
+class BackendWarning(ClothsimWarning):
+    """A requested backend is unavailable and a fallback is used."""
+
+
+class MeshWarning(ClothsimWarning):
+    """A mesh is usable but suspicious (unreferenced or duplicate vertices, several parts)."""
+
+
+def check_finite(name: str, value) -> np.ndarray:
+    """Return ``value`` as a float64 array; raise :class:`InputError` naming the first bad index.
+
+    Parameters
+    ----------
+    name : str
+        Field name used in the message, e.g. ``"vertex_mass"``.
+    value : array_like
+        Numbers to check.
+    """
+    arr = np.asarray(value, dtype=np.float64)
+    bad = ~np.isfinite(arr)
+    if bad.any():
+        index = np.unravel_index(int(np.flatnonzero(bad)[0]), arr.shape)
+        where = f"{name}[{', '.join(str(int(i)) for i in index)}]" if arr.ndim else name
+        raise InputError(f"{where}: must be a finite number, got {arr[index]!r}")
+    return arr
+
+
+def check_positive(name: str, value, *, allow_zero: bool = False) -> np.ndarray:
+    """Like :func:`check_finite`, and also require every entry > 0 (>= 0 with ``allow_zero``)."""
+    arr = check_finite(name, value)
+    bad = arr < 0 if allow_zero else arr <= 0
+    if bad.any():
+        index = np.unravel_index(int(np.flatnonzero(bad)[0]), arr.shape)
+        where = f"{name}[{', '.join(str(int(i)) for i in index)}]" if arr.ndim else name
+        rel = "non-negative" if allow_zero else "positive"
+        raise InputError(f"{where}: must be {rel}, got {float(arr[index])!r}")
+    return arr

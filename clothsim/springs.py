@@ -1,0 +1,221 @@
+"""Springs: which vertices they join, how stiff they are, and their rest lengths.
+
+Second stage of the pipeline. Two builders:
+
+grid_springs
+    The seed report's three families on a :func:`clothsim.mesh.grid`:
+    structural (i,j)–(i,j+1), (i,j)–(i+1,j); shear (i,j)–(i+1,j+1), (i+1,j)–(i,j+1);
+    bending (i,j)–(i,j+2), (i,j)–(i+2,j).
+mesh_springs
+    Any triangle mesh: structural springs on every edge (and strand), bending springs
+    joining the two vertices opposite each interior edge.
+
+A family whose stiffness is None is not built. Rest lengths come from the initial shape.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from .errors import InputError, check_finite, check_positive
+from .mesh import Mesh
+
+FAMILIES = ("structural", "shear", "bending")
+BENDING_PATTERNS = ("every", "alternate")
+
+
+@dataclass(frozen=True, eq=False)
+class Springs:
+    """A set of s springs.
+
+    Attributes
+    ----------
+    spring_vertices : ndarray, shape (s, 2), int64
+        End vertices (a_i, b_i) of each spring; the paper's incidence vector A_i has +1 at
+        a_i and −1 at b_i.
+    spring_stiffness : ndarray, shape (s,), float64
+        k_i [N/m], >= 0.
+    spring_rest_length : ndarray, shape (s,), float64
+        r_i [m], >= 0.
+    spring_family : ndarray, shape (s,), int8
+        Index into :data:`FAMILIES`.
+    """
+
+    spring_vertices: np.ndarray
+    spring_stiffness: np.ndarray
+    spring_rest_length: np.ndarray
+    spring_family: np.ndarray
+
+    def __post_init__(self):
+        idx = np.asarray(self.spring_vertices, dtype=np.int64).reshape(-1, 2)
+        s = len(idx)
+        k = check_positive("spring_stiffness", self.spring_stiffness, allow_zero=True)
+        r = check_positive("spring_rest_length", self.spring_rest_length, allow_zero=True)
+        fam = np.asarray(self.spring_family, dtype=np.int8)
+        k = np.broadcast_to(k, (s,)).copy()
+        r = np.broadcast_to(r, (s,)).copy()
+        fam = np.broadcast_to(fam, (s,)).copy()
+        self_loops = np.flatnonzero(idx[:, 0] == idx[:, 1])
+        if len(self_loops):
+            raise InputError(f"spring_vertices[{self_loops[0]}]: a spring joins vertex "
+                             f"{idx[self_loops[0], 0]} to itself")
+        for name, a in (("spring_vertices", idx), ("spring_stiffness", k),
+                        ("spring_rest_length", r), ("spring_family", fam)):
+            a.flags.writeable = False
+            object.__setattr__(self, name, a)
+
+    @property
+    def spring_count(self) -> int:
+        return len(self.spring_vertices)
+
+    def family_count(self, family: str) -> int:
+        """Number of springs of ``family`` (one of :data:`FAMILIES`)."""
+        return int(np.count_nonzero(self.spring_family == FAMILIES.index(family)))
+
+    def with_stiffness(self, stiffness) -> "Springs":
+        """A copy with new stiffnesses (scalar or per spring)."""
+        return Springs(self.spring_vertices, stiffness, self.spring_rest_length,
+                       self.spring_family)
+
+    @staticmethod
+    def concatenate(parts: list["Springs"]) -> "Springs":
+        """Join several spring sets into one."""
+        if not parts:
+            return Springs(np.zeros((0, 2), np.int64), np.zeros(0), np.zeros(0),
+                           np.zeros(0, np.int8))
+        return Springs(
+            np.concatenate([p.spring_vertices for p in parts]),
+            np.concatenate([p.spring_stiffness for p in parts]),
+            np.concatenate([p.spring_rest_length for p in parts]),
+            np.concatenate([p.spring_family for p in parts]),
+        )
+
+
+def _check_stiffness(family: str, k) -> float | None:
+    if k is None:
+        return None
+    return float(check_positive(f"springs.{family}", k, allow_zero=True))
+
+
+def _family(vertices: np.ndarray, pairs: np.ndarray, k: float, family: str) -> Springs:
+    pairs = pairs.reshape(-1, 2).astype(np.int64)
+    rest = np.linalg.norm(vertices[pairs[:, 0]] - vertices[pairs[:, 1]], axis=1)
+    return Springs(pairs, np.full(len(pairs), k), rest,
+                   np.full(len(pairs), FAMILIES.index(family), np.int8))
+
+
+def grid_pairs(nx: int, ny: int, family: str, bending_pattern: str = "every") -> np.ndarray:
+    """Vertex pairs of one spring family on an nx × ny grid (vertex (i, j) = i * nx + j).
+
+    Parameters
+    ----------
+    family : {"structural", "shear", "bending"}
+    bending_pattern : {"every", "alternate"}
+        ``"every"``: a bending spring starts at every vertex. ``"alternate"``: only at every
+        other vertex along the spring's direction (columns/rows 0, 2, 4, …), as the C++
+        ports do; for an odd n × n grid this gives the seed's count s = (n − 1)(5n − 2).
+
+    Returns
+    -------
+    ndarray, shape (k, 2), int64
+    """
+    if bending_pattern not in BENDING_PATTERNS:
+        raise InputError(f"springs.bending_pattern: must be one of "
+                         f"{', '.join(map(repr, BENDING_PATTERNS))}, got {bending_pattern!r}")
+    ii, jj = np.meshgrid(np.arange(ny), np.arange(nx), indexing="ij")
+    idx = ii * nx + jj
+
+    def pairs(di: int, dj: int, step_i: int = 1, step_j: int = 1) -> np.ndarray:
+        i0 = max(0, -di)
+        i1 = ny - max(0, di)
+        j0 = max(0, -dj)
+        j1 = nx - max(0, dj)
+        a = idx[i0:i1:step_i, j0:j1:step_j]
+        b = idx[i0 + di:i1 + di:step_i, j0 + dj:j1 + dj:step_j]
+        return np.stack([a.ravel(), b.ravel()], axis=1)
+
+    if family == "structural":
+        return np.concatenate([pairs(0, 1), pairs(1, 0)])
+    if family == "shear":
+        return np.concatenate([pairs(1, 1), pairs(1, -1)])
+    if family == "bending":
+        step = 2 if bending_pattern == "alternate" else 1
+        return np.concatenate([pairs(0, 2, 1, step), pairs(2, 0, step, 1)])
+    raise InputError(f"springs: unknown family {family!r}; expected one of {FAMILIES}")
+
+
+def grid_springs(
+    mesh: Mesh,
+    *,
+    structural: float | None = None,
+    shear: float | None = None,
+    bending: float | None = None,
+    bending_pattern: str = "every",
+) -> Springs:
+    """The seed report's spring families on a grid mesh.
+
+    Parameters
+    ----------
+    mesh : Mesh
+        Made by :func:`clothsim.mesh.grid` (it must have ``grid_shape``).
+    structural, shear, bending : float or None
+        Stiffness of each family [N/m]; None leaves the family out.
+    bending_pattern : {"every", "alternate"}
+        See :func:`grid_pairs`.
+
+    Returns
+    -------
+    Springs
+        For an n × n grid: 2n(n−1) structural, 2(n−1)² shear and 2n(n−2) ("every") or
+        n(n−1) ("alternate", odd n) bending springs.
+    """
+    if mesh.grid_shape is None:
+        raise InputError("cloth.shape: grid springs need a grid mesh; use mesh_springs")
+    ny, nx = mesh.grid_shape
+    parts = []
+    for family, k in (("structural", structural), ("shear", shear), ("bending", bending)):
+        k = _check_stiffness(family, k)
+        if k is not None:
+            parts.append(_family(mesh.vertices, grid_pairs(nx, ny, family, bending_pattern),
+                                 k, family))
+    return Springs.concatenate(parts)
+
+
+def mesh_springs(
+    mesh: Mesh,
+    *,
+    structural: float | None = None,
+    bending: float | None = None,
+) -> Springs:
+    """Springs of a general mesh: one per edge, one across every interior edge.
+
+    Parameters
+    ----------
+    mesh : Mesh
+    structural : float or None
+        Stiffness [N/m] of the springs on every edge (triangle edges and strands).
+    bending : float or None
+        Stiffness [N/m] of the springs joining the two vertices opposite each interior edge.
+    """
+    parts = []
+    k = _check_stiffness("structural", structural)
+    if k is not None:
+        parts.append(_family(mesh.vertices, mesh.edges, k, "structural"))
+    k = _check_stiffness("bending", bending)
+    if k is not None:
+        parts.append(_family(mesh.vertices, mesh.interior_edge_opposites, k, "bending"))
+    return Springs.concatenate(parts)
+
+
+def springs_from_pairs(mesh: Mesh, pairs, stiffness, *, family: str = "structural") -> Springs:
+    """Springs on explicit vertex pairs with rest lengths from ``mesh``'s shape."""
+    pairs = np.asarray(pairs, dtype=np.int64).reshape(-1, 2)
+    n = mesh.vertex_count
+    if pairs.size and (pairs.min() < 0 or pairs.max() >= n):
+        raise InputError(f"springs: vertex index out of range 0..{n - 1}")
+    k = check_finite("spring_stiffness", stiffness)
+    rest = np.linalg.norm(mesh.vertices[pairs[:, 0]] - mesh.vertices[pairs[:, 1]], axis=1)
+    return Springs(pairs, np.broadcast_to(k, (len(pairs),)), rest,
+                   np.full(len(pairs), FAMILIES.index(family), np.int8))
