@@ -66,12 +66,20 @@ class StepProblem:
         if h <= 0:
             raise InputError(f"h: the time step must be positive, got {h!r}")
         self.h = h
+        # a NaN/inf in the state or forces (bad input, or a blow-up) is named, never solved
+        self.x = check_finite("state.positions", self.x)
+        self.v = check_finite("state.velocities", self.v)
         if self.y is None:
             self.y = self.x + h * self.v
+        self.y = check_finite("inertial_target", self.y)
+        if self.f_ext is not None:
+            self.f_ext = check_finite("external_force", self.f_ext)
         self.fixed_vertices = np.asarray(self.fixed_vertices, np.int64).reshape(-1)
         self.fixed_positions = np.asarray(self.fixed_positions, np.float64).reshape(-1, 3)
         self.anchor_vertices = np.asarray(self.anchor_vertices, np.int64).reshape(-1)
         self.anchor_positions = np.asarray(self.anchor_positions, np.float64).reshape(-1, 3)
+        check_finite("pins.fixed_positions", self.fixed_positions)
+        check_finite("pins.anchor_positions", self.anchor_positions)
         self.anchor_stiffness = np.broadcast_to(
             np.asarray(self.anchor_stiffness, np.float64), self.anchor_vertices.shape)
 
@@ -113,34 +121,31 @@ class StepResult:
     converged: bool = True
 
 
-def objective(model: Model, problem: StepProblem, x: np.ndarray) -> float:
-    """g(x) = ½ (x − y)ᵀ M (x − y) + h² E(x), E with springs, anchors and −xᵀf [J·s²]."""
-    h2 = problem.h ** 2
+def _objective_without_springs(model: Model, problem: StepProblem, x: np.ndarray) -> float:
+    """½ (x − y)ᵀ M (x − y) + h² (anchor energy − xᵀ f): the terms g and ĝ share."""
     dx = x - problem.y
     g = 0.5 * float(np.sum(model.vertex_mass[:, None] * dx * dx))
-    e = energy.spring_energy(model, x)
+    e = 0.0
     if len(problem.anchor_vertices):
         q = x[problem.anchor_vertices] - problem.anchor_positions
         e += 0.5 * float(np.sum(problem.anchor_stiffness[:, None] * q * q))
     if problem.f_ext is not None:
         e -= float(np.sum(x * problem.f_ext))
-    return g + h2 * e
+    return g + problem.h ** 2 * e
+
+
+def objective(model: Model, problem: StepProblem, x: np.ndarray) -> float:
+    """g(x) = ½ (x − y)ᵀ M (x − y) + h² E(x), E with springs, anchors and −xᵀf [J·s²]."""
+    return (_objective_without_springs(model, problem, x)
+            + problem.h ** 2 * energy.spring_energy(model, x))
 
 
 def augmented_objective(model: Model, problem: StepProblem, x: np.ndarray,
                         d: np.ndarray) -> float:
     """ĝ(x, d): g with |p_i| − r_i replaced by |p_i − d_i| (Eq. 9); ĝ(x, d(x)) = g(x)."""
-    h2 = problem.h ** 2
-    dx = x - problem.y
-    g = 0.5 * float(np.sum(model.vertex_mass[:, None] * dx * dx))
     q = energy.spring_vectors(model, x) - d
-    e = 0.5 * float(np.sum(model.springs.spring_stiffness[:, None] * q * q))
-    if len(problem.anchor_vertices):
-        qa = x[problem.anchor_vertices] - problem.anchor_positions
-        e += 0.5 * float(np.sum(problem.anchor_stiffness[:, None] * qa * qa))
-    if problem.f_ext is not None:
-        e -= float(np.sum(x * problem.f_ext))
-    return g + h2 * e
+    springs = 0.5 * float(np.sum(model.springs.spring_stiffness[:, None] * q * q))
+    return _objective_without_springs(model, problem, x) + problem.h ** 2 * springs
 
 
 def objective_gradient(model: Model, problem: StepProblem, x: np.ndarray) -> np.ndarray:
