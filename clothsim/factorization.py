@@ -92,14 +92,29 @@ class Factor:
                 self._factor = cholesky(self.A)
             except CholmodNotPositiveDefiniteError as exc:
                 raise FactorizationError(f"system matrix is not positive definite: {exc}") from exc
+            # For small or very sparse matrices CHOLMOD picks a simplicial LDLᵀ, which does not
+            # fail on an indefinite matrix: check the signs of D (L's squared diagonal for LLᵀ).
+            D = self._factor.D() if self.shape[0] else np.ones(0)
+            if np.any(D <= 0) or not np.all(np.isfinite(D)):
+                raise FactorizationError("system matrix is not positive definite (CHOLMOD found "
+                                         f"a non-positive pivot {float(np.min(D))!r})")
             self._solve = self._factor
         else:
             if self.shape[0] == 0:
                 self._solve = lambda b: np.zeros_like(b)
             else:
-                lu = spla.splu(self.A, permc_spec="MMD_AT_PLUS_A",
-                               options={"SymmetricMode": True})
+                # Diagonal pivots only (diag_pivot_thresh=0): then, when the row and column
+                # permutations agree, U's diagonal is D of a symmetric LDLᵀ and its signs
+                # decide definiteness. Off-diagonal pivots would hide an indefinite matrix.
+                try:
+                    lu = spla.splu(self.A, permc_spec="MMD_AT_PLUS_A", diag_pivot_thresh=0.0,
+                                   options={"SymmetricMode": True})
+                except RuntimeError as exc:  # "Factor is exactly singular"
+                    raise FactorizationError(f"system matrix is singular: {exc}") from exc
                 pivots = lu.U.diagonal()
+                if not np.array_equal(lu.perm_r, lu.perm_c):
+                    raise FactorizationError("system matrix is not positive definite "
+                                             "(SuperLU needed an off-diagonal pivot)")
                 if np.any(pivots <= 0) or not np.all(np.isfinite(pivots)):
                     raise FactorizationError("system matrix is not positive definite "
                                              "(SuperLU found a non-positive pivot)")

@@ -11,8 +11,9 @@ Because M = M_s ⊗ I3 and L = L_s ⊗ I3, the solver factors the n × n matrix
 M_s + h² L_s and solves for the three coordinate columns at once.
 
 With exact pins the fixed vertices P are removed: the free vertices F solve
-A_FF x_F = b_F − A_FP x_P. Penalty pins add their stiffness k to L_s's diagonal and
-h² k q to the right-hand side.
+A_FF x_F = b_F − A_FP x_P. The solve is done for the displacement δ = x − y (same x,
+translation invariant to rounding; see :meth:`LocalGlobalSolver.global_step`). Penalty pins
+add their stiffness k to L_s's diagonal and h² k q to the right-hand side.
 
 References
 ----------
@@ -162,23 +163,60 @@ class LocalGlobalSolver(Solver):
                       h2 * problem.anchor_stiffness[:, None] * problem.anchor_positions)
         return b
 
+    def displacement_right_hand_side(self, problem: StepProblem, d: np.ndarray) -> np.ndarray:
+        """b(d) − A y = h² J (d − p(y)) + h² f + h² K_anchor (q − y), shape (n, 3).
+
+        Uses L y = J p(y), p(y)_i = y_{a_i} − y_{b_i}: only differences of positions enter,
+        so the result does not depend on where the cloth is (no cancellation of large
+        coordinates, unlike forming b and A y separately).
+        """
+        h2 = problem.h ** 2
+        y = problem.y
+        b = h2 * (self._Js @ (d - (y[self._a] - y[self._b])))
+        if problem.f_ext is not None:
+            b += h2 * problem.f_ext
+        if len(problem.anchor_vertices):
+            av = problem.anchor_vertices
+            np.add.at(b, av, h2 * problem.anchor_stiffness[:, None]
+                      * (problem.anchor_positions - y[av]))
+        return b
+
     def global_step(self, problem: StepProblem, d: np.ndarray) -> np.ndarray:
-        """Solve (M + h² L) x = b(d) for the free vertices; fixed ones at their targets."""
+        """Solve (M + h² L) x = b(d) for the free vertices; fixed ones at their targets.
+
+        Solved for the displacement δ = x − y: A_FF δ_F = (b − A y)_F − A_FP δ_P, then
+        x = y + δ. Same x as solving for x directly, but translation invariant to rounding
+        (a cloth 1 km from the origin moves like one at the origin).
+        """
         sysf = self.system(problem)
-        b = self.right_hand_side(problem, d)
-        x = np.empty_like(b)
+        rhs_all = self.displacement_right_hand_side(problem, d)
+        y = problem.y
+        x = np.array(y, dtype=np.float64)
         x[problem.fixed_vertices] = problem.fixed_positions
-        rhs = b[sysf.free]
+        rhs = rhs_all[sysf.free]
         if len(sysf.fixed):
-            rhs -= sysf.A_FP @ x[sysf.fixed]
-        x[sysf.free] = sysf.A_FF_factor.solve(rhs)
+            rhs -= sysf.A_FP @ (x[sysf.fixed] - y[sysf.fixed])
+        x[sysf.free] = y[sysf.free] + sysf.A_FF_factor.solve(rhs)
         return x
 
     def gradient(self, problem: StepProblem, x: np.ndarray, d: np.ndarray) -> np.ndarray:
-        """∇g(x) over the free vertices, (A x − b(d))_F, valid when d = d(x)."""
+        """∇g(x) over the free vertices, (A x − b(d))_F, valid when d = d(x).
+
+        Evaluated as M (x − y) + h² J (p(x) − d) − h² f + h² K_anchor (x − q) (L x = J p(x)),
+        from differences of positions only, so its rounding floor does not grow with the
+        distance of the cloth from the origin.
+        """
         sysf = self.system(problem)
-        b = self.right_hand_side(problem, d)
-        return (sysf.A @ x - b)[sysf.free]
+        h2 = problem.h ** 2
+        grad = (self._Ms[:, None] * (x - problem.y)
+                + h2 * (self._Js @ ((x[self._a] - x[self._b]) - d)))
+        if problem.f_ext is not None:
+            grad -= h2 * problem.f_ext
+        if len(problem.anchor_vertices):
+            av = problem.anchor_vertices
+            np.add.at(grad, av, h2 * problem.anchor_stiffness[:, None]
+                      * (x[av] - problem.anchor_positions))
+        return grad[sysf.free]
 
     # -- the iteration --------------------------------------------------------------------
     def solve(self, problem: StepProblem, x0: np.ndarray | None = None) -> StepResult:
