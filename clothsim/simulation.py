@@ -103,6 +103,9 @@ class Simulation:
         self._hooks = {hook: [e for e in self.effects if overrides(e, hook)]
                        for hook in ("add_force", "adjust_target", "pins", "correct_positions",
                                     "correct_velocities")}
+        for e in self.effects:  # effects that must not move pinned vertices (strain limit)
+            if hasattr(e, "connect_pins"):
+                e.connect_pins(self.pinned_vertices)
         if state is None:
             n = model.vertex_count
             state = State(model.mesh.vertices.copy(), np.zeros((n, 3)))
@@ -124,6 +127,14 @@ class Simulation:
         if np.any(counts > 1):
             raise InputError(f"effects.pin: vertex {uniq[counts > 1][0]} is pinned by more than "
                              f"one pin")
+
+    def pinned_vertices(self, t: float) -> np.ndarray:
+        """Vertices held by a pin (exact or penalty) in the step ending at time t, sorted."""
+        if not self._hooks["pins"]:
+            return np.zeros(0, np.int64)
+        sets = [e.pins(t) for e in self._hooks["pins"]]
+        return np.unique(np.concatenate([np.concatenate([p.fixed_vertices, p.anchor_vertices])
+                                         for p in sets]))
 
     def problem(self, state: State | None = None) -> StepProblem:
         """The implicit Euler problem of the next step from ``state`` (default: current)."""

@@ -1,0 +1,380 @@
+"""Static obstacles: a half-space (plane), a sphere and an axis-aligned box.
+
+As in the paper and the seed, collisions are not part of the optimization: after the
+solve, vertices that end a step inside an obstacle are moved out (the ``correct_positions``
+hook), and the simulation then derives v = (x − x_n)/h, which is the collision response.
+
+Contact model (one vectorized pass per obstacle and step)
+---------------------------------------------------------
+For every vertex the segment from x_n (start of the step) to x (the solver's answer) is
+tested against the solid:
+
+1. **Detection, continuous.** If x_n is outside and the segment enters the solid (sign
+   change for the plane, ray/sphere roots for the sphere, slab test for the box), the
+   contact point p is the *entry point* and n the outward normal there. So a vertex that
+   would cross a thin box or a small sphere within one step is caught on the side it came
+   from (no tunnelling). If x_n is already inside (only an initial overlap can do that),
+   p is the surface point nearest to x.
+2. **Normal response.** x is projected onto the supporting plane at p:
+   x ← x + δ n with penetration δ = max(0, (p − x)·n). The obstacles are convex, so a
+   point on that plane is never inside.
+3. **Friction (Coulomb-like, position based).** The tangential displacement of the step,
+   Δ_t = (I − n nᵀ)(x − x_n), is shortened by μ δ: Δ_t ← Δ_t max(0, 1 − μ δ / |Δ_t|).
+   δ m / h is the normal impulse that stopped the vertex, so the tangential impulse
+   removed is at most μ times it (Coulomb's bound); when |Δ_t| ≤ μ δ the vertex sticks
+   (static friction). μ = 0 is frictionless sliding.
+4. **Sphere only.** The point is moved radially onto the sphere, so a vertex sliding over
+   the sphere stays on it, on the hemisphere centred at the entry point.
+5. **Velocity** (``correct_velocities``). The inward normal part of v of the vertices in
+   contact is removed: v ← v − min(0, v·n) n (perfectly inelastic contact; resting
+   vertices keep v·n = 0 instead of carrying the approach speed into the next step).
+
+Limitations: obstacles are static and rigid; only vertices are tested (an edge or a
+triangle can still pass over a sharp box corner or a sphere smaller than the mesh spacing
+between vertices); several obstacles are applied one after another, so a vertex squeezed
+between two overlapping ones may end inside the first. Pinned vertices are moved like any
+other vertex if they lie inside an obstacle.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from ..errors import InputError, check_finite
+from .base import Effect
+
+
+def _vector3(name: str, value) -> np.ndarray:
+    a = check_finite(name, value)
+    if a.shape != (3,):
+        raise InputError(f"{name}: expected 3 numbers, got shape {a.shape}")
+    return a
+
+
+def _non_negative(name: str, value) -> float:
+    a = check_finite(name, value)
+    if a.ndim != 0:
+        raise InputError(f"{name}: expected one number, got shape {a.shape}")
+    if a < 0:
+        raise InputError(f"{name}: must be non-negative, got {float(a)!r}")
+    return float(a)
+
+
+def _rowdot(a: np.ndarray, b: np.ndarray) -> np.ndarray:
+    return np.einsum("ij,ij->i", a, b)
+
+
+class Obstacle(Effect):
+    """Base of the static obstacles: the shared contact response (see module docstring).
+
+    A subclass implements :meth:`contacts` (detection), :meth:`inside` and
+    :meth:`closest` (for the final safety projection) and may override :meth:`settle`.
+
+    Attributes
+    ----------
+    friction : float
+        Coulomb coefficient μ (dimensionless, >= 0).
+    contact_vertices : ndarray, shape (c,), int
+        Vertices in contact during the last step.
+    contact_normals : ndarray, shape (c, 3)
+        Their outward unit normals at the end of the step.
+    """
+
+    kind = "obstacle"
+
+    def __init__(self, friction: float = 0.0):
+        self.friction = _non_negative(f"{self.kind}.friction", friction)
+        self.contact_vertices = np.zeros(0, np.int64)
+        self.contact_normals = np.zeros((0, 3))
+
+    # -- geometry, implemented by each shape ---------------------------------------------
+    def contacts(self, x0: np.ndarray, x: np.ndarray):
+        """Vertices whose step segment x0 → x touches the solid.
+
+        Returns
+        -------
+        index : ndarray, shape (c,), int
+        point : ndarray, shape (c, 3)
+            Contact point p on the surface [m] (entry point, or nearest point to x).
+        normal : ndarray, shape (c, 3)
+            Outward unit normal at p.
+        """
+        raise NotImplementedError
+
+    def inside(self, x: np.ndarray) -> np.ndarray:
+        """Boolean mask, shape (n,): strictly inside the solid."""
+        raise NotImplementedError
+
+    def closest(self, x: np.ndarray):
+        """Nearest surface points to x (k, 3) and the outward normals there (k, 3)."""
+        raise NotImplementedError
+
+    def settle(self, x: np.ndarray, normal: np.ndarray):
+        """Final placement of contact points after friction (default: keep)."""
+        return x, normal
+
+    # -- the hooks ---------------------------------------------------------------------
+    def correct_positions(self, t, state, x, h):
+        x0 = state.positions
+        index, p, n = self.contacts(x0, x)
+        if len(index) == 0:
+            self.contact_vertices = index
+            self.contact_normals = n
+            return x
+        xc = x[index]
+        depth = np.maximum(_rowdot(p - xc, n), 0.0)
+        xc = xc + depth[:, None] * n
+        if self.friction > 0.0:
+            step = xc - x0[index]
+            tangential = step - _rowdot(step, n)[:, None] * n
+            length = np.linalg.norm(tangential, axis=1)
+            keep = np.zeros_like(length)
+            moving = length > 0
+            keep[moving] = np.maximum(0.0, 1.0 - self.friction * depth[moving] / length[moving])
+            xc = xc - (1.0 - keep)[:, None] * tangential
+        xc, n = self.settle(xc, n)
+        x = x.copy()
+        x[index] = xc
+        # safety net against rounding: nothing may stay strictly inside
+        still = np.flatnonzero(self.inside(x))
+        if len(still):
+            q, nq = self.closest(x[still])
+            x[still] = q
+            index = np.concatenate([index, still])
+            n = np.concatenate([n, nq])
+        self.contact_vertices = index
+        self.contact_normals = n
+        return x
+
+    def correct_velocities(self, t, state, x, v, h):
+        if len(self.contact_vertices) == 0:
+            return v
+        i, n = self.contact_vertices, self.contact_normals
+        vn = _rowdot(v[i], n)
+        inward = vn < 0
+        if not inward.any():
+            return v
+        v = v.copy()
+        v[i[inward]] -= vn[inward, None] * n[inward]
+        return v
+
+    def bind(self, model, h):
+        super().bind(model, h)
+        self.contact_vertices = np.zeros(0, np.int64)
+        self.contact_normals = np.zeros((0, 3))
+
+
+class Plane(Obstacle):
+    """A static half-space: the solid lies behind a plane, ``normal`` points to free space.
+
+    Parameters
+    ----------
+    point : (3,) array_like
+        A point on the plane [m].
+    normal : (3,) array_like
+        Direction of free space (normalized here; must not be zero).
+    friction : float, default 0
+        Coulomb coefficient μ.
+    thickness : float, default 0
+        Contact margin [m]: vertices are kept at least this far in front of the plane
+        (the surface of the solid is the plane moved by ``thickness`` along the normal).
+
+    Notes
+    -----
+    The whole solid lies behind the plane, so the end-of-step signed distance
+    φ(x) = (x − point)·n − thickness already detects every crossing (a sign change of φ
+    along the step): no tunnelling is possible and the contact point is x − φ n.
+    """
+
+    kind = "plane"
+
+    def __init__(self, point, normal, *, friction: float = 0.0, thickness: float = 0.0):
+        super().__init__(friction)
+        self.point = _vector3("plane.point", point)
+        normal = _vector3("plane.normal", normal)
+        norm = float(np.linalg.norm(normal))
+        if norm == 0.0:
+            raise InputError("plane.normal: must not be the zero vector")
+        self.normal = normal / norm
+        self.thickness = _non_negative("plane.thickness", thickness)
+        self._offset = float(self.point @ self.normal) + self.thickness
+
+    def signed_distance(self, x: np.ndarray) -> np.ndarray:
+        """φ(x) = n·x − n·point − thickness [m], shape (n,); negative inside."""
+        return x @ self.normal - self._offset
+
+    def contacts(self, x0, x):
+        phi = self.signed_distance(x)
+        index = np.flatnonzero(phi < 0)
+        n = np.broadcast_to(self.normal, (len(index), 3))
+        return index, x[index] - phi[index, None] * n, n
+
+    def inside(self, x):
+        return self.signed_distance(x) < 0
+
+    def closest(self, x):
+        n = np.broadcast_to(self.normal, x.shape)
+        return x - self.signed_distance(x)[:, None] * n, n
+
+    def describe(self):
+        return {"kind": self.kind, "point": self.point.tolist(), "normal": self.normal.tolist(),
+                "friction": self.friction, "thickness": self.thickness}
+
+
+class Sphere(Obstacle):
+    """A static solid ball.
+
+    Parameters
+    ----------
+    center : (3,) array_like
+        Centre c [m].
+    radius : float
+        R [m], > 0.
+    friction : float, default 0
+        Coulomb coefficient μ.
+
+    Notes
+    -----
+    Entry along the step x(s) = x_n + s d, s ∈ [0, 1], d = x − x_n: the smaller root of
+    |x_n + s d − c|² = R², computed without cancellation as
+    s = (|x_n − c|² − R²) / (−d·(x_n − c) + √disc), disc = (d·(x_n − c))² − |d|²(|x_n − c|² − R²).
+    """
+
+    kind = "sphere"
+
+    def __init__(self, center, radius, *, friction: float = 0.0):
+        super().__init__(friction)
+        self.center = _vector3("sphere.center", center)
+        r = check_finite("sphere.radius", radius)
+        if r.ndim != 0 or r <= 0:
+            raise InputError(f"sphere.radius: must be one positive number, got {radius!r}")
+        self.radius = float(r)
+
+    def inside(self, x):
+        q = x - self.center
+        return _rowdot(q, q) < self.radius ** 2
+
+    def closest(self, x):
+        q = x - self.center
+        length = np.linalg.norm(q, axis=1)
+        n = np.empty_like(q)
+        ok = length > 0
+        n[ok] = q[ok] / length[ok, None]
+        n[~ok] = (0.0, 1.0, 0.0)  # the centre itself: any direction is nearest
+        # a few ulps outside, so that rounding never leaves a placed point inside
+        return self.center + (self.radius * (1.0 + 4 * np.finfo(float).eps)) * n, n
+
+    def contacts(self, x0, x):
+        R2 = self.radius ** 2
+        q0 = x0 - self.center
+        c0 = _rowdot(q0, q0) - R2                       # > = 0: x_n outside or on
+        d = x - x0
+        bh = _rowdot(d, q0)                             # half the linear coefficient
+        disc = bh * bh - _rowdot(d, d) * c0
+        start_out = c0 >= 0
+        enters = start_out & (bh < 0) & (disc > 0)
+        i = np.flatnonzero(enters)
+        s = c0[i] / (-bh[i] + np.sqrt(disc[i]))
+        hit = s <= 1.0
+        i, s = i[hit], s[hit]
+        p = x0[i] + s[:, None] * d[i]
+        n = p - self.center
+        n /= np.linalg.norm(n, axis=1)[:, None]
+        p = self.center + self.radius * n
+        # started inside (initial overlap): nearest surface point of x
+        j = np.flatnonzero(~start_out & self.inside(x))
+        pj, nj = self.closest(x[j])
+        return np.concatenate([i, j]), np.concatenate([p, pj]), np.concatenate([n, nj])
+
+    def settle(self, x, normal):
+        return self.closest(x)
+
+    def describe(self):
+        return {"kind": self.kind, "center": self.center.tolist(), "radius": self.radius,
+                "friction": self.friction}
+
+
+class Box(Obstacle):
+    """A static solid axis-aligned box.
+
+    Parameters
+    ----------
+    min, max : (3,) array_like
+        Opposite corners [m], ``min < max`` on every axis.
+    friction : float, default 0
+        Coulomb coefficient μ.
+
+    Notes
+    -----
+    Slab test: on each axis k the step x_n + s d is strictly between the faces for s in
+    the open interval between (min_k − x_n,k)/d_k and (max_k − x_n,k)/d_k (all s, or none,
+    when d_k = 0). The step enters the box at s_in = max_k (near ends) when
+    s_in < s_out = min_k (far ends), s_in ≤ 1 and s_out > 0; the entry face is the one of
+    the axis attaining s_in. A vertex starting inside goes to the nearest face.
+    """
+
+    kind = "box"
+
+    def __init__(self, min, max, *, friction: float = 0.0):  # noqa: A002 (TOML keys)
+        super().__init__(friction)
+        lo = _vector3("box.min", min)
+        hi = _vector3("box.max", max)
+        bad = np.flatnonzero(lo >= hi)
+        if len(bad):
+            k = int(bad[0])
+            raise InputError(f"box.min[{k}]: must be less than box.max[{k}], got "
+                             f"{lo[k]!r} >= {hi[k]!r}")
+        self.min, self.max = lo, hi
+
+    def inside(self, x):
+        return np.all((x > self.min) & (x < self.max), axis=1)
+
+    def closest(self, x):
+        gaps = np.concatenate([x - self.min, self.max - x], axis=1)   # (k, 6)
+        face = np.argmin(gaps, axis=1)
+        axis, upper = face % 3, face >= 3
+        rows = np.arange(len(x))
+        p = x.copy()
+        p[rows, axis] = np.where(upper, self.max[axis], self.min[axis])
+        n = np.zeros_like(x)
+        n[rows, axis] = np.where(upper, 1.0, -1.0)
+        return p, n
+
+    def contacts(self, x0, x):
+        start_in = self.inside(x0)
+        d = x - x0
+        with np.errstate(divide="ignore", invalid="ignore"):
+            a = (self.min - x0) / d
+            b = (self.max - x0) / d
+        near, far = np.minimum(a, b), np.maximum(a, b)
+        still = d == 0
+        between = (x0 > self.min) & (x0 < self.max)
+        near[still] = np.where(between[still], -np.inf, np.inf)
+        far[still] = np.where(between[still], np.inf, -np.inf)
+        axis = np.argmax(near, axis=1)
+        rows = np.arange(len(x0))
+        s_in = near[rows, axis]
+        s_out = far.min(axis=1)
+        enters = ~start_in & (s_in < s_out) & (s_in <= 1.0) & (s_out > 0)
+        i = np.flatnonzero(enters)
+        k = axis[i]
+        p = x0[i] + np.clip(s_in[i], 0.0, 1.0)[:, None] * d[i]
+        up = d[i, k] < 0                      # moving down the axis: entered by the max face
+        rr = np.arange(len(i))
+        p[rr, k] = np.where(up, self.max[k], self.min[k])
+        n = np.zeros((len(i), 3))
+        n[rr, k] = np.where(up, 1.0, -1.0)
+        j = np.flatnonzero(start_in & self.inside(x))
+        pj, nj = self.closest(x[j])
+        return np.concatenate([i, j]), np.concatenate([p, pj]), np.concatenate([n, nj])
+
+    def settle(self, x, normal):
+        # put the contact coordinate exactly on its face (x + δ n can be an ulp off)
+        rows = np.arange(len(x))
+        axis = np.argmax(np.abs(normal), axis=1)
+        x[rows, axis] = np.where(normal[rows, axis] > 0, self.max[axis], self.min[axis])
+        return x, normal
+
+    def describe(self):
+        return {"kind": self.kind, "min": self.min.tolist(), "max": self.max.tolist(),
+                "friction": self.friction}
