@@ -1,0 +1,196 @@
+"""The ``clothsim`` command (also ``python -m clothsim``).
+
+::
+
+    clothsim run [SCENE] [--out DIR] [--frames N] [--resume] [--no-preview]
+    clothsim scenes
+    clothsim validate SCENE
+    clothsim accuracy [SCENE] [...]
+
+SCENE is a scene file (``.toml``, or an assignment ``.json``) or a built-in scene name;
+``run`` without one runs ``drop-on-square`` into ``out/<scene-name>``.
+
+Exit status: 0 success; 1 any other error (one line on stderr); 2 a bad scene or bad
+arguments (one line: ``clothsim: error: <file>: <key.path>: <message>``, no traceback);
+130 interrupted with Ctrl-C (frames done so far stay readable).
+"""
+
+from __future__ import annotations
+
+import argparse
+import logging
+import sys
+from pathlib import Path
+
+from .errors import InputError
+
+PROG = "clothsim"
+log = logging.getLogger(__name__)
+
+
+class _Parser(argparse.ArgumentParser):
+    """argparse, but a usage error is one line and exit status 2 (no usage dump)."""
+
+    def error(self, message):
+        raise _UsageError(message)
+
+
+class _UsageError(Exception):
+    pass
+
+
+def _one_line(text: str) -> str:
+    return " ".join(str(text).split())
+
+
+def _fail(message: str, code: int) -> int:
+    print(f"{PROG}: error: {_one_line(message)}", file=sys.stderr)
+    return code
+
+
+def build_parser() -> argparse.ArgumentParser:
+    """The argument parser of the ``clothsim`` command."""
+    parser = _Parser(prog=PROG, description="Cloth simulation with mass-spring systems by the "
+                     "local/global method of Liu et al. (2013).")
+    parser.add_argument("-v", "--verbose", action="count", default=0,
+                        help="log more (-v info, -vv debug)")
+    sub = parser.add_subparsers(dest="command", metavar="COMMAND", parser_class=_Parser)
+    sub.required = True
+
+    run = sub.add_parser("run", help="run a scene and write frames, trajectory, previews")
+    run.add_argument("scene", nargs="?", default=None, metavar="SCENE",
+                     help="scene file or built-in name (default: drop-on-square)")
+    run.add_argument("--out", metavar="DIR", default=None,
+                     help="output directory (default: out/<scene-name>)")
+    run.add_argument("--frames", type=int, metavar="N", default=None,
+                     help="frames after the initial one (default: the scene's)")
+    run.add_argument("--resume", action="store_true",
+                     help="continue from the last complete frame in the output directory")
+    run.add_argument("--no-preview", action="store_true",
+                     help="skip preview.gif and final.png")
+
+    sub.add_parser("scenes", help="list the built-in scenes")
+
+    val = sub.add_parser("validate", help="check a scene file without running it")
+    val.add_argument("scene", metavar="SCENE", help="scene file or built-in name")
+
+    acc = sub.add_parser("accuracy", help="accuracy and cost sweep of the solvers on a scene")
+    try:
+        from . import accuracy
+    except ImportError:
+        acc.add_argument("rest", nargs=argparse.REMAINDER)
+        acc.set_defaults(accuracy_missing=True)
+    else:
+        accuracy.add_arguments(acc)
+    return parser
+
+
+def _configure_logging(verbose: int):
+    """Send clothsim's log records to stderr (warnings only, unless -v); returns an undo."""
+    level = logging.WARNING if verbose <= 0 else logging.INFO if verbose == 1 else logging.DEBUG
+    root = logging.getLogger("clothsim")
+    handler = logging.StreamHandler(sys.stderr)
+    handler.setFormatter(logging.Formatter(f"{PROG}: %(levelname)s: %(message)s"))
+    old_level = root.level
+    root.addHandler(handler)
+    root.setLevel(level)
+
+    def undo():
+        root.removeHandler(handler)
+        root.setLevel(old_level)
+
+    return undo
+
+
+def _cmd_scenes(args) -> int:
+    from .scene import DEFAULT_SCENE, list_builtin_scenes
+
+    scenes = list_builtin_scenes()
+    width = max(map(len, scenes), default=0)
+    for name, desc in scenes.items():
+        mark = " (default)" if name == DEFAULT_SCENE and "default" not in desc else ""
+        print(f"{name:<{width}}  {desc}{mark}")
+    return 0
+
+
+def _cmd_validate(args) -> int:
+    from .scene import load_scene
+
+    scene = load_scene(args.scene)
+    model = scene.build_model()
+    sim = scene.build_simulation(model)
+    print(f"ok: {scene.source}: scene '{scene.name}', {model.vertex_count} vertices, "
+          f"{model.spring_count} springs, {scene.frames} frames at h = {scene.h:.6g} s, "
+          f"effects: {', '.join(sim.effects_built) or 'none'}")
+    return 0
+
+
+def _cmd_run(args) -> int:
+    from .runner import run_scene
+    from .scene import DEFAULT_SCENE, load_scene
+
+    if args.frames is not None and args.frames < 0:
+        return _fail(f"--frames: must be >= 0, got {args.frames}", 2)
+    scene = load_scene(args.scene or DEFAULT_SCENE)
+    out = Path(args.out) if args.out else Path("out") / scene.name
+    frames = scene.frames if args.frames is None else args.frames
+    try:
+        from tqdm import tqdm
+    except ImportError:  # pragma: no cover - tqdm is a declared dependency
+        tqdm = None
+    bar = None if tqdm is None else tqdm(total=frames, unit="frame", desc=scene.name,
+                                         disable=None, leave=False)
+
+    def progress(k, total):
+        if bar is not None:
+            bar.n = k
+            bar.refresh()
+
+    try:
+        result = run_scene(scene, out, frames=frames, progress=progress, resume=args.resume,
+                           preview=not args.no_preview)
+    except KeyboardInterrupt:
+        return _fail(f"interrupted; complete frames and run.json are in {out}", 130)
+    finally:
+        if bar is not None:
+            bar.close()
+    print(f"{scene.name}: {result.last_frame} frames written to {out}")
+    return 0
+
+
+def _cmd_accuracy(args) -> int:
+    if getattr(args, "accuracy_missing", False):
+        return _fail("accuracy: this installation has no clothsim.accuracy module", 1)
+    from . import accuracy
+
+    return int(accuracy.command(args) or 0)
+
+
+COMMANDS = {"run": _cmd_run, "scenes": _cmd_scenes, "validate": _cmd_validate,
+            "accuracy": _cmd_accuracy}
+
+
+def main(argv: list[str] | None = None) -> int:
+    """Run the command line; returns the exit status (the entry point exits with it)."""
+    parser = build_parser()
+    try:
+        args = parser.parse_args(argv)
+    except _UsageError as exc:
+        return _fail(str(exc), 2)
+    except SystemExit as exc:  # --help
+        return int(exc.code or 0)
+    undo_logging = _configure_logging(args.verbose)
+    try:
+        return COMMANDS[args.command](args)
+    except InputError as exc:  # SceneError included: bad input, exit status 2
+        return _fail(str(exc), 2)
+    except KeyboardInterrupt:
+        return _fail("interrupted", 130)
+    except Exception as exc:  # one line, no traceback; -vv logs it in full
+        log.debug("unhandled error", exc_info=True)
+        return _fail(f"{type(exc).__name__}: {exc}", 1)
+    finally:
+        undo_logging()
+
+
+__all__ = ["main", "build_parser"]

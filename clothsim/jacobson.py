@@ -1,0 +1,230 @@
+"""Reader for the scene format of A. Jacobson's mass-spring assignment (CSC317/CSC418, A8).
+
+An assignment scene is a small JSON file next to an OBJ mesh::
+
+    {"obj": "flag.obj", "b": [1, 2, 3], "k": 100000, "m": 1, "png": "flag.png"}
+
+========  ==================================================================================
+key       meaning, and how clothsim reads it
+========  ==================================================================================
+``obj``   Mesh file, relative to the JSON. Polygon faces (the flag and skirt are quads)
+          are fan-triangulated for display and area; two-vertex faces ``f a b`` are
+          strands (the chain, the net, the single spring).
+``k``     One stiffness [N/m] for every spring. As in the assignment, springs lie on the
+          sides of every face (each polygon's boundary, no quad diagonals), one per edge.
+``m``     Mass of every vertex [kg]. Without it, each vertex gets a third of the area of
+          its adjacent triangles at 1 kg/m² (the assignment uses libigl's Voronoi mass
+          matrix; the two agree in total mass, the area of the mesh).
+``b``     Pinned vertices, **1-based**; clothsim pins them exactly (the assignment uses a
+          stiff penalty, w = 1e10) at their initial positions.
+``png``   Texture; ignored.
+========  ==================================================================================
+
+The assignment's step is 1/30 s and its gravity is a force of −9.8 N per vertex; clothsim
+uses h = 1/30 s and gravity as an *acceleration* of 9.8 m/s², which is the same thing
+where m = 1 kg (chain, net, spring) and the physical reading elsewhere (flag, skirt).
+No mesh file passes through meshio here: OBJ polygons and line faces are read directly.
+"""
+
+from __future__ import annotations
+
+import json
+from dataclasses import dataclass
+from functools import lru_cache
+from pathlib import Path
+
+import numpy as np
+
+from .errors import InputError
+from .mesh import Mesh
+
+
+@dataclass(frozen=True, eq=False)
+class Assignment:
+    """One assignment scene, read and checked.
+
+    Attributes
+    ----------
+    mesh : Mesh
+        Vertices [m], fan-triangulated faces, and strands (two-vertex faces).
+    spring_pairs : ndarray, shape (s, 2), int64
+        Unique sides of every face (0-based vertex indices).
+    stiffness : float
+        k [N/m], the same for every spring.
+    vertex_mass : ndarray, shape (n,)
+        m_i [kg].
+    pinned : ndarray, shape (p,), int64
+        Pinned vertices, 0-based (the JSON's ``b`` minus one).
+    source : Path
+        The JSON file.
+    """
+
+    mesh: Mesh
+    spring_pairs: np.ndarray
+    stiffness: float
+    vertex_mass: np.ndarray
+    pinned: np.ndarray
+    source: Path
+
+
+def _error(source, path: str, detail: str):
+    from .scene import SceneError
+    return SceneError(str(source), path, detail)
+
+
+def read_obj_polygons(path) -> tuple[np.ndarray, list[np.ndarray]]:
+    """Vertices and polygon faces of an OBJ file (``v`` and ``f`` lines only).
+
+    Returns
+    -------
+    vertices : ndarray, shape (n, 3), float64
+    faces : list of ndarray
+        One int64 array of shape (f_k, k) per face size k, 0-based indices.
+    """
+    vertices: list[list[float]] = []
+    faces: dict[int, list[list[int]]] = {}
+    with open(path, encoding="utf-8") as fh:
+        for lineno, line in enumerate(fh, 1):
+            tok = line.split()
+            if not tok:
+                continue
+            try:
+                if tok[0] == "v":
+                    vertices.append([float(t) for t in tok[1:4]])
+                elif tok[0] == "f":
+                    idx = [int(t.split("/")[0]) for t in tok[1:]]
+                    # OBJ indices are 1-based; negative ones count back from the last vertex
+                    idx = [i - 1 if i > 0 else len(vertices) + i for i in idx]
+                    faces.setdefault(len(idx), []).append(idx)
+            except ValueError:
+                raise _error(path, f"line {lineno}", f"cannot parse {line.strip()!r}") from None
+    v = np.asarray(vertices, dtype=np.float64).reshape(-1, 3)
+    return v, [np.asarray(f, dtype=np.int64) for _, f in sorted(faces.items())]
+
+
+def _sides(faces: list[np.ndarray]) -> np.ndarray:
+    """Unique undirected sides of polygon faces (each polygon's boundary cycle)."""
+    parts = [np.stack([f, np.roll(f, -1, axis=1)], axis=2).reshape(-1, 2) for f in faces]
+    if not parts:
+        return np.zeros((0, 2), np.int64)
+    e = np.sort(np.concatenate(parts), axis=1)
+    e = e[e[:, 0] != e[:, 1]]
+    return np.unique(e, axis=0)
+
+
+def _triangles(faces: list[np.ndarray]) -> np.ndarray:
+    """Fan triangulation (0, j, j+1) of every face with at least three vertices."""
+    tris = [np.stack([f[:, 0], f[:, j], f[:, j + 1]], axis=1)
+            for f in faces if f.shape[1] >= 3 for j in range(1, f.shape[1] - 1)]
+    return np.concatenate(tris) if tris else np.zeros((0, 3), np.int64)
+
+
+def _load_json(path: Path) -> dict:
+    try:
+        data = json.loads(path.read_text(encoding="utf-8"))
+    except json.JSONDecodeError as exc:
+        raise _error(path, f"line {exc.lineno}", f"invalid JSON: {exc.msg}") from None
+    except OSError as exc:
+        raise _error(path, "", f"cannot read: {exc.strerror}") from None
+    if not isinstance(data, dict):
+        raise _error(path, "", "expected a JSON object")
+    unknown = sorted(set(data) - {"obj", "b", "k", "m", "png", "bc"})
+    if unknown:
+        raise _error(path, unknown[0], "unknown key (expected obj, b, k, m, png)")
+    if "bc" in data:
+        raise _error(path, "bc", "not supported (pins stay at their initial positions)")
+    for key in ("obj", "b", "k"):
+        if key not in data:
+            raise _error(path, key, "missing")
+    return data
+
+
+def _number(path, key, value) -> float:
+    if isinstance(value, bool) or not isinstance(value, (int, float)) or not np.isfinite(value):
+        raise _error(path, key, f"expected a finite number, got {value!r}")
+    if value <= 0:
+        raise _error(path, key, f"must be positive, got {value!r}")
+    return float(value)
+
+
+def read_pins(path) -> np.ndarray:
+    """The JSON's ``b``, converted to 0-based vertex indices (range checked on build)."""
+    path = Path(path)
+    b = _load_json(path)["b"]
+    if not isinstance(b, list) or not all(isinstance(i, int) and not isinstance(i, bool)
+                                          for i in b):
+        raise _error(path, "b", "expected an array of 1-based vertex indices")
+    b = np.asarray(b, dtype=np.int64).reshape(-1)
+    bad = np.flatnonzero(b < 1)
+    if len(bad):
+        raise _error(path, f"b[{bad[0]}]", f"vertex {b[bad[0]]} out of range (b is 1-based)")
+    uniq, counts = np.unique(b, return_counts=True)
+    if np.any(counts > 1):
+        raise _error(path, "b", f"vertex {uniq[counts > 1][0]} is listed twice")
+    return b - 1
+
+
+def read_assignment(path) -> Assignment:
+    """Read and check an assignment scene (JSON + OBJ); see the module docstring."""
+    p = Path(path).resolve()
+    stamp = p.stat().st_mtime_ns if p.is_file() else 0
+    return _read_cached(str(p), stamp)
+
+
+@lru_cache(maxsize=4)
+def _read_cached(path: str, stamp: int) -> Assignment:
+    p = Path(path)
+    data = _load_json(p)
+    k = _number(p, "k", data["k"])
+    if not isinstance(data["obj"], str):
+        raise _error(p, "obj", f"expected a file name, got {data['obj']!r}")
+    obj = p.parent / data["obj"]
+    if not obj.is_file():
+        raise _error(p, "obj", f"file not found: {obj}")
+    vertices, faces = read_obj_polygons(obj)
+    n = len(vertices)
+    bad = [f for f in faces if f.size and (f.min() < 0 or f.max() >= n)]
+    if bad:
+        raise _error(obj, "f", f"vertex index out of range 1..{n}")
+    strands = np.concatenate([f for f in faces if f.shape[1] == 2] or [np.zeros((0, 2), int)])
+    try:
+        mesh = Mesh(vertices, _triangles(faces), strands)
+    except InputError as exc:
+        raise _error(obj, "", str(exc)) from None
+    pairs = _sides(faces)
+    if "m" in data:
+        m = np.full(n, _number(p, "m", data["m"]))
+    else:
+        if mesh.triangle_count == 0:
+            raise _error(p, "m", "missing: a mesh without polygons needs a per-vertex mass m")
+        m = mesh.vertex_areas()  # kg at 1 kg/m²
+        if np.any(m <= 0):
+            raise _error(p, "m", f"missing, and vertex {int(np.argmin(m)) + 1} touches no "
+                                 f"polygon, so area lumping gives it no mass")
+    pinned = read_pins(p)
+    if len(pinned) and pinned.max() >= n:
+        i = int(np.argmax(pinned))
+        raise _error(p, f"b[{i}]", f"vertex {pinned[i] + 1} out of range 1..{n}")
+    for a in (pairs, m, pinned):
+        a.flags.writeable = False
+    return Assignment(mesh, pairs, k, m, pinned, p)
+
+
+def scene_dict(path, *, frames: int = 60, iterations: int = 50) -> dict:
+    """A scene document (as :class:`~clothsim.scene.Scene.from_dict` takes) for a JSON file.
+
+    h = 1/30 s as in the assignment, gravity 9.8 m/s² along −y, exact pins from ``b``,
+    ``iterations`` local/global iterations per step.
+    """
+    p = Path(path).resolve()
+    _load_json(p)  # fail early, naming the JSON file
+    return {
+        "scene": {"name": f"jacobson-{p.stem}", "frames": frames, "fps": 30, "substeps": 1,
+                  "description": f"assignment scene {p.name}"},
+        "cloth": {"shape": "jacobson", "file": str(p)},
+        "solver": {"method": "local-global", "iterations": iterations},
+        "effects": [{"kind": "gravity", "acceleration": [0.0, -9.8, 0.0]}],
+    }
+
+
+__all__ = ["Assignment", "read_assignment", "read_pins", "read_obj_polygons", "scene_dict"]
