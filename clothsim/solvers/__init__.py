@@ -1,21 +1,28 @@
 """Time-step solvers: each minimizes the same implicit Euler objective g(x).
 
-=================  ======================================================================
-method             class
-=================  ======================================================================
-``local-global``   :class:`LocalGlobalSolver` (Liu et al. 2013, the paper)
-``newton``         :class:`NewtonSolver` (exact reference, line search)
-=================  ======================================================================
+====================  ===================================================================
+method                class
+====================  ===================================================================
+``local-global``      :class:`LocalGlobalSolver` (Liu et al. 2013, the paper)
+``chebyshev``         :class:`ChebyshevSolver` (local/global + Chebyshev, Wang 2015)
+``newton``            :class:`NewtonSolver` (exact reference, line search)
+``symplectic-euler``  :class:`SymplecticEulerSolver` (explicit baseline: a different
+                      integrator, no optimization; stable only for h < 2/ω_max)
+====================  ===================================================================
 """
 
 from .base import (StepProblem, StepResult, Solver, augmented_objective, objective,
                    objective_gradient)
+from .chebyshev import ChebyshevSolver, estimate_spectral_radius
 from .local_global import LocalGlobalSolver
 from .newton import NewtonSolver
+from .symplectic import StabilityWarning, SymplecticEulerSolver, stable_time_step
 
 SOLVERS: dict[str, type[Solver]] = {
     "local-global": LocalGlobalSolver,
+    "chebyshev": ChebyshevSolver,
     "newton": NewtonSolver,
+    "symplectic-euler": SymplecticEulerSolver,
 }
 
 
@@ -31,5 +38,7 @@ def make_solver(method: str, model, **options) -> Solver:
     return cls(model, **options)
 
 
-__all__ = ["StepProblem", "StepResult", "Solver", "LocalGlobalSolver", "NewtonSolver",
-           "SOLVERS", "make_solver", "objective", "augmented_objective", "objective_gradient"]
+__all__ = ["StepProblem", "StepResult", "Solver", "LocalGlobalSolver", "ChebyshevSolver",
+           "NewtonSolver", "SymplecticEulerSolver", "StabilityWarning", "SOLVERS",
+           "make_solver", "objective", "augmented_objective", "objective_gradient",
+           "estimate_spectral_radius", "stable_time_step"]

@@ -1,0 +1,28 @@
+"""Run the benchmarks: ``python -m benchmarks [NAME ...]`` (default: all, in order)."""
+
+from __future__ import annotations
+
+import importlib
+import sys
+import time
+
+BENCHMARKS = ("stiffness", "crossover", "paper_timing", "sweep")
+
+
+def main(argv: list[str]) -> int:
+    names = argv or list(BENCHMARKS)
+    unknown = [n for n in names if n not in BENCHMARKS]
+    if unknown:
+        print(f"unknown benchmark {unknown[0]!r}; choose from {', '.join(BENCHMARKS)}",
+              file=sys.stderr)
+        return 2
+    for name in names:
+        print(f"== {name}", flush=True)
+        t0 = time.perf_counter()
+        importlib.import_module(f"benchmarks.{name}").main()
+        print(f"   ({time.perf_counter() - t0:.1f} s)", flush=True)
+    return 0
+
+
+if __name__ == "__main__":
+    raise SystemExit(main(sys.argv[1:]))
