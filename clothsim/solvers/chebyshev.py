@@ -40,7 +40,7 @@ import numpy as np
 
 from ..errors import InputError, check_finite
 from ..model import Model
-from .base import StepProblem, StepResult, relative
+from .base import StepProblem, StepResult, gradient_noise_floor, relative
 from .local_global import LocalGlobalSolver
 
 log = logging.getLogger(__name__)
@@ -179,12 +179,15 @@ class ChebyshevSolver(LocalGlobalSolver):
         r0 = None
         x = None
         it = 0
+        floor = 0.0
         for it, x, rn in self.iterates(problem, x0):
-            r0 = rn if r0 is None else r0
+            if r0 is None:
+                r0 = rn
+                floor = gradient_noise_floor(self.model, problem, x) if self.tolerance else 0.0
             history.append(relative(rn, r0))
             if not math.isfinite(rn):
                 break
             if it >= self.iterations or (self.tolerance is not None
-                                         and history[-1] <= self.tolerance):
+                                         and (history[-1] <= self.tolerance or rn <= floor)):
                 break
-        return self._finish(x, it, history)
+        return self._finish(x, it, history, at_floor=rn <= floor)

@@ -32,7 +32,7 @@ import scipy.sparse as sp
 from .. import matrices
 from ..factorization import Factor
 from ..model import Model
-from .base import Solver, StepProblem, StepResult, relative
+from .base import Solver, StepProblem, StepResult, gradient_noise_floor, relative
 
 log = logging.getLogger(__name__)
 
@@ -226,14 +226,15 @@ class LocalGlobalSolver(Solver):
         history: list[float] = []
         r0 = None
         it = 0
+        floor = gradient_noise_floor(self.model, problem, x) if self.tolerance else 0.0
         while True:
             d = self.local_step(x)
             rn = float(np.linalg.norm(self.gradient(problem, x, d)))
             r0 = rn if r0 is None else r0
             history.append(relative(rn, r0))
             if it >= self.iterations or (self.tolerance is not None
-                                         and history[-1] <= self.tolerance):
+                                         and (history[-1] <= self.tolerance or rn <= floor)):
                 break
             x = self.global_step(problem, d)
             it += 1
-        return self._finish(x, it, history)
+        return self._finish(x, it, history, at_floor=rn <= floor)

@@ -25,7 +25,8 @@ from .. import energy
 from ..errors import FactorizationError
 from ..factorization import Factor
 from ..model import Model
-from .base import Solver, StepProblem, StepResult, objective, objective_gradient, relative
+from .base import (Solver, StepProblem, StepResult, gradient_noise_floor, objective,
+                   objective_gradient, relative)
 
 ARMIJO_C = 1e-4
 MAX_HALVINGS = 60
@@ -75,10 +76,11 @@ class NewtonSolver(Solver):
         g = objective(self.model, problem, x)
         r0 = float(np.linalg.norm(grad))
         history = [relative(r0, r0)]
+        floor = gradient_noise_floor(self.model, problem, x) if self.tolerance else 0.0
         it = 0
         self.stalled = False
-        while it < self.iterations and not (self.tolerance is not None
-                                            and history[-1] <= self.tolerance):
+        while it < self.iterations and not (self.tolerance is not None and (
+                history[-1] <= self.tolerance or history[-1] * r0 <= floor)):
             try:
                 factor = Factor(self.hessian(problem, x)[free][:, free],
                                 backend=self.backend_requested, check_conditioning=False)
@@ -113,6 +115,4 @@ class NewtonSolver(Solver):
             if moved <= 4 * np.finfo(float).eps * max(float(np.abs(x).max()), 1e-300):
                 self.stalled = True  # x no longer changes: the gradient is at rounding level
                 break
-        if self.stalled and self.tolerance is not None:
-            return StepResult(x, it, history[-1], history, True)
-        return self._finish(x, it, history)
+        return self._finish(x, it, history, at_floor=self.stalled or history[-1] * r0 <= floor)
