@@ -6,9 +6,15 @@
     clothsim scenes
     clothsim validate SCENE
     clothsim accuracy [SCENE] [...]
+    clothsim export SCENE [--out DIR]
+    clothsim compare TRAJECTORY REFERENCE [--rtol R] [--atol A] [--frames N] [--field F]
 
 SCENE is a scene file (``.toml``, or an assignment ``.json``) or a built-in scene name;
 ``run`` without one runs ``drop-on-square`` into ``out/<scene-name>``.
+
+``export`` writes the paper's matrices and the model's arrays for regression-checking another
+port; ``compare`` checks a trajectory against a reference with tolerances (exit 0 when it
+passes, 1 when it does not).
 
 Exit status: 0 success; 1 any other error (one line on stderr); 2 a bad scene or bad
 arguments (one line: ``clothsim: error: <file>: <key.path>: <message>``, no traceback);
@@ -73,6 +79,22 @@ def build_parser() -> argparse.ArgumentParser:
 
     val = sub.add_parser("validate", help="check a scene file without running it")
     val.add_argument("scene", metavar="SCENE", help="scene file or built-in name")
+
+    exp = sub.add_parser("export", help="write M, L, J, M + h²L and the model's arrays "
+                         "(Matrix Market, text) for checking another port")
+    exp.add_argument("scene", metavar="SCENE", help="scene file or built-in name")
+    exp.add_argument("--out", metavar="DIR", default=None,
+                     help="output directory (default: out/<scene-name>/matrices)")
+
+    cmp_ = sub.add_parser("compare", help="compare a trajectory with a reference, with "
+                          "tolerances |a - b| <= atol + rtol |b|")
+    cmp_.add_argument("trajectory", help="trajectory.npz, a run directory, or a .pvd")
+    cmp_.add_argument("reference", help="the reference, in any of the same forms")
+    cmp_.add_argument("--rtol", type=float, default=1e-6, help="relative tolerance (1e-6)")
+    cmp_.add_argument("--atol", type=float, default=1e-9, help="absolute tolerance [m] (1e-9)")
+    cmp_.add_argument("--frames", type=int, default=None, metavar="N",
+                      help="compare only the first N frames")
+    cmp_.add_argument("--field", default="positions", choices=("positions", "velocities"))
 
     acc = sub.add_parser("accuracy", help="accuracy and cost sweep of the solvers on a scene")
     try:
@@ -158,6 +180,34 @@ def _cmd_run(args) -> int:
     return 0
 
 
+def _cmd_export(args) -> int:
+    from .export import export_matrices
+    from .scene import load_scene
+
+    scene = load_scene(args.scene)
+    model = scene.build_model()
+    sim = scene.build_simulation(model)
+    out = Path(args.out) if args.out else Path("out") / scene.name / "matrices"
+    pinned = sim.pinned_vertices(sim.h)
+    manifest = export_matrices(model, scene.h, out, pinned=pinned)
+    print(f"{scene.name}: {len(manifest['files'])} files for n = {model.vertex_count}, "
+          f"s = {model.spring_count}, h = {scene.h:.6g} s written to {out}")
+    return 0
+
+
+def _cmd_compare(args) -> int:
+    from .compare import compare_trajectories
+
+    for name in ("rtol", "atol"):
+        value = getattr(args, name)
+        if not value >= 0:
+            return _fail(f"--{name}: must be a non-negative number, got {value}", 2)
+    result = compare_trajectories(args.trajectory, args.reference, rtol=args.rtol,
+                                  atol=args.atol, field=args.field, frames=args.frames)
+    print(result.summary())
+    return 0 if result.passed else 1
+
+
 def _cmd_accuracy(args) -> int:
     if getattr(args, "accuracy_missing", False):
         return _fail("accuracy: this installation has no clothsim.accuracy module", 1)
@@ -167,7 +217,7 @@ def _cmd_accuracy(args) -> int:
 
 
 COMMANDS = {"run": _cmd_run, "scenes": _cmd_scenes, "validate": _cmd_validate,
-            "accuracy": _cmd_accuracy}
+            "accuracy": _cmd_accuracy, "export": _cmd_export, "compare": _cmd_compare}
 
 
 def main(argv: list[str] | None = None) -> int:

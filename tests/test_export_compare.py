@@ -77,3 +77,27 @@ def test_compare_reads_pvd_frames(model, tmp_path):
     traj = np.stack([x + i for i in range(3)])
     np.savez(tmp_path / "ref.npz", positions=traj)
     assert compare_trajectories(tmp_path, tmp_path / "ref.npz", rtol=0, atol=0).passed
+
+
+def test_cli_export_and_compare(tmp_path, capsys):
+    from clothsim.cli import main
+
+    assert main(["export", "hanging", "--out", str(tmp_path / "m")]) == 0
+    assert (tmp_path / "m" / "L.mtx").is_file() and (tmp_path / "m" / "manifest.json").is_file()
+    manifest = json.loads((tmp_path / "m" / "manifest.json").read_text())
+    assert manifest["pinned_vertices"], "the hanging scene's pins are recorded"
+    assert main(["run", "hanging", "--frames", "2", "--no-preview",
+                 "--out", str(tmp_path / "a")]) == 0
+    assert main(["run", "hanging", "--frames", "2", "--no-preview",
+                 "--out", str(tmp_path / "b")]) == 0
+    capsys.readouterr()
+    assert main(["compare", str(tmp_path / "a"), str(tmp_path / "b"), "--atol", "0",
+                 "--rtol", "0"]) == 0
+    assert capsys.readouterr().out.startswith("PASS")
+    traj = np.load(tmp_path / "b" / "trajectory.npz")
+    moved = dict(traj)
+    moved["positions"] = traj["positions"] + 1e-6
+    np.savez(tmp_path / "moved.npz", **moved)
+    assert main(["compare", str(tmp_path / "moved.npz"), str(tmp_path / "b"),
+                 "--atol", "1e-9", "--rtol", "0"]) == 1
+    assert main(["compare", str(tmp_path / "a"), str(tmp_path / "b"), "--rtol", "-1"]) == 2
