@@ -12,20 +12,25 @@ The pipeline, one module per stage::
 imported where they are used.
 """
 
-from .effects import Effect, Gravity, Pin
+from .effects import (Box, Damping, Effect, Gravity, Impulse, Pin, Plane, Sphere, StrainLimit,
+                      Wind)
 from .errors import (ClothsimError, ClothsimWarning, ConditioningWarning, ConvergenceWarning,
-                     InputError)
-from .mesh import Mesh, grid
+                     InputError, MeshWarning)
+from .mesh import Mesh, grid, load, polygon
 from .model import Model
 from .simulation import Simulation, State
-from .solvers import LocalGlobalSolver, NewtonSolver, StepProblem, make_solver
+from .scene import load_scene
+from .solvers import (ChebyshevSolver, LocalGlobalSolver, NewtonSolver, StepProblem,
+                      SymplecticEulerSolver, make_solver)
 from .springs import Springs, grid_springs, mesh_springs
 
 __version__ = "0.1.0"
 
 __all__ = [
-    "Mesh", "grid", "Springs", "grid_springs", "mesh_springs", "Model", "Simulation", "State",
-    "LocalGlobalSolver", "NewtonSolver", "StepProblem", "make_solver", "Effect", "Gravity",
-    "Pin", "ClothsimError", "ClothsimWarning", "ConvergenceWarning", "ConditioningWarning",
-    "InputError", "__version__",
+    "Mesh", "grid", "polygon", "load", "Springs", "grid_springs", "mesh_springs", "Model",
+    "Simulation", "State", "load_scene", "LocalGlobalSolver", "ChebyshevSolver",
+    "NewtonSolver", "SymplecticEulerSolver", "StepProblem", "make_solver", "Effect", "Gravity",
+    "Pin", "Plane", "Sphere", "Box", "Impulse", "Wind", "Damping", "StrainLimit",
+    "ClothsimError", "ClothsimWarning", "ConvergenceWarning", "ConditioningWarning",
+    "InputError", "MeshWarning", "__version__",
 ]
