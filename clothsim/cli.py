@@ -135,12 +135,17 @@ def _cmd_scenes(args) -> int:
     return 0
 
 
-def _cmd_validate(args) -> int:
+def _build(scene_arg: str):
+    """Load, validate and build a scene: (scene, model, simulation)."""
     from .scene import load_scene
 
-    scene = load_scene(args.scene)
+    scene = load_scene(scene_arg)
     model = scene.build_model()
-    sim = scene.build_simulation(model)
+    return scene, model, scene.build_simulation(model)
+
+
+def _cmd_validate(args) -> int:
+    scene, model, sim = _build(args.scene)
     print(f"ok: {scene.source}: scene '{scene.name}', {model.vertex_count} vertices, "
           f"{model.spring_count} springs, {scene.frames} frames at h = {scene.h:.6g} s, "
           f"effects: {', '.join(sim.effects_built) or 'none'}")
@@ -182,11 +187,8 @@ def _cmd_run(args) -> int:
 
 def _cmd_export(args) -> int:
     from .export import export_matrices
-    from .scene import load_scene
 
-    scene = load_scene(args.scene)
-    model = scene.build_model()
-    sim = scene.build_simulation(model)
+    scene, model, sim = _build(args.scene)
     out = Path(args.out) if args.out else Path("out") / scene.name / "matrices"
     pinned = sim.pinned_vertices(sim.h)
     manifest = export_matrices(model, scene.h, out, pinned=pinned)
