@@ -39,6 +39,36 @@ def curtain(n: int, *, stiffness: float = 800.0, bending: float = 80.0, mass: fl
                          **solver_options)
 
 
+def swing(n: int, *, stiffness: float = 800.0, bending: float = 80.0, mass: float = 1.0,
+          method: str = "local-global", h: float = 1 / 30, iterations: int | None = 10,
+          tolerance: float | None = None, **solver_options) -> cs.Simulation:
+    """An n × n, 1 m × 1 m horizontal cloth hinged along one edge, released from rest.
+
+    The trajectory-accuracy scene: every vertex of one edge (row 0 of the ``plane="xz"``
+    grid) is pinned, and the sheet swings down like a pendulum, its free edge falling
+    about 1 m in 0.5 s: a slow, large motion next to the springs' fast vibrations.
+    Structural and shear springs of ``stiffness`` [N/m], bending springs of ``bending``.
+    """
+    mesh = cs.grid(n, n, size=(1.0, 1.0), center=(0.0, 1.0, 0.0), plane="xz")
+    springs = cs.grid_springs(mesh, structural=stiffness, shear=stiffness, bending=bending,
+                              bending_pattern="every")
+    model = cs.Model.build(mesh, springs, total_mass=mass)
+    return cs.Simulation(model, h=h, effects=[cs.Gravity((0.0, -9.81, 0.0)),
+                                              cs.Pin(list(range(n)))],
+                         solver=method, iterations=iterations or 10, tolerance=tolerance,
+                         **solver_options)
+
+
+def swing_factory(n: int, **kw):
+    """A simulation factory ``(method, h, iterations, tolerance) -> Simulation`` for
+    :func:`swing`."""
+
+    def factory(method, h, iterations, tolerance):
+        return swing(n, method=method, h=h, iterations=iterations, tolerance=tolerance, **kw)
+
+    return factory
+
+
 def curtain_factory(n: int, **kw):
     """A simulation factory ``(method, h, iterations, tolerance) -> Simulation``."""
 

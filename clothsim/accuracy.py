@@ -9,18 +9,22 @@ Two kinds of accuracy are measured, both for the same implicit Euler problem
    relative, :func:`converged_solution`) and the objective gap g(x_k) − g(x*) [J·s²].
    The wall time is cumulative over the iterations, with the error evaluation excluded.
 2. **Trajectory accuracy** (:func:`run_sweep`). Vertex positions at every frame of a run,
-   against a reference run with a much smaller time step solved to convergence:
-   ‖X − X_ref‖ / ‖X_ref − X_0‖ over all frames (Frobenius norms over frames × vertices).
+   against a reference run with a much smaller time step solved to convergence and
+   Richardson-extrapolated (:func:`reference_trajectory`):
+   ‖X − X_ref‖ / ‖X_ref − X_0‖ over all frames (Frobenius norms over frames × vertices);
+   :func:`convergence_slope` fits its log-log slope against h (implicit Euler: 1).
    Implicit Euler damps: a linear spring's amplitude shrinks by (1 + ω²h²)^(−½) per step
-   (:func:`implicit_euler_amplitude`), and stopping the iterations early adds damping of
-   its own; the sweep measures both as trajectory error.
+   (:func:`implicit_euler_amplitude`). Stopping the iterations early changes the energy
+   loss too, in either direction (:func:`mechanical_energy`, :func:`energy_curves`;
+   docs/accuracy.md shows both), so the sweep measures accuracy as trajectory error.
 
 The sweep's core takes a *simulation factory* ``factory(method, h, iterations, tolerance)
 -> Simulation``, so it runs on any scene; :func:`command` builds one from
 :func:`clothsim.scene.load_scene` for ``clothsim accuracy``. Results: ``accuracy.csv``
 (:data:`CSV_FIELDS`, one row per configuration), plots of error against iterations and
 against wall time, the accuracy/time frontier with the cheapest configuration for each
-accuracy level (:func:`cheapest`), and the damping plot.
+accuracy level (:func:`cheapest`), trajectory error against h (:func:`plot_convergence`)
+and the damping/energy plot.
 """
 
 from __future__ import annotations
@@ -36,11 +40,12 @@ from pathlib import Path
 
 import numpy as np
 
+from . import energy
 from .errors import InputError
 from .model import Model
 from .simulation import Simulation
 from .solvers import (ChebyshevSolver, LocalGlobalSolver, NewtonSolver, Solver, StepProblem,
-                      make_solver, objective)
+                      make_solver, objective, objective_gradient)
 
 log = logging.getLogger(__name__)
 
@@ -136,6 +141,29 @@ def iterates(solver: Solver, problem: StepProblem) -> Iterator[np.ndarray]:
     if type(solver) is LocalGlobalSolver:
         return _local_global_iterates(solver, problem)
     return _chained_iterates(solver, problem)
+
+
+def representative_problem(sim: Simulation, *, steps: int) -> StepProblem:
+    """The step, among the next ``steps`` of ``sim``, whose initial guess is farthest from
+    optimal (largest ‖∇g(y)‖): a step with real motion, not one at rest.
+
+    A step of a cloth at rest has ‖∇g(y)‖ near its rounding floor
+    (:func:`clothsim.solvers.base.gradient_noise_floor`), where no method can show
+    more than a few digits of accuracy. ``sim`` is advanced by ``steps`` steps.
+    """
+    import copy
+
+    best, best_norm = None, -1.0
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        for _ in range(max(1, steps)):
+            problem = sim.problem()
+            norm = float(np.linalg.norm(objective_gradient(sim.model, problem,
+                                                           problem.initial_guess())))
+            if norm > best_norm:
+                best, best_norm = copy.deepcopy(problem), norm
+            sim.step()
+    return best
 
 
 def trace_solver(solver: Solver, problem: StepProblem, x_star: np.ndarray, *,
@@ -256,6 +284,7 @@ class Trajectory:
 
     frames: np.ndarray                       # (f + 1, n, 3) [m], frame 0 the initial state
     step_seconds: list[float] = field(default_factory=list)
+    energy: np.ndarray | None = None         # (f + 1,) [J] mechanical energy, with gravity
     solver_error: float = math.nan
     objective_gap: float = math.nan
 
@@ -270,16 +299,35 @@ def steps_per_frame(frame_time: float, h: float) -> int:
     return steps
 
 
+def mechanical_energy(sim: Simulation) -> float:
+    """Kinetic + spring + gravitational potential energy of ``sim``'s state [J].
+
+    Gravity is taken from the simulation's :class:`~clothsim.effects.Gravity` effects
+    (none: no potential term). Pins and other effects store no energy.
+    """
+    from .effects import Gravity
+
+    x, v = sim.state.positions, sim.state.velocities
+    e = energy.kinetic_energy(sim.model, v) + energy.spring_energy(sim.model, x)
+    for effect in sim.effects:
+        if isinstance(effect, Gravity):
+            e += energy.gravity_energy(sim.model, x, effect.acceleration)
+    return e
+
+
 def run_trajectory(sim: Simulation, *, frames: int, frame_time: float,
-                   probe_frame: int | None = None, backend: str = "auto") -> Trajectory:
+                   probe_frame: int | None = None, backend: str = "auto",
+                   record_energy: bool = False) -> Trajectory:
     """Run ``sim`` for ``frames`` frames, recording positions at each frame.
 
     With ``probe_frame``, the first step of that frame is also solved to convergence by
     Newton and the simulation's solver error on it is recorded (relative error against
-    x*, and objective gap).
+    x*, and objective gap). With ``record_energy``, :func:`mechanical_energy` at each
+    frame is recorded in ``Trajectory.energy``.
     """
     per_frame = steps_per_frame(frame_time, sim.h)
     out = [sim.state.positions.copy()]
+    energies = [mechanical_energy(sim)] if record_energy else []
     seconds: list[float] = []
     traj = Trajectory(np.empty(0))
     with np.errstate(all="ignore"):
@@ -298,11 +346,17 @@ def run_trajectory(sim: Simulation, *, frames: int, frame_time: float,
                 seconds.append(sim.step().seconds)
             x = sim.state.positions
             out.append(x.copy())
+            if record_energy:
+                energies.append(mechanical_energy(sim))
             if not np.all(np.isfinite(x)):
                 out.extend([np.full_like(x, np.nan)] * (frames - f - 1))
                 break
     traj.frames = np.stack(out)
     traj.step_seconds = seconds
+    if record_energy:
+        e = np.full(len(out), np.nan)
+        e[:len(energies)] = energies
+        traj.energy = e
     return traj
 
 
@@ -316,6 +370,47 @@ def trajectory_error(frames: np.ndarray, reference: np.ndarray) -> float:
         return math.inf
     den = float(np.linalg.norm(reference - reference[0]))
     return float(np.linalg.norm(frames - reference)) / (den or 1.0)
+
+
+def reference_trajectory(factory: SimulationFactory, *, h: float, frames: int,
+                         frame_time: float, method: str = "newton",
+                         tolerance: float = 1e-10, iterations: int = 50,
+                         extrapolate: bool = True) -> tuple[np.ndarray, float]:
+    """A converged, small-h reference trajectory for :func:`trajectory_error`.
+
+    Implicit Euler solved to ``tolerance`` at h and at 2h. Its global error is
+    X(h) − X_exact = C h + O(h²) (first order), so with ``extrapolate`` the returned
+    frames are Richardson's 2 X(h) − X(2h), whose error is O(h²).
+
+    Returns
+    -------
+    frames : ndarray, shape (frames + 1, n, 3) [m]
+    error_estimate : float
+        ‖X(h) − X(2h)‖ / ‖X(h) − X_0‖, about the relative error of the *unextrapolated*
+        X(h) (an upper bound for the extrapolated one when the error is first order).
+    """
+    fine = run_trajectory(factory(method, h, iterations, tolerance), frames=frames,
+                          frame_time=frame_time).frames
+    coarse = run_trajectory(factory(method, 2.0 * h, iterations, tolerance), frames=frames,
+                            frame_time=frame_time).frames
+    estimate = trajectory_error(coarse, fine)
+    return (2.0 * fine - coarse if extrapolate else fine), estimate
+
+
+def convergence_slope(rows: Sequence[SweepRow], *, method: str,
+                      iterations: int | None) -> float:
+    """Log-log slope of trajectory error against h for one (method, iterations) series.
+
+    Implicit Euler solved to convergence is first order: the slope should be about 1.
+    NaN when fewer than two finite points exist.
+    """
+    pts = [(r.h, r.trajectory_error) for r in rows
+           if r.method == method and r.iterations == iterations
+           and math.isfinite(r.trajectory_error) and r.trajectory_error > 0]
+    if len(pts) < 2:
+        return math.nan
+    h, e = np.log(np.array(pts)).T
+    return float(np.polyfit(h, e, 1)[0])
 
 
 def _stable_explicit_step(model: Model, frame_time: float, problem: StepProblem) -> float:
@@ -337,9 +432,9 @@ def run_sweep(factory: SimulationFactory, *, time_steps: Sequence[float],
               iterations: Sequence[int] = (1, 2, 5, 10, 20, 50),
               newton_iterations: Sequence[int] = (1, 2, 3, 5),
               tolerances: Sequence[float] = (),
-              reference_h: float | None = None, reference_method: str = "local-global",
-              reference_tolerance: float = 1e-8, reference_iterations: int = 50,
-              probe_frame: int | None = None,
+              reference_h: float | None = None, reference_method: str = "newton",
+              reference_tolerance: float = 1e-10, reference_iterations: int = 50,
+              reference: np.ndarray | None = None, probe_frame: int | None = None,
               backend: str = "auto", progress: bool = False) -> list[SweepRow]:
     """Run every configuration (method × iterations or tolerance × h) and measure it.
 
@@ -366,9 +461,11 @@ def run_sweep(factory: SimulationFactory, *, time_steps: Sequence[float],
     reference_h : float, optional
         Reference time step; default min(time_steps) / 16.
     reference_method, reference_tolerance, reference_iterations
-        The reference run is solved by this method to this relative residual, with at most
-        this many iterations per step (at the small reference h local/global converges in a
-        few iterations; the cap only matters at the rounding floor).
+        The reference run (:func:`reference_trajectory`, Richardson-extrapolated) is
+        solved by this method to this relative residual, with at most this many
+        iterations per step.
+    reference : ndarray, shape (frames + 1, n, 3), optional
+        A precomputed reference trajectory (then ``reference_*`` are ignored).
     probe_frame : int, optional
         Frame at whose first step the solver error is measured (default frames // 2).
     progress : bool
@@ -395,9 +492,13 @@ def run_sweep(factory: SimulationFactory, *, time_steps: Sequence[float],
     bar = _progress(len(configs) + 1, progress)
     with warnings.catch_warnings():
         warnings.simplefilter("ignore")
-        ref_sim = factory(reference_method, h_ref, reference_iterations,
-                          reference_tolerance)
-        reference = run_trajectory(ref_sim, frames=frames, frame_time=frame_time).frames
+        if reference is None:
+            reference, ref_error = reference_trajectory(
+                factory, h=h_ref, frames=frames, frame_time=frame_time,
+                method=reference_method, tolerance=reference_tolerance,
+                iterations=reference_iterations)
+            log.info("reference h=%.4g s: unextrapolated relative error about %.2e",
+                     h_ref, ref_error)
     bar.update(1)
     rows = []
     for method, h, its, tol in configs:
@@ -610,6 +711,42 @@ def plot_frontier(rows: Sequence[SweepRow], path, *, title: str = "") -> Path:
     return Path(path)
 
 
+def plot_convergence(rows: Sequence[SweepRow], path, *, title: str = "") -> Path:
+    """Trajectory error against h (log-log), one line per (method, iterations), with a
+    slope-1 guide (implicit Euler is first order) and each line's fitted slope."""
+    plt = _pyplot()
+    fig, ax = plt.subplots(figsize=(6.4, 4.6))
+    series = dict.fromkeys((r.method, r.iterations) for r in rows
+                           if r.method not in EXPLICIT_METHODS)
+    styles = ["-", "--", ":", "-."]
+    for i, (method, its) in enumerate(series):
+        pts = sorted((r.h, r.trajectory_error) for r in rows
+                     if (r.method, r.iterations) == (method, its)
+                     and math.isfinite(r.trajectory_error))
+        if len(pts) < 2:
+            continue
+        h, e = np.array(pts).T
+        slope = convergence_slope(rows, method=method, iterations=its)
+        ax.loglog(h, e, styles[i % 4], marker="o", ms=3, color=_COLORS.get(method),
+                  label=f"{method} {its} it (slope {slope:.2f})")
+    h_all = np.array(sorted({r.h for r in rows if math.isfinite(r.h)}))
+    if len(h_all):
+        best = min((r for r in rows if r.h == h_all[0] and math.isfinite(r.trajectory_error)),
+                   key=lambda r: r.trajectory_error, default=None)
+        if best is not None:
+            ax.loglog(h_all, best.trajectory_error * h_all / h_all[0], "k:", lw=1,
+                      label="slope 1")
+    ax.set_xlabel("time step h [s]")
+    ax.set_ylabel("trajectory error ‖X − X_ref‖ / ‖X_ref − X_0‖")
+    ax.grid(True, which="both", alpha=0.3)
+    ax.legend(fontsize=7)
+    ax.set_title(title or "trajectory error against h")
+    fig.tight_layout()
+    fig.savefig(path, dpi=110)
+    plt.close(fig)
+    return Path(path)
+
+
 def damping_curves(factory: SimulationFactory, *, h: float, frames: int, frame_time: float,
                    settings: Sequence[tuple[str, int | None, float | None]], vertex: int
                    ) -> dict[str, np.ndarray]:
@@ -622,6 +759,24 @@ def damping_curves(factory: SimulationFactory, *, h: float, frames: int, frame_t
             traj = run_trajectory(sim, frames=frames, frame_time=frame_time)
             label = f"{method}, " + (f"tol {tol:g}" if tol else f"{its} it")
             out[label] = traj.frames[:, vertex, 1]
+    return out
+
+
+def energy_curves(factory: SimulationFactory, *, h: float, frames: int, frame_time: float,
+                  settings: Sequence[tuple[str, int | None, float | None]],
+                  reference: np.ndarray | None = None) -> dict[str, np.ndarray]:
+    """Mechanical energy (:func:`mechanical_energy`) at every frame for a few (method,
+    iterations, tolerance); ``reference`` (shape (frames + 1,)) is added as-is."""
+    out = {}
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        for method, its, tol in settings:
+            sim = factory(method, h, its, tol)
+            traj = run_trajectory(sim, frames=frames, frame_time=frame_time,
+                                  record_energy=True)
+            out[f"{method}, " + (f"tol {tol:g}" if tol else f"{its} it")] = traj.energy
+    if reference is not None:
+        out["reference (small h, converged)"] = np.asarray(reference)
     return out
 
 
@@ -659,9 +814,10 @@ def single_spring_heights(*, h: float, steps: int, stiffness: float = 100.0,
 
 def plot_damping(path, *, h: float = 1 / 30, steps: int = 90,
                  cloth_curves: dict[str, np.ndarray] | None = None,
-                 frame_time: float = 1 / 30) -> Path:
+                 frame_time: float = 1 / 30, cloth_ylabel: str = "mechanical energy [J]",
+                 cloth_title: str = "cloth: energy, iterations per step") -> Path:
     """Implicit Euler's damping: the single spring against its closed-form envelope, and
-    (optionally) a cloth vertex's height for a few iteration counts."""
+    (optionally) a cloth quantity (:func:`energy_curves`) for a few iteration counts."""
     plt = _pyplot()
     panels = 2 if cloth_curves else 1
     fig, axes = plt.subplots(1, panels, figsize=(5.6 * panels, 4.2), squeeze=False)
@@ -680,8 +836,8 @@ def plot_damping(path, *, h: float = 1 / 30, steps: int = 90,
         for label, y in cloth_curves.items():
             ax.plot(np.arange(len(y)) * frame_time, y, lw=1.1, label=label)
         ax.set_xlabel("time [s]")
-        ax.set_ylabel("height of a free corner [m]")
-        ax.set_title("cloth: free corner height, iterations per step")
+        ax.set_ylabel(cloth_ylabel)
+        ax.set_title(cloth_title)
         ax.legend(fontsize=8)
     fig.tight_layout()
     fig.savefig(path, dpi=110)
@@ -732,13 +888,18 @@ def command(args) -> int:
     rows = run_sweep(factory, frame_time=h, frames=frames, progress=True, **kw)
     write_csv(rows, out / "accuracy.csv")
     sim = factory("local-global", h, 10, None)
-    sim.run(max(1, frames // 2))
-    traces = solver_accuracy(model, sim.problem(), iterations=100 if args.quick else 500,
+    problem = representative_problem(sim, steps=max(1, frames // 2))
+    traces = solver_accuracy(model, problem, iterations=100 if args.quick else 500,
                              newton_iterations=10 if args.quick else 30)
     plot_solver_accuracy(traces, out / "error_vs_iterations_time.png",
-                         title=f"{args.scene}: one step at t = {sim.state.time:.2f} s")
+                         title=f"{args.scene}: the step of largest ‖∇g(y)‖ "
+                               f"in the first {max(1, frames // 2)}")
     plot_frontier(rows, out / "frontier.png")
-    plot_damping(out / "damping.png", h=h)
+    plot_convergence(rows, out / "convergence.png", title=f"{args.scene}: trajectory error")
+    curves = energy_curves(factory, h=h, frames=frames, frame_time=h,
+                           settings=[("local-global", 1, None), ("local-global", 10, None),
+                                     ("newton", 50, 1e-10)])
+    plot_damping(out / "damping.png", h=h, cloth_curves=curves, frame_time=h)
     for level, r in cheapest(rows, levels=TRAJECTORY_LEVELS):
         if r is not None:
             log.info("trajectory error <= %.0e: %s h=%.4g it=%s, %.3g ms/frame", level,
