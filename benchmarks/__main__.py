@@ -6,7 +6,7 @@ import importlib
 import sys
 import time
 
-BENCHMARKS = ("stiffness", "crossover", "paper_timing", "sweep")
+BENCHMARKS = ("stiffness", "crossover", "paper_timing", "sweep", "stability_figures")
 
 
 def main(argv: list[str]) -> int:

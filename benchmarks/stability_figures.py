@@ -2,26 +2,94 @@
 
 Run from the repository root::
 
-    .venv/bin/python benchmarks/stability_figures.py
+    .venv/bin/python benchmarks/stability_figures.py            # everything, ~3–4 min
+    .venv/bin/python benchmarks/stability_figures.py --quick    # without the full flag
 
 The figures come from the same ``measure_*`` helpers the tests assert on
-(tests/test_stability_solver.py, tests/test_stability_exact.py), so the table and the
-tests cannot drift apart.
+(tests/test_stability_{solver,exact,contact,long}.py), so the table and the tests cannot
+drift apart. Cases 7 and 8 also re-measure the set-ups of tests/test_effects.py (imported
+from there: same cloth, same obstacles, same step counts).
 """
 
 from __future__ import annotations
 
+import argparse
 import sys
 import warnings
 from pathlib import Path
 
 sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "tests"))
 
+import numpy as np  # noqa: E402
+
+import clothsim as cs  # noqa: E402
+import test_effects as ef  # noqa: E402
+import test_stability_contact as co  # noqa: E402
 import test_stability_exact as ex  # noqa: E402
+import test_stability_long as lo  # noqa: E402
 import test_stability_solver as so  # noqa: E402
 
 
-def main() -> None:
+def measure_slab_in_simulation() -> dict:
+    """tests/test_effects.py::test_thin_box_no_tunnelling_in_simulation, measured."""
+    model = ef.grid_model(6, size=0.3, center=(0.0, 0.08, 0.0))
+    box = cs.Box((-1, 0, -1), (1, 0.01, 1))
+    sim = cs.Simulation(model, h=ef.H, effects=[box],
+                        state=ef.state_of(model, (0.0, -5 * 0.01 / ef.H, 0.0)))
+    below, contacts = -np.inf, []
+    for _ in range(6):
+        sim.step()
+        below = max(below, 0.01 - sim.state.positions[:, 1].min())
+        contacts.append(len(box.contact_vertices))
+    return {"max_below_top": below, "contacts": contacts}
+
+
+def measure_small_sphere_direct() -> float:
+    """tests/test_effects.py::test_small_sphere_no_tunnelling: min |x − c| − R [m]."""
+    rng = np.random.default_rng(2)
+    c, R, k = np.array([0.1, 0.2, 0.3]), 0.005, 400
+    offset = rng.uniform(-0.2 * R, 0.2 * R, (k, 2))
+    x0 = c + np.column_stack([offset[:, 0], np.full(k, 0.02), offset[:, 1]])
+    out = cs.Sphere(c, R).correct_positions(0.0, cs.State(x0, np.zeros_like(x0)),
+                                            x0 + (0.0, -0.05, 0.0), ef.H)
+    return float((np.linalg.norm(out - c, axis=1) - R).min())
+
+
+def measure_resting_contact(name: str, friction: float, settle: int) -> dict:
+    """tests/test_effects.py::test_resting_contact, measured (one second after settling)."""
+    make, depth = ef.OBSTACLES[name]
+    model = ef.grid_model(center=(0.0, 0.25, 0.0))
+    sim = cs.Simulation(model, h=ef.H, effects=[cs.Gravity(), make(friction)], iterations=20)
+    sim.run(settle)
+    speed, inside = 0.0, -np.inf
+    for _ in range(30):
+        sim.step()
+        speed = max(speed, np.linalg.norm(sim.state.velocities, axis=1).max())
+        inside = max(inside, depth(sim.state.positions).max())
+    return {"max_speed": speed, "max_inside": inside}
+
+
+def print_long_run(label: str, r: dict) -> None:
+    c, w, q = r["cpu"], r["wall"], r["normalized"]
+    print(f"    {label}: {r['vertex_count']} vertices, {r['steps_done']} steps, finite={r['finite']},"
+          f" max distance to pole {r['max_pole_ratio']:.4f} W (W = {r['width']:.3g} m),"
+          f" max |v| {r['max_speed']:.3g} m/s, |t - N h| {r['time_drift']:.1e} s")
+    print(f"      step time median {c['median'] * 1e3:.2f} ms CPU / {w['median'] * 1e3:.2f} ms wall,"
+          f" total {r['wall_total']:.0f} s")
+    print(f"      trend per 1000 steps: normalized {q['relative_slope_per_1000']:+.2%} (the test's),"
+          f" raw CPU {c['relative_slope_per_1000']:+.2%}, wall {w['relative_slope_per_1000']:+.2%};"
+          f" last/first chunk normalized {q['last_over_first']:.3f}")
+    print("      normalized chunk medians: "
+          + " ".join(f"{m:.3f}" for m in q["chunk_medians"]))
+    print("      CPU chunk medians [ms]: "
+          + " ".join(f"{m * 1e3:.2f}" for m in c["chunk_medians"]))
+
+
+def main(argv=None) -> None:
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("--quick", action="store_true",
+                        help="skip the full 31 x 21 flag (10^4 steps, ~2-3 min)")
+    args = parser.parse_args([] if argv is None else argv)
     warnings.simplefilter("ignore")
     print("case 1  stiffness sweep (4x4, h=1/30, cap 1000 iterations, tolerance 1e-6)")
     for r in so.measure_stiffness_sweep():
@@ -43,6 +111,25 @@ def main() -> None:
     print(f"case 6  free fall max error: local-global {ex.measure_free_fall():.2e} m, "
           f"newton {ex.measure_free_fall('newton'):.2e} m")
     print(f"        release vs refactor: {ex.measure_release_vs_refactor():.2e} m")
+    r = measure_slab_in_simulation()
+    print(f"case 7  slab 0.01 m, 0.05 m per step: max depth below the top {r['max_below_top']:.1e} m,"
+          f" contacts per step {r['contacts']}")
+    print(f"        sphere R=0.005 m, 0.05 m segments: min |x-c| - R = "
+          f"{measure_small_sphere_direct():.1e} m")
+    for mu in (0.0, 1.0):
+        r = co.measure_sphere_tunnelling(mu)
+        print(f"        sphere R=0.01 m in a simulation, 0.1 m per step, mu={mu:g}: max depth "
+              f"{r['max_depth']:.1e} m, caught {len(r['caught'])} on step 1 at y >= "
+              f"{r['caught_height']:.4f} m (free: {r['would_end']:.4f} m), gap "
+              f"{r['caught_gap'].max():.1e} m")
+    for name, mu, settle in (("plane", 0.0, 60), ("sphere", 1.0, 150)):
+        r = measure_resting_contact(name, mu, settle)
+        print(f"case 8  resting on {name} (mu={mu:g}, settle {settle} steps): max |v| over 1 s "
+              f"{r['max_speed']:.1e} m/s, max depth inside {r['max_inside']:.1e} m")
+    print("case 9  long run of the flag scene (h = 1/30 s)")
+    print_long_run("coarse 7x5 (the test)", lo.measure_long_run())
+    if not args.quick:
+        print_long_run("full 31x21", lo.measure_long_run(resolution=None))
     r = ex.measure_invariance()
     print(f"case 10 rotation {r['rotation']:.2e} m; translation {r['translation_per_metre']:.2e} m/m")
     print(f"case 11 oscillator max deviation: {ex.measure_oscillator():.2e} m")
@@ -52,4 +139,4 @@ def main() -> None:
 
 
 if __name__ == "__main__":
-    main()
+    main(sys.argv[1:])

@@ -56,7 +56,7 @@ def check_finite(name: str, value) -> np.ndarray:
     if bad.any():
         index = np.unravel_index(int(np.flatnonzero(bad)[0]), arr.shape)
         where = f"{name}[{', '.join(str(int(i)) for i in index)}]" if arr.ndim else name
-        raise InputError(f"{where}: must be a finite number, got {arr[index]!r}")
+        raise InputError(f"{where}: must be a finite number, got {float(arr[index])!r}")
     return arr
 
 

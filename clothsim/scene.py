@@ -221,6 +221,14 @@ def _validate(raw: dict, base_dir: Path, default_name: str) -> dict:
         "fps": _number(s.get("fps", 30.0), "scene.fps", positive=True),
         "substeps": _integer(s.get("substeps", 1), "scene.substeps", minimum=1),
     }
+    try:  # h = 1 / (fps · substeps) must not underflow to 0
+        rate = out["scene"]["fps"] * out["scene"]["substeps"]
+    except OverflowError:
+        rate = math.inf
+    if not math.isfinite(rate):
+        raise _Invalid("scene.fps", f"fps · substeps = {out['scene']['fps']!r} · "
+                                    f"{out['scene']['substeps']} overflows: the time step "
+                                    f"h = 1 / (fps · substeps) would be 0")
 
     # [cloth]
     c = _table(raw.get("cloth", {}), "cloth")
