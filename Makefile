@@ -1,4 +1,4 @@
-# make demo : set up (first time only) and run the default scene into ./out
+# make demo : set up (first time only) and run the default scene into out/drop-on-square
 # make test : set up (first time only) and run the test suite
 # make bench: run the benchmarks (heavy measurements, not part of the tests)
 VENV := .venv
@@ -9,7 +9,7 @@ setup:
 	@sh scripts/bootstrap.sh
 
 demo: setup
-	$(PY) -m clothsim run --out out
+	$(PY) -m clothsim run
 
 test: setup
 	$(PY) -m pytest -q
