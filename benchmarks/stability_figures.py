@@ -55,20 +55,6 @@ def measure_small_sphere_direct() -> float:
     return float((np.linalg.norm(out - c, axis=1) - R).min())
 
 
-def measure_resting_contact(name: str, friction: float, settle: int) -> dict:
-    """tests/test_effects.py::test_resting_contact, measured (one second after settling)."""
-    make, depth = ef.OBSTACLES[name]
-    model = ef.grid_model(center=(0.0, 0.25, 0.0))
-    sim = cs.Simulation(model, h=ef.H, effects=[cs.Gravity(), make(friction)], iterations=20)
-    sim.run(settle)
-    speed, inside = 0.0, -np.inf
-    for _ in range(30):
-        sim.step()
-        speed = max(speed, np.linalg.norm(sim.state.velocities, axis=1).max())
-        inside = max(inside, depth(sim.state.positions).max())
-    return {"max_speed": speed, "max_inside": inside}
-
-
 def print_long_run(label: str, r: dict) -> None:
     c, w, q = r["cpu"], r["wall"], r["normalized"]
     print(f"    {label}: {r['vertex_count']} vertices, {r['steps_done']} steps, finite={r['finite']},"
@@ -123,7 +109,7 @@ def main(argv=None) -> None:
               f"{r['caught_height']:.4f} m (free: {r['would_end']:.4f} m), gap "
               f"{r['caught_gap'].max():.1e} m")
     for name, mu, settle in (("plane", 0.0, 60), ("sphere", 1.0, 150)):
-        r = measure_resting_contact(name, mu, settle)
+        r = ef.measure_resting_contact(name, mu, settle)
         print(f"case 8  resting on {name} (mu={mu:g}, settle {settle} steps): max |v| over 1 s "
               f"{r['max_speed']:.1e} m/s, max depth inside {r['max_inside']:.1e} m")
     print("case 9  long run of the flag scene (h = 1/30 s)")

@@ -650,6 +650,14 @@ def _pyplot():
     return plt
 
 
+def _save(plt, fig, path) -> Path:
+    """Lay out, write (110 dpi) and close a figure; returns its path."""
+    fig.tight_layout()
+    fig.savefig(path, dpi=110)
+    plt.close(fig)
+    return Path(path)
+
+
 def plot_solver_accuracy(traces: dict[str, IterateTrace], path, *, title: str = "") -> Path:
     """Two panels: relative error against iterations, and against cumulative wall time."""
     plt = _pyplot()
@@ -668,10 +676,7 @@ def plot_solver_accuracy(traces: dict[str, IterateTrace], path, *, title: str = 
         ax.grid(True, which="both", alpha=0.3)
         ax.legend()
     fig.suptitle(title or "solver accuracy within one implicit Euler step")
-    fig.tight_layout()
-    fig.savefig(path, dpi=110)
-    plt.close(fig)
-    return Path(path)
+    return _save(plt, fig, path)
 
 
 def plot_frontier(rows: Sequence[SweepRow], path, *, title: str = "") -> Path:
@@ -705,10 +710,7 @@ def plot_frontier(rows: Sequence[SweepRow], path, *, title: str = "") -> Path:
     axes[0].set_title("trajectory vs. small-h converged reference")
     axes[1].set_title("solver error within a step (vs. Newton x*)")
     fig.suptitle(title or "accuracy/time frontier (★ = cheapest for each accuracy level)")
-    fig.tight_layout()
-    fig.savefig(path, dpi=110)
-    plt.close(fig)
-    return Path(path)
+    return _save(plt, fig, path)
 
 
 def plot_convergence(rows: Sequence[SweepRow], path, *, title: str = "") -> Path:
@@ -741,10 +743,7 @@ def plot_convergence(rows: Sequence[SweepRow], path, *, title: str = "") -> Path
     ax.grid(True, which="both", alpha=0.3)
     ax.legend(fontsize=7)
     ax.set_title(title or "trajectory error against h")
-    fig.tight_layout()
-    fig.savefig(path, dpi=110)
-    plt.close(fig)
-    return Path(path)
+    return _save(plt, fig, path)
 
 
 def damping_curves(factory: SimulationFactory, *, h: float, frames: int, frame_time: float,
@@ -839,10 +838,7 @@ def plot_damping(path, *, h: float = 1 / 30, steps: int = 90,
         ax.set_ylabel(cloth_ylabel)
         ax.set_title(cloth_title)
         ax.legend(fontsize=8)
-    fig.tight_layout()
-    fig.savefig(path, dpi=110)
-    plt.close(fig)
-    return Path(path)
+    return _save(plt, fig, path)
 
 
 # -- command line ---------------------------------------------------------------------------
