@@ -117,24 +117,22 @@ class Simulation:
         """Kinds of the effects this simulation runs."""
         return [e.kind for e in self.effects]
 
+    def _pin_list(self, t: float) -> np.ndarray:
+        """Every vertex each pin holds in the step ending at t (a vertex twice if two do)."""
+        sets = [e.pins(t) for e in self._hooks["pins"]]
+        return np.concatenate([np.zeros(0, np.int64)]
+                              + [np.concatenate([p.fixed_vertices, p.anchor_vertices])
+                                 for p in sets])
+
     def _check_pin_overlap(self) -> None:
-        sets = [e.pins(self.state.time + self.h) for e in self._hooks["pins"]]
-        if not sets:
-            return
-        both = np.concatenate([np.concatenate([p.fixed_vertices, p.anchor_vertices])
-                               for p in sets])
-        uniq, counts = np.unique(both, return_counts=True)
+        uniq, counts = np.unique(self._pin_list(self.state.time + self.h), return_counts=True)
         if np.any(counts > 1):
             raise InputError(f"effects.pin: vertex {uniq[counts > 1][0]} is pinned by more than "
                              f"one pin")
 
     def pinned_vertices(self, t: float) -> np.ndarray:
         """Vertices held by a pin (exact or penalty) in the step ending at time t, sorted."""
-        if not self._hooks["pins"]:
-            return np.zeros(0, np.int64)
-        sets = [e.pins(t) for e in self._hooks["pins"]]
-        return np.unique(np.concatenate([np.concatenate([p.fixed_vertices, p.anchor_vertices])
-                                         for p in sets]))
+        return np.unique(self._pin_list(t))
 
     def problem(self, state: State | None = None) -> StepProblem:
         """The implicit Euler problem of the next step from ``state`` (default: current)."""
