@@ -12,14 +12,21 @@ from clothsim.errors import InputError
 from clothsim.solvers import LocalGlobalSolver, objective, objective_gradient
 
 
-def curtain(n=7, k=800.0, *, method="local-global", h=1 / 30, iterations=10, tolerance=None):
-    mesh = cs.grid(n, n, size=(1.0, 1.0), center=(0.0, 1.0, 0.0), plane="xy")
+def sheet(n, k, plane, pins, *, method, h, iterations, tolerance):
+    """A 1 m, 1 kg n × n cloth in ``plane`` with gravity and exact ``pins``."""
+    mesh = cs.grid(n, n, size=(1.0, 1.0), center=(0.0, 1.0, 0.0), plane=plane)
     springs = cs.grid_springs(mesh, structural=k, shear=k, bending=k / 10,
                               bending_pattern="every")
     model = cs.Model.build(mesh, springs, total_mass=1.0)
     return cs.Simulation(model, h=h, solver=method, iterations=iterations or 10,
                          tolerance=tolerance,
-                         effects=[cs.Gravity((0.0, -9.81, 0.0)), cs.Pin([n * (n - 1), n * n - 1])])
+                         effects=[cs.Gravity((0.0, -9.81, 0.0)), cs.Pin(pins)])
+
+
+def curtain(n=7, k=800.0, *, method="local-global", h=1 / 30, iterations=10, tolerance=None):
+    """A vertical curtain hanging from its two top corners."""
+    return sheet(n, k, "xy", [n * (n - 1), n * n - 1], method=method, h=h,
+                 iterations=iterations, tolerance=tolerance)
 
 
 def factory(method, h, iterations, tolerance):
@@ -174,13 +181,8 @@ def test_cli_arguments_and_scene_factory():
 
 def swing(n=5, k=800.0, *, method="newton", h=1 / 30, iterations=50, tolerance=1e-10):
     """A horizontal sheet hinged along one edge (row 0 pinned), released from rest."""
-    mesh = cs.grid(n, n, size=(1.0, 1.0), center=(0.0, 1.0, 0.0), plane="xz")
-    springs = cs.grid_springs(mesh, structural=k, shear=k, bending=k / 10,
-                              bending_pattern="every")
-    model = cs.Model.build(mesh, springs, total_mass=1.0)
-    return cs.Simulation(model, h=h, solver=method, iterations=iterations or 10,
-                         tolerance=tolerance,
-                         effects=[cs.Gravity((0.0, -9.81, 0.0)), cs.Pin(list(range(n)))])
+    return sheet(n, k, "xz", list(range(n)), method=method, h=h, iterations=iterations,
+                 tolerance=tolerance)
 
 
 def swing_factory(method, h, iterations, tolerance):
