@@ -114,9 +114,25 @@ def read_mesh(path, *, field: str = "mesh") -> Mesh:
 
 
 def _read_obj(path: Path, field: str) -> Mesh:
-    """Wavefront OBJ: ``v`` (first 3 numbers), ``f`` with k >= 3 vertices (fan-split), ``f``
-    with 2 vertices and ``l`` polylines (strands); ``i``, ``i/t``, ``i//n``, ``i/t/n`` and
-    negative (relative) indices. Everything else (vt, vn, groups, materials) is ignored."""
+    """Wavefront OBJ as a :class:`Mesh` (polygons fan-split; see :func:`read_obj_cells`)."""
+    return from_cells(*read_obj_cells(path, field=field), field=field)
+
+
+def read_obj_cells(path, *, field: str = "mesh") -> tuple[np.ndarray, list]:
+    """Vertices and cell blocks of a Wavefront OBJ file, faces kept as written.
+
+    Reads ``v`` (first 3 numbers), ``f`` with k >= 3 vertices (a ``"triangle"`` or
+    ``"polygon"`` block per run of one size, in file order), ``f`` with 2 vertices and ``l``
+    polylines (``"line"`` segments); ``i``, ``i/t``, ``i//n``, ``i/t/n`` and negative
+    (relative) indices. Everything else (vt, vn, groups, materials) is ignored.
+
+    Returns
+    -------
+    vertices : ndarray, shape (n, 3), float64
+    cells : list of (str, ndarray (c, k) int64)
+        0-based vertex indices, as :func:`clothsim.mesh.from_cells` takes them.
+    """
+    path = Path(path)
     try:
         text = path.read_text(encoding="utf-8", errors="replace")
     except OSError as exc:
@@ -183,7 +199,7 @@ def _read_obj(path: Path, field: str) -> Mesh:
         pair = np.column_stack([flat[:-1], flat[1:]])
         last = np.cumsum(size) - 1
         cells.append(("line", np.delete(pair, last[:-1], axis=0)))
-    return from_cells(vertices, cells, field=field)
+    return vertices, cells
 
 
 def _cell_blocks(mesh: Mesh) -> list[tuple[str, np.ndarray]]:

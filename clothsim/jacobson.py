@@ -36,7 +36,8 @@ from pathlib import Path
 import numpy as np
 
 from .errors import InputError
-from .mesh import Mesh
+from . import io
+from .mesh import Mesh, fan_triangles
 
 
 @dataclass(frozen=True, eq=False)
@@ -72,51 +73,10 @@ def _error(source, path: str, detail: str):
     return SceneError(str(source), path, detail)
 
 
-def read_obj_polygons(path) -> tuple[np.ndarray, list[np.ndarray]]:
-    """Vertices and polygon faces of an OBJ file (``v`` and ``f`` lines only).
-
-    Returns
-    -------
-    vertices : ndarray, shape (n, 3), float64
-    faces : list of ndarray
-        One int64 array of shape (f_k, k) per face size k, 0-based indices.
-    """
-    vertices: list[list[float]] = []
-    faces: dict[int, list[list[int]]] = {}
-    with open(path, encoding="utf-8") as fh:
-        for lineno, line in enumerate(fh, 1):
-            tok = line.split()
-            if not tok:
-                continue
-            try:
-                if tok[0] == "v":
-                    vertices.append([float(t) for t in tok[1:4]])
-                elif tok[0] == "f":
-                    idx = [int(t.split("/")[0]) for t in tok[1:]]
-                    # OBJ indices are 1-based; negative ones count back from the last vertex
-                    idx = [i - 1 if i > 0 else len(vertices) + i for i in idx]
-                    faces.setdefault(len(idx), []).append(idx)
-            except ValueError:
-                raise _error(path, f"line {lineno}", f"cannot parse {line.strip()!r}") from None
-    v = np.asarray(vertices, dtype=np.float64).reshape(-1, 3)
-    return v, [np.asarray(f, dtype=np.int64) for _, f in sorted(faces.items())]
-
-
 def _sides(faces: list[np.ndarray]) -> np.ndarray:
-    """Unique undirected sides of polygon faces (each polygon's boundary cycle)."""
+    """Undirected sides of polygon faces (each polygon's boundary cycle), shape (e, 2)."""
     parts = [np.stack([f, np.roll(f, -1, axis=1)], axis=2).reshape(-1, 2) for f in faces]
-    if not parts:
-        return np.zeros((0, 2), np.int64)
-    e = np.sort(np.concatenate(parts), axis=1)
-    e = e[e[:, 0] != e[:, 1]]
-    return np.unique(e, axis=0)
-
-
-def _triangles(faces: list[np.ndarray]) -> np.ndarray:
-    """Fan triangulation (0, j, j+1) of every face with at least three vertices."""
-    tris = [np.stack([f[:, 0], f[:, j], f[:, j + 1]], axis=1)
-            for f in faces if f.shape[1] >= 3 for j in range(1, f.shape[1] - 1)]
-    return np.concatenate(tris) if tris else np.zeros((0, 3), np.int64)
+    return np.concatenate(parts) if parts else np.zeros((0, 2), np.int64)
 
 
 def _load_json(path: Path) -> dict:
@@ -181,17 +141,19 @@ def _read_cached(path: str, stamp: int) -> Assignment:
     obj = p.parent / data["obj"]
     if not obj.is_file():
         raise _error(p, "obj", f"file not found: {obj}")
-    vertices, faces = read_obj_polygons(obj)
-    n = len(vertices)
-    bad = [f for f in faces if f.size and (f.min() < 0 or f.max() >= n)]
-    if bad:
-        raise _error(obj, "f", f"vertex index out of range 1..{n}")
-    strands = np.concatenate([f for f in faces if f.shape[1] == 2] or [np.zeros((0, 2), int)])
-    try:
-        mesh = Mesh(vertices, _triangles(faces), strands)
+    try:  # the springs need the faces as written (quad sides, no diagonals)
+        vertices, cells = io.read_obj_cells(obj, field="obj")
+        faces = [c for kind, c in cells if kind != "line"]
+        strands = np.concatenate([c for kind, c in cells if kind == "line"]
+                                 or [np.zeros((0, 2), np.int64)])
+        triangles = np.concatenate([fan_triangles(f) for f in faces]
+                                   or [np.zeros((0, 3), np.int64)])
+        mesh = Mesh(vertices, triangles, strands)
     except InputError as exc:
         raise _error(obj, "", str(exc)) from None
-    pairs = _sides(faces)
+    n = len(vertices)
+    pairs = np.sort(np.concatenate([_sides(faces), strands]), axis=1)
+    pairs = np.unique(pairs[pairs[:, 0] != pairs[:, 1]], axis=0)
     if "m" in data:
         m = np.full(n, _number(p, "m", data["m"]))
     else:
@@ -227,4 +189,4 @@ def scene_dict(path, *, frames: int = 60, iterations: int = 50) -> dict:
     }
 
 
-__all__ = ["Assignment", "read_assignment", "read_pins", "read_obj_polygons", "scene_dict"]
+__all__ = ["Assignment", "read_assignment", "read_pins", "scene_dict"]
