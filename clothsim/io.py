@@ -24,7 +24,7 @@ import logging
 import os
 import re
 import xml.etree.ElementTree as ET
-from contextlib import redirect_stderr, redirect_stdout
+from contextlib import contextmanager, redirect_stderr, redirect_stdout
 from io import StringIO
 from pathlib import Path
 
@@ -70,6 +70,20 @@ def _quietly(call, *args, **kwargs):
         text = _one_line(exc) if not isinstance(exc, SystemExit) else ""
         text = "; ".join(t for t in (said, text) if t) or type(exc).__name__
         raise _MeshioFailure(text if len(text) < 300 else text[:297] + "...") from exc
+
+
+@contextmanager
+def atomic_path(path):
+    """Yield a temporary name beside ``path``; on success move it onto ``path``
+    (:func:`os.replace`, atomic), otherwise delete it. Readers never see a partial file."""
+    path = Path(path)
+    tmp = path.with_name(f".{path.name}.{os.getpid()}.tmp")
+    try:
+        yield tmp
+        os.replace(tmp, path)
+    finally:
+        if tmp.exists():
+            tmp.unlink()
 
 
 def supported_formats() -> list[str]:
@@ -327,14 +341,9 @@ class FrameWriter:
                 self._entries = {i: t for i, t in self._read_pvd().items() if i < index}
         meshio = _meshio()
         path = self.out_dir / self.filename(index)
-        tmp = path.with_name(f".{path.name}.{os.getpid()}.tmp")
-        try:
+        with atomic_path(path) as tmp:
             meshio.write(tmp, meshio.Mesh(x, self._cells, point_data={"velocity": v}),
                          file_format="vtu")
-            os.replace(tmp, path)
-        finally:
-            if tmp.exists():
-                tmp.unlink()
         self._entries[index] = float(time)
         self._write_pvd()
         logger.debug("wrote %s (t = %g s)", path, time)
@@ -368,9 +377,8 @@ class FrameWriter:
             ET.SubElement(collection, "DataSet", timestep=repr(t), group="", part="0",
                           file=self.filename(i))
         ET.indent(root)
-        tmp = self.pvd_path.with_name(f".{PVD_NAME}.{os.getpid()}.tmp")
-        ET.ElementTree(root).write(tmp, encoding="utf-8", xml_declaration=True)
-        os.replace(tmp, self.pvd_path)
+        with atomic_path(self.pvd_path) as tmp:
+            ET.ElementTree(root).write(tmp, encoding="utf-8", xml_declaration=True)
 
 
 def read_pvd(path) -> list[tuple[float, Path]]:

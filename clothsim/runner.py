@@ -27,7 +27,6 @@ from __future__ import annotations
 import json
 import logging
 import math
-import os
 import platform
 import re
 import time as _time
@@ -38,6 +37,7 @@ from typing import Callable
 
 import numpy as np
 
+from . import io
 from .errors import InputError
 from .scene import Scene, load_scene
 from .simulation import State
@@ -108,14 +108,8 @@ def _clean(value):
 
 def _atomic_write(path: Path, write: Callable) -> None:
     """Write through ``write(file)`` to a temporary file, then move it onto ``path``."""
-    tmp = path.with_name(f".{path.name}.{os.getpid()}.tmp")
-    try:
-        with open(tmp, "wb") as f:
-            write(f)
-        os.replace(tmp, path)
-    finally:
-        if tmp.exists():
-            tmp.unlink()
+    with io.atomic_path(path) as tmp, open(tmp, "wb") as f:
+        write(f)
 
 
 def write_json(path: Path, data: dict) -> None:
@@ -198,8 +192,6 @@ def run_scene(scene, out_dir, *, frames: int | None = None,
         Propagated after frames 0..k−1, trajectory.npz and run.json (status
         ``"interrupted"``, ``last_frame`` k − 1 and the error) are written.
     """
-    from . import io
-
     if not isinstance(scene, Scene):
         scene = load_scene(scene)
     frames = scene.frames if frames is None else int(frames)
