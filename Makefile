@@ -12,6 +12,7 @@ demo: setup
 	$(PY) -m clothsim run
 
 test: setup
+	$(VENV)/bin/ruff check clothsim tests benchmarks examples
 	$(PY) -m pytest -q
 
 bench: setup

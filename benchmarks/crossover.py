@@ -28,8 +28,12 @@ import warnings
 
 import numpy as np
 
-from clothsim.accuracy import (ACCURACY_LEVELS, converged_solution, plot_solver_accuracy,
-                               solver_accuracy)
+from clothsim.accuracy import (
+    ACCURACY_LEVELS,
+    converged_solution,
+    plot_solver_accuracy,
+    solver_accuracy,
+)
 from clothsim.solvers import estimate_spectral_radius, objective_gradient
 from clothsim.solvers.base import gradient_noise_floor
 
@@ -79,7 +83,7 @@ def _times(traces) -> dict:
 
 
 def main() -> None:
-    for name, (n, plane, warmup, _) in SCENES.items():
+    for name, (n, _plane, warmup, _) in SCENES.items():
         sim, problem, traces, rho = run(name)
         g0 = float(np.linalg.norm(objective_gradient(sim.model, problem,
                                                      problem.initial_guess())))

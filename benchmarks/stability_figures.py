@@ -21,13 +21,13 @@ from pathlib import Path
 sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "tests"))
 
 import numpy as np  # noqa: E402
-
-import clothsim as cs  # noqa: E402
 import test_effects as ef  # noqa: E402
 import test_stability_contact as co  # noqa: E402
 import test_stability_exact as ex  # noqa: E402
 import test_stability_long as lo  # noqa: E402
 import test_stability_solver as so  # noqa: E402
+
+import clothsim as cs  # noqa: E402
 
 
 def measure_slab_in_simulation() -> dict:
@@ -57,12 +57,15 @@ def measure_small_sphere_direct() -> float:
 
 def print_long_run(label: str, r: dict) -> None:
     c, w, q = r["cpu"], r["wall"], r["normalized"]
-    print(f"    {label}: {r['vertex_count']} vertices, {r['steps_done']} steps, finite={r['finite']},"
+    print(f"    {label}: {r['vertex_count']} vertices, {r['steps_done']} steps,"
+          f" finite={r['finite']},"
           f" max distance to pole {r['max_pole_ratio']:.4f} W (W = {r['width']:.3g} m),"
           f" max |v| {r['max_speed']:.3g} m/s, |t - N h| {r['time_drift']:.1e} s")
-    print(f"      step time median {c['median'] * 1e3:.2f} ms CPU / {w['median'] * 1e3:.2f} ms wall,"
+    print(f"      step time median {c['median'] * 1e3:.2f} ms CPU /"
+          f" {w['median'] * 1e3:.2f} ms wall,"
           f" total {r['wall_total']:.0f} s")
-    print(f"      trend per 1000 steps: normalized {q['relative_slope_per_1000']:+.2%} (the test's),"
+    print(f"      trend per 1000 steps: normalized {q['relative_slope_per_1000']:+.2%}"
+          f" (the test's),"
           f" raw CPU {c['relative_slope_per_1000']:+.2%}, wall {w['relative_slope_per_1000']:+.2%};"
           f" last/first chunk normalized {q['last_over_first']:.3f}")
     print("      normalized chunk medians: "
@@ -84,10 +87,12 @@ def main(argv=None) -> None:
     print("case 2  max per-step relative energy increase (Newton 1e-12, 20 steps)")
     for h in (1 / 24, 0.1, 1.0):
         r = so.measure_energy_increase(h)
-        print(f"    h={h:.4g}  {r['max_relative_increase']:.2e}  (energy lost {r['energy_lost']:.3f} J)")
+        print(f"    h={h:.4g}  {r['max_relative_increase']:.2e}  (energy lost"
+              f" {r['energy_lost']:.3f} J)")
     print(f"case 3  max relative increase of g-hat over half steps: "
           f"{so.measure_degenerate_monotone()['max_relative_increase']:.2e}")
-    print(f"        zero-rest spring length after 12 steps: {so.measure_zero_rest_collapse():.2e} m")
+    print(f"        zero-rest spring length after 12 steps:"
+          f" {so.measure_zero_rest_collapse():.2e} m")
     for scale in (10.0, 0.01):
         r = so.measure_release(scale)
         print(f"case 4  scale {scale:g}: start max|l/r-1|={r['start_strain']:.3g} "
@@ -98,7 +103,8 @@ def main(argv=None) -> None:
           f"newton {ex.measure_free_fall('newton'):.2e} m")
     print(f"        release vs refactor: {ex.measure_release_vs_refactor():.2e} m")
     r = measure_slab_in_simulation()
-    print(f"case 7  slab 0.01 m, 0.05 m per step: max depth below the top {r['max_below_top']:.1e} m,"
+    print(f"case 7  slab 0.01 m, 0.05 m per step: max depth below the top"
+          f" {r['max_below_top']:.1e} m,"
           f" contacts per step {r['contacts']}")
     print(f"        sphere R=0.005 m, 0.05 m segments: min |x-c| - R = "
           f"{measure_small_sphere_direct():.1e} m")
@@ -117,7 +123,8 @@ def main(argv=None) -> None:
     if not args.quick:
         print_long_run("full 31x21", lo.measure_long_run(resolution=None))
     r = ex.measure_invariance()
-    print(f"case 10 rotation {r['rotation']:.2e} m; translation {r['translation_per_metre']:.2e} m/m")
+    print(f"case 10 rotation {r['rotation']:.2e} m; translation"
+          f" {r['translation_per_metre']:.2e} m/m")
     print(f"case 11 oscillator max deviation: {ex.measure_oscillator():.2e} m")
     r = ex.measure_convergence_order()
     print(f"case 12 slope {r['slope']:.4f}; errors {[f'{e:.3e}' for e in r['errors']]}")

@@ -13,7 +13,6 @@ Printed: the error and its ratio to the paper's figure (log10 ratio = digits apa
 
 from __future__ import annotations
 
-import math
 import warnings
 
 from clothsim.accuracy import converged_solution, trace_solver

@@ -21,12 +21,19 @@ import math
 import platform
 import time
 
-import numpy as np
-
-from clothsim.accuracy import (ACCURACY_LEVELS, TRAJECTORY_LEVELS, cheapest,
-                               convergence_slope, energy_curves, plot_convergence,
-                               plot_damping, plot_frontier, reference_trajectory, run_sweep,
-                               write_csv)
+from clothsim.accuracy import (
+    ACCURACY_LEVELS,
+    TRAJECTORY_LEVELS,
+    cheapest,
+    convergence_slope,
+    energy_curves,
+    plot_convergence,
+    plot_damping,
+    plot_frontier,
+    reference_trajectory,
+    run_sweep,
+    write_csv,
+)
 
 from . import DOCS_IMG, ROOT, report, swing_factory
 

@@ -12,16 +12,27 @@ The pipeline, one module per stage::
 imported where they are used.
 """
 
-from .effects import (Box, Damping, Effect, Gravity, Impulse, Pin, Plane, Sphere, StrainLimit,
-                      Wind)
-from .errors import (ClothsimError, ClothsimWarning, ConditioningWarning, ConvergenceWarning,
-                     InputError, MeshWarning)
+from .effects import Box, Damping, Effect, Gravity, Impulse, Pin, Plane, Sphere, StrainLimit, Wind
+from .errors import (
+                      ClothsimError,
+                      ClothsimWarning,
+                      ConditioningWarning,
+                      ConvergenceWarning,
+                      InputError,
+                      MeshWarning,
+)
 from .mesh import Mesh, grid, load, polygon
 from .model import Model
-from .simulation import Simulation, State
 from .scene import load_scene
-from .solvers import (ChebyshevSolver, LocalGlobalSolver, NewtonSolver, StepProblem,
-                      SymplecticEulerSolver, make_solver)
+from .simulation import Simulation, State
+from .solvers import (
+                      ChebyshevSolver,
+                      LocalGlobalSolver,
+                      NewtonSolver,
+                      StepProblem,
+                      SymplecticEulerSolver,
+                      make_solver,
+)
 from .springs import Springs, grid_springs, mesh_springs
 
 __version__ = "0.1.0"

@@ -44,8 +44,16 @@ from . import energy
 from .errors import InputError
 from .model import Model
 from .simulation import Simulation
-from .solvers import (ChebyshevSolver, LocalGlobalSolver, NewtonSolver, Solver, StepProblem,
-                      make_solver, objective, objective_gradient)
+from .solvers import (
+    ChebyshevSolver,
+    LocalGlobalSolver,
+    NewtonSolver,
+    Solver,
+    StepProblem,
+    make_solver,
+    objective,
+    objective_gradient,
+)
 
 log = logging.getLogger(__name__)
 

@@ -43,7 +43,8 @@ def export_matrices(model: Model, h: float, out_dir, *, pinned=None) -> dict:
     out.mkdir(parents=True, exist_ok=True)
     files = {
         "M.mtx": (matrices.mass_matrix(model), "M = diag(m) kron I3, 3n x 3n [kg]"),
-        "L.mtx": (matrices.stiffness_matrix(model), "L = (sum k_i A_i A_i^T) kron I3, 3n x 3n [N/m]"),
+        "L.mtx": (matrices.stiffness_matrix(model),
+                  "L = (sum k_i A_i A_i^T) kron I3, 3n x 3n [N/m]"),
         "J.mtx": (matrices.spring_matrix(model), "J = (sum k_i A_i S_i^T) kron I3, 3n x 3s [N/m]"),
         "A.mtx": (matrices.system_matrix(model, h, expand=True), "M + h^2 L, 3n x 3n [kg]"),
         "A_scalar.mtx": (matrices.system_matrix(model, h), "M_s + h^2 L_s, n x n [kg]"),

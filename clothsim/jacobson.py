@@ -35,8 +35,8 @@ from pathlib import Path
 
 import numpy as np
 
-from .errors import InputError
 from . import io
+from .errors import InputError
 from .mesh import Mesh, fan_triangles
 
 

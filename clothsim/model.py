@@ -59,7 +59,7 @@ class Model:
         total_mass: float | None = None,
         vertex_mass=None,
         mass_lumping: str = "uniform",
-    ) -> "Model":
+    ) -> Model:
         """Make a model from a mesh, springs and either a total or per-vertex mass.
 
         Parameters
@@ -111,14 +111,14 @@ class Model:
         """Initial positions, shape (n, 3) [m]."""
         return self.mesh.vertices
 
-    def with_stiffness(self, stiffness) -> "Model":
+    def with_stiffness(self, stiffness) -> Model:
         """A new model with other spring stiffnesses (a solver must be rebuilt for it)."""
         return Model(self.mesh, self.springs.with_stiffness(stiffness), self.vertex_mass)
 
-    def with_vertex_mass(self, vertex_mass) -> "Model":
+    def with_vertex_mass(self, vertex_mass) -> Model:
         return Model(self.mesh, self.springs, vertex_mass)
 
-    def with_positions(self, positions) -> "Model":
+    def with_positions(self, positions) -> Model:
         """A new model whose initial positions differ but whose rest lengths are kept."""
         x = check_finite("positions", positions)
         mesh = Mesh(x, self.mesh.triangles, self.mesh.strands, self.mesh.grid_shape)

@@ -30,10 +30,10 @@ import math
 import platform
 import re
 import time as _time
+from collections.abc import Callable
 from dataclasses import dataclass, field
-from datetime import datetime, timezone
+from datetime import UTC, datetime
 from pathlib import Path
-from typing import Callable
 
 import numpy as np
 
@@ -246,7 +246,7 @@ def run_scene(scene, out_dir, *, frames: int | None = None,
                    "backend_requested": sim.solver.backend_requested,
                    "iterations": sim.solver.iterations, "tolerance": sim.solver.tolerance},
         "versions": package_versions(),
-        "started": datetime.now(timezone.utc).isoformat(timespec="seconds"),
+        "started": datetime.now(UTC).isoformat(timespec="seconds"),
         "resumed_from": start if resume and start > 0 else None,
     }
     done = start
@@ -300,7 +300,7 @@ def _write_run_json(out: Path, info: dict, status: str, done: int, records: list
     data = dict(info)
     data.update(status=status, last_frame=done, error=error,
                 wall_seconds=_time.perf_counter() - wall,
-                finished=(datetime.now(timezone.utc).isoformat(timespec="seconds")
+                finished=(datetime.now(UTC).isoformat(timespec="seconds")
                           if status != "running" else None),
                 frames=records)
     write_json(out / "run.json", data)

@@ -448,7 +448,7 @@ class Scene:
     base_dir: Path = field(default_factory=Path.cwd)
 
     @classmethod
-    def from_dict(cls, d: dict, *, source: str = "<dict>", base_dir=None) -> "Scene":
+    def from_dict(cls, d: dict, *, source: str = "<dict>", base_dir=None) -> Scene:
         """Validate a scene document (as parsed from TOML) and return the scene.
 
         Raises

@@ -41,7 +41,7 @@ class State:
     time: float = 0.0
     step: int = 0
 
-    def copy(self) -> "State":
+    def copy(self) -> State:
         return State(self.positions.copy(), self.velocities.copy(), self.time, self.step)
 
 

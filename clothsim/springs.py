@@ -74,13 +74,13 @@ class Springs:
         """Number of springs of ``family`` (one of :data:`FAMILIES`)."""
         return int(np.count_nonzero(self.spring_family == FAMILIES.index(family)))
 
-    def with_stiffness(self, stiffness) -> "Springs":
+    def with_stiffness(self, stiffness) -> Springs:
         """A copy with new stiffnesses (scalar or per spring)."""
         return Springs(self.spring_vertices, stiffness, self.spring_rest_length,
                        self.spring_family)
 
     @staticmethod
-    def concatenate(parts: list["Springs"]) -> "Springs":
+    def concatenate(parts: list[Springs]) -> Springs:
         """Join several spring sets into one."""
         if not parts:
             return Springs(np.zeros((0, 2), np.int64), np.zeros(0), np.zeros(0),

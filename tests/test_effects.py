@@ -14,8 +14,17 @@ import numpy as np
 import pytest
 
 import clothsim as cs
-from clothsim.effects import (EFFECTS, Box, Damping, Effect, Impulse, Plane, Sphere,
-                              StrainLimit, Wind)
+from clothsim.effects import (
+    EFFECTS,
+    Box,
+    Damping,
+    Effect,
+    Impulse,
+    Plane,
+    Sphere,
+    StrainLimit,
+    Wind,
+)
 from clothsim.effects.damping import rigid_velocity
 from clothsim.errors import InputError
 

@@ -241,7 +241,7 @@ def test_frame_writer_interrupted_mid_write_leaves_valid_files(tmp_path, monkeyp
         "frame_000000.vtu", "frame_000001.vtu", "trajectory.pvd"]
     assert [f for _, f in pvd_entries(tmp_path / "trajectory.pvd")] == [
         "frame_000000.vtu", "frame_000001.vtu"]
-    for t, path in io.read_pvd(tmp_path / "trajectory.pvd"):
+    for _t, path in io.read_pvd(tmp_path / "trajectory.pvd"):
         assert io.read_frame(path)[0].shape == (9, 3)
 
 

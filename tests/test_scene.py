@@ -10,8 +10,14 @@ import pytest
 
 from clothsim import cli
 from clothsim.effects.base import overrides
-from clothsim.scene import (DEFAULT_SCENE, Scene, SceneError, data_dir, list_builtin_scenes,
-                            load_scene)
+from clothsim.scene import (
+    DEFAULT_SCENE,
+    Scene,
+    SceneError,
+    data_dir,
+    list_builtin_scenes,
+    load_scene,
+)
 
 FULL = """
 [scene]

@@ -8,9 +8,16 @@ import pytest
 import clothsim as cs
 from clothsim.accuracy import converged_solution, single_spring, trace_solver
 from clothsim.errors import InputError
-from clothsim.solvers import (SOLVERS, ChebyshevSolver, LocalGlobalSolver, StabilityWarning,
-                              SymplecticEulerSolver, estimate_spectral_radius, make_solver,
-                              stable_time_step)
+from clothsim.solvers import (
+    SOLVERS,
+    ChebyshevSolver,
+    LocalGlobalSolver,
+    StabilityWarning,
+    SymplecticEulerSolver,
+    estimate_spectral_radius,
+    make_solver,
+    stable_time_step,
+)
 
 
 def curtain(n=9, k=800.0, method="local-global", **kw):

@@ -6,12 +6,12 @@ from __future__ import annotations
 
 import numpy as np
 import pytest
-from hypothesis import given, settings, strategies as st
+from conftest import GRAVITY, make_grid_model
+from hypothesis import given, settings
+from hypothesis import strategies as st
 
 import clothsim as cs
 from clothsim.errors import InputError
-
-from conftest import GRAVITY, make_grid_model
 
 NAN, INF = float("nan"), float("inf")
 
@@ -235,7 +235,7 @@ def test_bad_scene_overrides_and_assignment_json(tmp_path):
 @given(data=st.data(), value=st.sampled_from(["nan", "inf", "-inf", "+inf"]))
 def test_toml_nan_at_random_index_is_named(data, value):
     """A nan/inf literal at a random index of a TOML vertex_mass array or pin-region corner."""
-    from clothsim.scene import SceneError, Scene, parse_toml
+    from clothsim.scene import Scene, SceneError, parse_toml
     if data.draw(st.booleans(), label="vertex_mass"):
         i = data.draw(st.integers(0, 15), label="vertex")
         masses = ["0.1"] * 16

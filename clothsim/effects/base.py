@@ -33,7 +33,7 @@ class PinSet:
     anchor_stiffness: np.ndarray = field(default_factory=lambda: np.zeros(0))
 
     @staticmethod
-    def merge(parts: list["PinSet"]) -> "PinSet":
+    def merge(parts: list[PinSet]) -> PinSet:
         if len(parts) == 1:
             return parts[0]
         cat = np.concatenate

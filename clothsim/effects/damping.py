@@ -109,7 +109,7 @@ def rigid_velocity(x: np.ndarray, v: np.ndarray, m: np.ndarray) -> np.ndarray:
     r = x - x_cm
     L = m @ np.cross(r, v)
     r2 = np.einsum("ij,ij->i", r, r)
-    I = (m @ r2) * np.eye(3) - np.einsum("i,ij,ik->jk", m, r, r)
+    I = (m @ r2) * np.eye(3) - np.einsum("i,ij,ik->jk", m, r, r)  # noqa: E741 (inertia tensor)
     omega = np.linalg.lstsq(I, L, rcond=None)[0]
     return v_cm + np.cross(omega, r)
 

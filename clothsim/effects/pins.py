@@ -15,7 +15,7 @@ follow a prescribed motion (constant ``velocity`` or a callable ``motion(t)``).
 
 from __future__ import annotations
 
-from typing import Callable
+from collections.abc import Callable
 
 import numpy as np
 
@@ -48,9 +48,9 @@ class Pin(Effect):
 
     kind = "pin"
 
-    def __init__(self, vertices=None, *, region: dict | None = None, method: str = "constraint", stiffness: float = 1e5,
-                 release: float | None = None, velocity=None,
-                 motion: Callable[[float], np.ndarray] | None = None):
+    def __init__(self, vertices=None, *, region: dict | None = None, method: str = "constraint",
+                 stiffness: float = 1e5, release: float | None = None,
+                 velocity=None, motion: Callable[[float], np.ndarray] | None = None):
         if (vertices is None) == (region is None):
             raise InputError("pin: give exactly one of 'vertices' or 'region'")
         self.region = None

@@ -4,14 +4,16 @@ After the solve, for ``iterations`` passes, every limited spring with |p| > (1 +
 shortened to exactly (1 + τ) r by moving its ends toward each other along p, in inverse
 proportion to their masses (w = 1/m; a pinned vertex has w = 0 and does not move):
 
-    x_a ← x_a − w_a / (w_a + w_b) (|p| − (1 + τ) r) p/|p|,   x_b ← x_b + w_b / (w_a + w_b) (…) p/|p|.
+    x_a ← x_a − w_a / (w_a + w_b) (|p| − (1 + τ) r) p/|p|,
+    x_b ← x_b + w_b / (w_a + w_b) (|p| − (1 + τ) r) p/|p|.
 
 Vectorization (Gauss–Seidel by colours): the limited springs are split into groups in
 which no two springs share a vertex (an edge colouring computed once in ``bind`` by
-:func:`matching_groups`, about 2Δ groups for largest vertex degree Δ). Within a group the corrections are independent, so one numpy
-assignment applies them all exactly; groups are applied one after another, as in Provot's
-sequential loop. A pass with no over-long spring ends the loop early. The simulation then derives v = (x − x_n)/h from the corrected positions,
-which also removes the over-stretching velocity.
+:func:`matching_groups`, about 2Δ groups for largest vertex degree Δ). Within a group the
+corrections are independent, so one numpy assignment applies them all exactly; groups are
+applied one after another, as in Provot's sequential loop. A pass with no over-long spring
+ends the loop early. The simulation then derives v = (x − x_n)/h from the corrected
+positions, which also removes the over-stretching velocity.
 
 Shortening one spring can stretch its neighbours, so a bounded number of passes reduces
 but need not remove every violation; the residual maximum strain is in
@@ -24,7 +26,7 @@ cloth behavior", Graphics Interface 1995.
 
 from __future__ import annotations
 
-from typing import Callable
+from collections.abc import Callable
 
 import numpy as np
 

@@ -11,8 +11,14 @@ method                class
 ====================  ===================================================================
 """
 
-from .base import (StepProblem, StepResult, Solver, augmented_objective, objective,
-                   objective_gradient)
+from .base import (
+    Solver,
+    StepProblem,
+    StepResult,
+    augmented_objective,
+    objective,
+    objective_gradient,
+)
 from .chebyshev import ChebyshevSolver, estimate_spectral_radius
 from .local_global import LocalGlobalSolver
 from .newton import NewtonSolver

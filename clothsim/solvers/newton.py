@@ -8,8 +8,8 @@ springs can make it indefinite; then (the Cholesky factorization fails) their tr
 stiffness factor (1 − r/l) is clamped at 0 (:func:`clothsim.energy.spring_hessian`), which
 makes the system positive definite and Δ a descent direction. Iterations stop at the
 tolerance, or when the step no longer changes x in floating point (the gradient has reached
-its rounding floor; this counts as converged). Converged, it gives the implicit Euler step x_{n+1} that the
-local/global iterations approach (Liu et al. 2013, Section 5 compares the two).
+its rounding floor; this counts as converged). Converged, it gives the implicit Euler step
+x_{n+1} that the local/global iterations approach (Liu et al. 2013, Section 5 compares the two).
 
 References
 ----------
@@ -25,8 +25,15 @@ from .. import energy
 from ..errors import FactorizationError
 from ..factorization import Factor
 from ..model import Model
-from .base import (Solver, StepProblem, StepResult, gradient_noise_floor, objective,
-                   objective_gradient, relative)
+from .base import (
+    Solver,
+    StepProblem,
+    StepResult,
+    gradient_noise_floor,
+    objective,
+    objective_gradient,
+    relative,
+)
 
 ARMIJO_C = 1e-4
 MAX_HALVINGS = 60
