@@ -12,7 +12,7 @@ demo: setup
 	$(PY) -m clothsim run
 
 test: setup
-	$(VENV)/bin/ruff check clothsim tests benchmarks examples
+	$(VENV)/bin/ruff check clothsim tests benchmarks examples scripts
 	$(PY) -m pytest -q
 
 bench: setup

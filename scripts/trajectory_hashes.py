@@ -2,15 +2,27 @@
 
 Usage: python scripts/trajectory_hashes.py OUT_ROOT   (OUT_ROOT holds one folder per run)
 """
-import hashlib, sys, pathlib
+
+import hashlib
+import pathlib
+import sys
+
 import numpy as np
-root = pathlib.Path(sys.argv[1])
-for d in sorted(p for p in root.iterdir() if p.is_dir()):
-    f = d / "trajectory.npz"
-    if not f.exists():
-        print(d.name, "MISSING"); continue
-    with np.load(f) as z:
-        h = hashlib.sha256()
-        for k in sorted(z.files):
-            a = z[k]; h.update(k.encode()); h.update(str(a.dtype).encode()); h.update(str(a.shape).encode()); h.update(np.ascontiguousarray(a).tobytes())
-        print(f"{d.name:18s} {h.hexdigest()[:16]} keys={sorted(z.files)}")
+
+
+def array_hash(path: pathlib.Path) -> str:
+    """SHA-256 over every array's name, dtype, shape and bytes, in name order."""
+    digest = hashlib.sha256()
+    with np.load(path) as z:
+        for key in sorted(z.files):
+            a = np.ascontiguousarray(z[key])
+            for part in (key, str(a.dtype), str(a.shape)):
+                digest.update(part.encode())
+            digest.update(a.tobytes())
+    return digest.hexdigest()[:16]
+
+
+if __name__ == "__main__":
+    for folder in sorted(p for p in pathlib.Path(sys.argv[1]).iterdir() if p.is_dir()):
+        npz = folder / "trajectory.npz"
+        print(f"{folder.name:18s} {array_hash(npz) if npz.exists() else 'MISSING'}")
