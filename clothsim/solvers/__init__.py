@@ -12,6 +12,7 @@ method                class
 """
 
 from .base import (
+    Iterate,
     Solver,
     StepProblem,
     StepResult,
@@ -44,7 +45,7 @@ def make_solver(method: str, model, **options) -> Solver:
     return cls(model, **options)
 
 
-__all__ = ["StepProblem", "StepResult", "Solver", "LocalGlobalSolver", "ChebyshevSolver",
+__all__ = ["StepProblem", "StepResult", "Iterate", "Solver", "LocalGlobalSolver", "ChebyshevSolver",
            "NewtonSolver", "SymplecticEulerSolver", "StabilityWarning", "SOLVERS",
            "make_solver", "objective", "augmented_objective", "objective_gradient",
            "estimate_spectral_radius", "stable_time_step"]

@@ -14,6 +14,7 @@ from __future__ import annotations
 
 import math
 import warnings
+from collections.abc import Iterator
 from dataclasses import dataclass, field
 
 import numpy as np
@@ -93,6 +94,25 @@ class StepProblem:
         mask = np.ones(n, bool)
         mask[self.fixed_vertices] = False
         return mask
+
+
+@dataclass
+class Iterate:
+    """One iterate of a step solver (see :meth:`Solver.iterates`).
+
+    Attributes
+    ----------
+    k : int
+        Iterations done; 0 is the initial guess.
+    x : ndarray, shape (n, 3)
+        The iterate [m]; valid until the generator resumes (copy it to keep it).
+    gradient_norm : float
+        ‖∇g(x)‖ over the free degrees of freedom [N·s²] (absolute, not relative).
+    """
+
+    k: int
+    x: np.ndarray
+    gradient_norm: float
 
 
 @dataclass
@@ -193,8 +213,36 @@ class Solver:
         self.tolerance = tolerance
         self.backend_requested = backend
 
-    def solve(self, problem: StepProblem, x0: np.ndarray | None = None) -> StepResult:
+    def iterates(self, problem: StepProblem, x0: np.ndarray | None = None) -> Iterator[Iterate]:
+        """Yield the initial guess (k = 0), then every iterate of the method.
+
+        Runs until the consumer stops, or returns when the method can make no further
+        progress. A yielded ``x`` is valid until the generator resumes: copy it to keep it.
+        """
         raise NotImplementedError
+
+    def solve(self, problem: StepProblem, x0: np.ndarray | None = None) -> StepResult:
+        """Minimize g from ``x0`` (default: y with pins applied) under the one stop rule.
+
+        Stops at ``iterations``, once the relative residual ‖∇g(x_k)‖ / ‖∇g(x_0)‖ is at
+        most ``tolerance``, once ‖∇g‖ is at its rounding floor
+        (:func:`gradient_noise_floor`, only with a tolerance), or on a non-finite residual.
+        """
+        history: list[float] = []
+        floor = r0 = None
+        last = None
+        for last in self.iterates(problem, x0):
+            rn = last.gradient_norm
+            if floor is None:
+                floor = gradient_noise_floor(self.model, problem, last.x) if self.tolerance else 0.0
+                r0 = rn
+            history.append(relative(rn, r0))
+            if (last.k >= self.iterations or not math.isfinite(rn)
+                    or (self.tolerance is not None
+                        and (history[-1] <= self.tolerance or rn <= floor))):
+                break
+        return self._finish(np.array(last.x), last.k, history,
+                            at_floor=last.gradient_norm <= floor)
 
     def invalidate(self) -> None:
         """Drop anything precomputed from the model (call after changing the model)."""

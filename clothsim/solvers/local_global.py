@@ -32,7 +32,7 @@ import scipy.sparse as sp
 from .. import matrices
 from ..factorization import Factor
 from ..model import Model
-from .base import Solver, StepProblem, StepResult, gradient_noise_floor, relative
+from .base import Iterate, Solver, StepProblem
 
 log = logging.getLogger(__name__)
 
@@ -219,22 +219,17 @@ class LocalGlobalSolver(Solver):
         return grad[sysf.free]
 
     # -- the iteration --------------------------------------------------------------------
-    def solve(self, problem: StepProblem, x0: np.ndarray | None = None) -> StepResult:
-        """Minimize g by local/global iterations from ``x0`` (default: y, pins applied)."""
+    def iterates(self, problem: StepProblem, x0: np.ndarray | None = None):
+        """Local/global iterates from ``x0`` (default: y, pins applied).
+
+        Each iterate's gradient norm is ‖∇g(x_k)‖ with d = d(x_k) from the local step; the
+        global step then gives x_{k+1}.
+        """
         self.system(problem)
         x = problem.initial_guess() if x0 is None else np.array(x0, dtype=np.float64)
-        history: list[float] = []
-        r0 = None
-        it = 0
-        floor = gradient_noise_floor(self.model, problem, x) if self.tolerance else 0.0
+        k = 0
         while True:
             d = self.local_step(x)
-            rn = float(np.linalg.norm(self.gradient(problem, x, d)))
-            r0 = rn if r0 is None else r0
-            history.append(relative(rn, r0))
-            if it >= self.iterations or (self.tolerance is not None
-                                         and (history[-1] <= self.tolerance or rn <= floor)):
-                break
+            yield Iterate(k, x, float(np.linalg.norm(self.gradient(problem, x, d))))
             x = self.global_step(problem, d)
-            it += 1
-        return self._finish(x, it, history, at_floor=rn <= floor)
+            k += 1
