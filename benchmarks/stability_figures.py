@@ -51,7 +51,7 @@ def measure_small_sphere_direct() -> float:
     offset = rng.uniform(-0.2 * R, 0.2 * R, (k, 2))
     x0 = c + np.column_stack([offset[:, 0], np.full(k, 0.02), offset[:, 1]])
     out = cs.Sphere(c, R).correct_positions(0.0, cs.State(x0, np.zeros_like(x0)),
-                                            x0 + (0.0, -0.05, 0.0), ef.H)
+                                            x0 + (0.0, -0.05, 0.0))
     return float((np.linalg.norm(out - c, axis=1) - R).min())
 
 

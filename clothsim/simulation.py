@@ -15,9 +15,10 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from .effects.base import Effect, PinSet, overrides
+from .effects.base import HOOKS, Effect, overrides
 from .errors import InputError, check_finite
 from .model import Model
+from .problem import PinSet
 from .solvers import Solver, StepProblem, StepResult, make_solver
 
 log = logging.getLogger(__name__)
@@ -41,18 +42,33 @@ class State:
     time: float = 0.0
     step: int = 0
 
+    def __post_init__(self):
+        x = check_finite("state.positions", self.positions)
+        if x.ndim != 2 or x.shape[1] != 3:
+            raise InputError(f"state.positions: expected shape (n, 3), got {x.shape}")
+        v = check_finite("state.velocities", self.velocities)
+        if v.shape != x.shape:
+            raise InputError(f"state.velocities: expected shape {x.shape} like the positions, "
+                             f"got {v.shape}")
+        self.positions, self.velocities = x, v
+        self.time = float(check_finite("state.time", self.time))
+
     def copy(self) -> State:
         return State(self.positions.copy(), self.velocities.copy(), self.time, self.step)
 
 
 @dataclass
 class StepRecord:
-    """What one step did: solver iterations, final relative residual, wall seconds."""
+    """What one step did: solver iterations, final relative residual, wall seconds.
+
+    ``converged`` is True or False when the solver had a tolerance (met or missed) and
+    None ("not checked") for a fixed iteration count.
+    """
 
     iterations: int
     residual: float
     seconds: float
-    converged: bool = True
+    converged: bool | None = None
     residual_history: list[float] = field(default_factory=list)
 
 
@@ -98,19 +114,30 @@ class Simulation:
             self.solver = make_solver(solver, model, iterations=iterations, tolerance=tolerance,
                                       backend=backend, **solver_options)
         self.effects: list[Effect] = list(effects)
+        for i, e in enumerate(self.effects):
+            if not isinstance(e, Effect):
+                raise InputError(f"effects[{i}]: expected an Effect, got {type(e).__name__}")
+            if e._simulation is not None or any(e is o for o in self.effects[:i]):
+                raise InputError(f"effects[{i}] ({e.kind}): already bound to another "
+                                 f"simulation; create one effect per simulation")
         for e in self.effects:
             e.bind(model, self.h)
-        self._hooks = {hook: [e for e in self.effects if overrides(e, hook)]
-                       for hook in ("add_force", "adjust_target", "pins", "correct_positions",
-                                    "correct_velocities")}
-        for e in self.effects:  # effects that must not move pinned vertices (strain limit)
-            if hasattr(e, "connect_pins"):
-                e.connect_pins(self.pinned_vertices)
+        self._hooks = {hook: [e for e in self.effects if overrides(e, hook)] for hook in HOOKS}
+        for e in self._hooks["connect_pins"]:  # effects that must not move pinned vertices
+            e.connect_pins(self.pinned_vertices)
+        n = model.vertex_count
         if state is None:
-            n = model.vertex_count
             state = State(model.mesh.vertices.copy(), np.zeros((n, 3)))
+        elif not isinstance(state, State):
+            raise InputError(f"state: expected a State, got {type(state).__name__}")
+        elif state.positions.shape != (n, 3):
+            raise InputError(f"state.positions: expected shape ({n}, 3) for this model, got "
+                             f"{state.positions.shape}")
         self.state = state
         self._check_pin_overlap()
+        for e in self.effects:
+            e._simulation = self
+        self._check_initial_overlap()
 
     @property
     def effects_built(self) -> list[str]:
@@ -130,6 +157,18 @@ class Simulation:
             raise InputError(f"effects.pin: vertex {uniq[counts > 1][0]} is pinned by more than "
                              f"one pin")
 
+    def _check_initial_overlap(self) -> None:
+        """Warn when an obstacle holds cloth vertices at t = 0 (they would be launched)."""
+        for i, e in enumerate(self.effects):
+            inside = getattr(e, "inside", None)
+            if inside is None or not overrides(e, "correct_positions"):
+                continue
+            count = int(np.count_nonzero(inside(self.state.positions)))
+            if count:
+                log.warning("effects[%d] (%s): %d of %d cloth vertices start inside the "
+                            "obstacle; they will be pushed out in the first step", i, e.kind,
+                            count, self.model.vertex_count)
+
     def pinned_vertices(self, t: float) -> np.ndarray:
         """Vertices held by a pin (exact or penalty) in the step ending at time t, sorted."""
         return np.unique(self._pin_list(t))
@@ -145,7 +184,7 @@ class Simulation:
                 e.add_force(t, s, f)
         y = s.positions + h * s.velocities
         for e in self._hooks["adjust_target"]:
-            y = e.adjust_target(t, s, y, h)
+            y = e.adjust_target(t, s, y)
         pins = PinSet()
         if self._hooks["pins"]:
             pins = PinSet.merge([e.pins(t + h) for e in self._hooks["pins"]])
@@ -162,10 +201,10 @@ class Simulation:
         x = result.x
         t1 = s.time + h
         for e in self._hooks["correct_positions"]:
-            x = e.correct_positions(t1, s, x, h)
+            x = e.correct_positions(t1, s, x)
         v = (x - s.positions) / h
         for e in self._hooks["correct_velocities"]:
-            v = e.correct_velocities(t1, s, x, v, h)
+            v = e.correct_velocities(t1, s, x, v)
         self.state = State(x, v, t1, s.step + 1)
         record = StepRecord(result.iterations, result.residual, _time.perf_counter() - start,
                             result.converged, result.residual_history)

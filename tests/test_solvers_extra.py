@@ -144,7 +144,9 @@ def test_symplectic_warns_above_stability_limit():
         SymplecticEulerSolver(model).solve(
             cs.Simulation(model, h=1.1 * limit, solver="symplectic-euler",
                           check_stability=False, effects=[pin], state=state).problem())
-    # below the limit: no warning (the test config turns warnings into errors)
+    # below the limit: no warning (the test config turns warnings into errors); a new pin,
+    # since an effect belongs to one simulation
+    pin = single_spring(stiffness=100.0, mass=1.0)[1]
     SymplecticEulerSolver(model).solve(
         cs.Simulation(model, h=0.9 * limit, solver="symplectic-euler", effects=[pin],
                       state=state).problem())

@@ -77,15 +77,15 @@ class Damping(Effect):
 class VelocityDamping(Damping):
     """v ← (1 − c) v after the step."""
 
-    def correct_velocities(self, t, state, x, v, h):
+    def correct_velocities(self, t, state, x, v):
         return (1.0 - self.coefficient) * v
 
 
 class InertialDamping(Damping):
     """y = x_n + a h v_n."""
 
-    def adjust_target(self, t, state, y, h):
-        return y - ((1.0 - self.coefficient) * h) * state.velocities
+    def adjust_target(self, t, state, y):
+        return y - ((1.0 - self.coefficient) * self.h) * state.velocities
 
 
 def rigid_velocity(x: np.ndarray, v: np.ndarray, m: np.ndarray) -> np.ndarray:
@@ -117,7 +117,7 @@ def rigid_velocity(x: np.ndarray, v: np.ndarray, m: np.ndarray) -> np.ndarray:
 class RigidDamping(Damping):
     """v ← v + c (v_rigid − v) after the step."""
 
-    def correct_velocities(self, t, state, x, v, h):
+    def correct_velocities(self, t, state, x, v):
         c = self.coefficient
         if c == 0.0:
             return v

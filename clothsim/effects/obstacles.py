@@ -114,7 +114,7 @@ class Obstacle(Effect):
         return x, normal
 
     # -- the hooks ---------------------------------------------------------------------
-    def correct_positions(self, t, state, x, h):
+    def correct_positions(self, t, state, x):
         x0 = state.positions
         index, p, n = self.contacts(x0, x)
         if len(index) == 0:
@@ -146,7 +146,7 @@ class Obstacle(Effect):
         self.contact_normals = n
         return x
 
-    def correct_velocities(self, t, state, x, v, h):
+    def correct_velocities(self, t, state, x, v):
         if len(self.contact_vertices) == 0:
             return v
         i, n = self.contact_vertices, self.contact_normals

@@ -159,7 +159,7 @@ class StrainLimit(Effect):
         self._groups = [(self._a[g], self._b[g], self._limit[g]) for g in
                         matching_groups(springs.spring_vertices[index], model.vertex_count)]
 
-    def correct_positions(self, t, state, x, h):
+    def correct_positions(self, t, state, x):
         w = self._inverse_mass
         pinned = self.pinned_vertices_at(t)
         if len(pinned):

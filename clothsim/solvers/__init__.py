@@ -11,15 +11,15 @@ method                class
 ====================  ===================================================================
 """
 
-from .base import (
-    Iterate,
-    Solver,
+from ..problem import (
+    PinSet,
     StepProblem,
-    StepResult,
     augmented_objective,
+    gradient_noise_floor,
     objective,
     objective_gradient,
 )
+from .base import Iterate, Solver, StepResult
 from .chebyshev import ChebyshevSolver, estimate_spectral_radius
 from .local_global import LocalGlobalSolver
 from .newton import NewtonSolver
@@ -47,5 +47,5 @@ def make_solver(method: str, model, **options) -> Solver:
 
 __all__ = ["StepProblem", "StepResult", "Iterate", "Solver", "LocalGlobalSolver", "ChebyshevSolver",
            "NewtonSolver", "SymplecticEulerSolver", "StabilityWarning", "SOLVERS",
-           "make_solver", "objective", "augmented_objective", "objective_gradient",
+           "make_solver", "PinSet", "gradient_noise_floor", "objective", "augmented_objective", "objective_gradient",
            "estimate_spectral_radius", "stable_time_step"]

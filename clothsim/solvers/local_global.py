@@ -158,9 +158,7 @@ class LocalGlobalSolver(Solver):
         b = self._Ms[:, None] * problem.y + h2 * (self._Js @ d)
         if problem.f_ext is not None:
             b += h2 * problem.f_ext
-        if len(problem.anchor_vertices):
-            np.add.at(b, problem.anchor_vertices,
-                      h2 * problem.anchor_stiffness[:, None] * problem.anchor_positions)
+        problem.anchors.add_rhs(b, h2)
         return b
 
     def displacement_right_hand_side(self, problem: StepProblem, d: np.ndarray) -> np.ndarray:
@@ -175,10 +173,7 @@ class LocalGlobalSolver(Solver):
         b = h2 * (self._Js @ (d - (y[self._a] - y[self._b])))
         if problem.f_ext is not None:
             b += h2 * problem.f_ext
-        if len(problem.anchor_vertices):
-            av = problem.anchor_vertices
-            np.add.at(b, av, h2 * problem.anchor_stiffness[:, None]
-                      * (problem.anchor_positions - y[av]))
+        problem.anchors.add_rhs(b, h2, origin=y)
         return b
 
     def global_step(self, problem: StepProblem, d: np.ndarray) -> np.ndarray:
@@ -212,10 +207,7 @@ class LocalGlobalSolver(Solver):
                 + h2 * (self._Js @ ((x[self._a] - x[self._b]) - d)))
         if problem.f_ext is not None:
             grad -= h2 * problem.f_ext
-        if len(problem.anchor_vertices):
-            av = problem.anchor_vertices
-            np.add.at(grad, av, h2 * problem.anchor_stiffness[:, None]
-                      * (x[av] - problem.anchor_positions))
+        problem.anchors.add_gradient(grad, x, h2)
         return grad[sysf.free]
 
     # -- the iteration --------------------------------------------------------------------

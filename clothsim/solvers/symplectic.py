@@ -36,7 +36,7 @@ import scipy.sparse.linalg as spla
 from .. import energy, matrices
 from ..errors import ClothsimWarning
 from ..model import Model
-from .base import Solver, StepProblem, StepResult
+from .base import Iterate, Solver, StepProblem
 
 log = logging.getLogger(__name__)
 
@@ -84,7 +84,8 @@ class SymplecticEulerSolver(Solver):
     ----------
     model : Model
     iterations, tolerance
-        Accepted for interface compatibility and ignored: a step is one force evaluation.
+        Accepted for interface compatibility and ignored: a step is one force evaluation
+        (one iterate); results report 1 iteration, residual 0 and ``converged`` None.
     backend
         Ignored (no linear system).
     check_stability : bool, default True
@@ -101,6 +102,7 @@ class SymplecticEulerSolver(Solver):
     def __init__(self, model: Model, *, iterations: int = 1, tolerance: float | None = None,
                  backend: str = "auto", check_stability: bool = True):
         super().__init__(model, iterations=iterations, tolerance=None, backend=backend)
+        self.iterations = 1  # one force evaluation per step, whatever was asked
         self.check_stability = check_stability
         self.stable_h: float | None = None
         self._checked = None
@@ -124,16 +126,20 @@ class SymplecticEulerSolver(Solver):
         f = -energy.spring_gradient(self.model, x)
         if problem.f_ext is not None:
             f += problem.f_ext
-        if len(problem.anchor_vertices):
-            k = problem.anchor_stiffness[:, None]
-            np.add.at(f, problem.anchor_vertices,
-                      -k * (x[problem.anchor_vertices] - problem.anchor_positions))
+        problem.anchors.add_gradient(f, x, -1.0)
         return f
 
-    def solve(self, problem: StepProblem, x0: np.ndarray | None = None) -> StepResult:
-        """x_{n+1} = y + h² M⁻¹ (f_ext − ∇E(x_n)), fixed vertices at their targets."""
+    def iterates(self, problem: StepProblem, x0: np.ndarray | None = None):
+        """The explicit step as one "iteration": k = 0 is x_n, k = 1 is x_{n+1}.
+
+        x_{n+1} = y + h² M⁻¹ (f_ext − ∇E(x_n)), fixed vertices at their targets. There is
+        no objective to minimize, so every gradient norm is reported as 0 (no residual);
+        the method can make no progress after its one step and then returns. ``x0`` is
+        ignored (the step starts from x_n by definition).
+        """
         if self.check_stability:
             self._check(problem)
+        yield Iterate(0, problem.x, 0.0)
         x = problem.y + problem.h ** 2 * self._inv_mass[:, None] * self.force(problem, problem.x)
         x[problem.fixed_vertices] = problem.fixed_positions
-        return StepResult(x, 1, 0.0, [], True)
+        yield Iterate(1, x, 0.0)

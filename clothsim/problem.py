@@ -1,0 +1,298 @@
+"""One implicit Euler step as an optimization problem: its data, objective and gradient.
+
+One step (Liu et al. 2013, Eq. 4) asks for
+
+    x_{n+1} = argmin_x g(x),   g(x) = ½ (x − y)ᵀ M (x − y) + h² E(x),
+
+with y the inertial target (y = x_n + h v_n unless a damping effect changes it), external
+forces f, exact pins (fixed vertices at prescribed positions, removed from the unknowns)
+and penalty pins ("anchors": zero-rest-length springs of stiffness k to fixed points q).
+:class:`StepProblem` holds exactly these data; every solver minimizes the same g.
+
+==========================  ===============================================================
+name                        meaning
+==========================  ===============================================================
+:class:`PinSet`             pins active during one step (what effects hand the simulation)
+:class:`StepProblem`        the data of one step
+:class:`PenaltyAnchors`     the anchor terms: energy, gradient, right-hand side
+:func:`objective`           g(x)
+:func:`augmented_objective` ĝ(x, d) (Eq. 9), ĝ(x, d(x)) = g(x)
+:func:`objective_gradient`  ∇g(x)
+:func:`gradient_noise_floor` ‖∇g‖ below which the gradient is rounding noise
+==========================  ===============================================================
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from . import energy
+from .errors import InputError, check_finite
+from .model import Model
+
+_EMPTY_I = np.zeros(0, np.int64)
+_EMPTY_X = np.zeros((0, 3))
+
+
+def _index_array(name: str, value, n: int | None = None) -> np.ndarray:
+    """Vertex indices as int64, shape (p,); floats that are not whole numbers, or indices
+    out of range 0..n−1, are an :class:`InputError` naming ``name``."""
+    arr = np.asarray(value)
+    if arr.size and not np.issubdtype(arr.dtype, np.integer):
+        if arr.dtype.kind != "f":
+            raise InputError(f"{name}: must be integer vertex indices, got dtype {arr.dtype}")
+        check_finite(name, arr)
+        if not np.all(np.mod(arr, 1) == 0):
+            raise InputError(f"{name}: must be integer vertex indices, got a non-integer value")
+    arr = arr.astype(np.int64).reshape(-1)
+    if n is not None and arr.size:
+        bad = np.flatnonzero((arr < 0) | (arr >= n))
+        if len(bad):
+            raise InputError(f"{name}[{bad[0]}]: vertex {arr[bad[0]]} out of range 0..{n - 1}")
+    return arr
+
+
+def _points(name: str, value, rows: int | None) -> np.ndarray:
+    """(rows, 3) float64 array of finite numbers, or an :class:`InputError` naming ``name``."""
+    arr = check_finite(name, value)
+    if arr.ndim != 2 or arr.shape[1] != 3 or (rows is not None and arr.shape[0] != rows):
+        want = f"({rows}, 3)" if rows is not None else "(p, 3)"
+        raise InputError(f"{name}: expected shape {want}, got {arr.shape}")
+    return arr
+
+
+@dataclass
+class PinSet:
+    """Pins active during one step (see :class:`StepProblem` for the meaning of each array).
+
+    Attributes
+    ----------
+    fixed_vertices : ndarray, shape (p,), int
+    fixed_positions : ndarray, shape (p, 3) [m]
+    anchor_vertices : ndarray, shape (q,), int
+    anchor_positions : ndarray, shape (q, 3) [m]
+    anchor_stiffness : ndarray, shape (q,) [N/m]
+    """
+
+    fixed_vertices: np.ndarray = field(default_factory=lambda: _EMPTY_I)
+    fixed_positions: np.ndarray = field(default_factory=lambda: _EMPTY_X)
+    anchor_vertices: np.ndarray = field(default_factory=lambda: _EMPTY_I)
+    anchor_positions: np.ndarray = field(default_factory=lambda: _EMPTY_X)
+    anchor_stiffness: np.ndarray = field(default_factory=lambda: np.zeros(0))
+
+    @staticmethod
+    def merge(parts: list[PinSet]) -> PinSet:
+        """One PinSet holding every pin of ``parts``."""
+        if len(parts) == 1:
+            return parts[0]
+        cat = np.concatenate
+        return PinSet(
+            cat([p.fixed_vertices for p in parts]), cat([p.fixed_positions for p in parts]),
+            cat([p.anchor_vertices for p in parts]), cat([p.anchor_positions for p in parts]),
+            cat([p.anchor_stiffness for p in parts]))
+
+
+@dataclass(frozen=True, eq=False)
+class PenaltyAnchors:
+    """Penalty pins: zero-rest-length springs of stiffness k_j from vertex v_j to point q_j.
+
+    Their energy ½ Σ_j k_j |x_{v_j} − q_j|² is part of E(x); its Hessian adds k_j to
+    L_s[v_j, v_j] (:func:`clothsim.matrices.system_matrix`) and its linear part h² k_j q_j
+    to the global step's right-hand side. Every solver writes these terms through this
+    class.
+
+    Attributes
+    ----------
+    vertices : ndarray, shape (q,), int
+    positions : ndarray, shape (q, 3) [m]
+    stiffness : ndarray, shape (q,) [N/m]
+    """
+
+    vertices: np.ndarray
+    positions: np.ndarray
+    stiffness: np.ndarray
+
+    def __len__(self) -> int:
+        return len(self.vertices)
+
+    def energy(self, x: np.ndarray) -> float:
+        """½ Σ_j k_j |x_{v_j} − q_j|² [J] for positions x, shape (n, 3)."""
+        q = x[self.vertices] - self.positions
+        return 0.5 * float(np.sum(self.stiffness[:, None] * q * q))
+
+    def add_gradient(self, out: np.ndarray, x: np.ndarray, scale: float = 1.0) -> np.ndarray:
+        """out[v_j] += scale k_j (x_{v_j} − q_j) in place (scale = −1 adds the force)."""
+        if len(self.vertices):
+            np.add.at(out, self.vertices,
+                      scale * self.stiffness[:, None] * (x[self.vertices] - self.positions))
+        return out
+
+    def add_rhs(self, out: np.ndarray, scale: float = 1.0,
+                origin: np.ndarray | None = None) -> np.ndarray:
+        """out[v_j] += scale k_j q_j in place: the anchors' part of the right-hand side.
+
+        With ``origin`` (n, 3), adds scale k_j (q_j − origin_{v_j}) instead (the right-hand
+        side of a solve for the displacement x − origin).
+        """
+        if len(self.vertices):
+            q = self.positions if origin is None else self.positions - origin[self.vertices]
+            np.add.at(out, self.vertices, scale * self.stiffness[:, None] * q)
+        return out
+
+
+@dataclass(eq=False)
+class StepProblem:
+    """Data of one implicit Euler step.
+
+    Attributes
+    ----------
+    h : float
+        Time step [s].
+    x : ndarray, shape (n, 3)
+        Positions x_n at the start of the step [m].
+    v : ndarray, shape (n, 3)
+        Velocities v_n [m/s].
+    y : ndarray, shape (n, 3)
+        Inertial target [m]; default x + h v.
+    f_ext : ndarray, shape (n, 3) or None
+        External force on each vertex [N]; None means none.
+    fixed_vertices : ndarray, shape (p,), int
+        Exact pins: vertices removed from the unknowns.
+    fixed_positions : ndarray, shape (p, 3)
+        Their positions at the end of the step [m].
+    anchor_vertices, anchor_positions, anchor_stiffness : ndarray, shapes (q,), (q, 3), (q,)
+        Penalty pins: zero-rest-length springs of stiffness k [N/m] to points q [m].
+    """
+
+    h: float
+    x: np.ndarray
+    v: np.ndarray
+    y: np.ndarray | None = None
+    f_ext: np.ndarray | None = None
+    fixed_vertices: np.ndarray = field(default_factory=lambda: _EMPTY_I)
+    fixed_positions: np.ndarray = field(default_factory=lambda: _EMPTY_X)
+    anchor_vertices: np.ndarray = field(default_factory=lambda: _EMPTY_I)
+    anchor_positions: np.ndarray = field(default_factory=lambda: _EMPTY_X)
+    anchor_stiffness: np.ndarray = field(default_factory=lambda: np.zeros(0))
+
+    def __post_init__(self):
+        h = float(check_finite("h", self.h))
+        if h <= 0:
+            raise InputError(f"h: the time step must be positive, got {h!r}")
+        self.h = h
+        # a NaN/inf in the state or forces (bad input, or a blow-up) is named, never solved
+        self.x = _points("state.positions", self.x, None)
+        n = len(self.x)
+        self.v = _points("state.velocities", self.v, n)
+        if self.y is None:
+            self.y = self.x + h * self.v
+        self.y = _points("inertial_target", self.y, n)
+        if self.f_ext is not None:
+            self.f_ext = _points("external_force", self.f_ext, n)
+        self.fixed_vertices = _index_array("pins.fixed_vertices", self.fixed_vertices, n)
+        self.fixed_positions = _points("pins.fixed_positions",
+                                       np.reshape(self.fixed_positions, (-1, 3)),
+                                       len(self.fixed_vertices))
+        self.anchor_vertices = _index_array("pins.anchor_vertices", self.anchor_vertices, n)
+        self.anchor_positions = _points("pins.anchor_positions",
+                                        np.reshape(self.anchor_positions, (-1, 3)),
+                                        len(self.anchor_vertices))
+        k = check_finite("pins.anchor_stiffness", self.anchor_stiffness)
+        if k.ndim > 1 or (k.ndim == 1 and len(k) != len(self.anchor_vertices)):
+            raise InputError(f"pins.anchor_stiffness: expected one value per anchor "
+                             f"({len(self.anchor_vertices)}), got shape {k.shape}")
+        self.anchor_stiffness = np.broadcast_to(k, self.anchor_vertices.shape)
+        self.anchors = PenaltyAnchors(self.anchor_vertices, self.anchor_positions,
+                                      self.anchor_stiffness)
+
+    def initial_guess(self) -> np.ndarray:
+        """y with fixed vertices at their prescribed positions (the paper's starting point)."""
+        x0 = np.array(self.y, dtype=np.float64)
+        x0[self.fixed_vertices] = self.fixed_positions
+        return x0
+
+    def free_mask(self, n: int) -> np.ndarray:
+        """Boolean mask, shape (n,): True for vertices that are unknowns (not fixed)."""
+        mask = np.ones(n, bool)
+        mask[self.fixed_vertices] = False
+        return mask
+
+
+def _objective_without_springs(model: Model, problem: StepProblem, x: np.ndarray) -> float:
+    """½ (x − y)ᵀ M (x − y) + h² (anchor energy − xᵀ f): the terms g and ĝ share."""
+    dx = x - problem.y
+    g = 0.5 * float(np.sum(model.vertex_mass[:, None] * dx * dx))
+    e = 0.0
+    if len(problem.anchors):
+        e += problem.anchors.energy(x)
+    if problem.f_ext is not None:
+        e -= float(np.sum(x * problem.f_ext))
+    return g + problem.h ** 2 * e
+
+
+def objective(model: Model, problem: StepProblem, x: np.ndarray) -> float:
+    """g(x) = ½ (x − y)ᵀ M (x − y) + h² E(x), E with springs, anchors and −xᵀf [J·s²].
+
+    Parameters
+    ----------
+    model : Model
+    problem : StepProblem
+    x : ndarray, shape (n, 3)
+        Positions [m].
+    """
+    return (_objective_without_springs(model, problem, x)
+            + problem.h ** 2 * energy.spring_energy(model, x))
+
+
+def augmented_objective(model: Model, problem: StepProblem, x: np.ndarray,
+                        d: np.ndarray) -> float:
+    """ĝ(x, d): g with |p_i| − r_i replaced by |p_i − d_i| (Eq. 9); ĝ(x, d(x)) = g(x).
+
+    ``x`` has shape (n, 3) [m], ``d`` shape (s, 3) [m].
+    """
+    q = energy.spring_vectors(model, x) - d
+    springs = 0.5 * float(np.sum(model.springs.spring_stiffness[:, None] * q * q))
+    return _objective_without_springs(model, problem, x) + problem.h ** 2 * springs
+
+
+def objective_gradient(model: Model, problem: StepProblem, x: np.ndarray) -> np.ndarray:
+    """∇g(x), shape (n, 3) [N·s²]; rows of fixed vertices are zero (they are not unknowns)."""
+    h2 = problem.h ** 2
+    grad = model.vertex_mass[:, None] * (x - problem.y) + h2 * energy.spring_gradient(model, x)
+    problem.anchors.add_gradient(grad, x, h2)
+    if problem.f_ext is not None:
+        grad -= h2 * problem.f_ext
+    grad[problem.fixed_vertices] = 0.0
+    return grad
+
+
+def gradient_noise_floor(model: Model, problem: StepProblem, x: np.ndarray) -> float:
+    """‖∇g‖ below which the gradient is rounding noise: eps h² (‖k‖₂ ‖x‖∞ + ‖f‖₂).
+
+    ∇g sums spring terms k_i (p_i − d_i) that cancel at the solution, and p_i = x_a − x_b
+    carries a rounding error of about eps |x| (positions are stored absolutely), so ‖∇g‖
+    cannot be computed more accurately than about eps h² ‖k‖ |x| (measured on a 41 × 41
+    cloth at rest: 0.35 of this bound). A step that starts almost at its solution (a cloth
+    at rest) can therefore not reduce ‖∇g‖ / ‖∇g(x_0)‖ to a tight tolerance; once ‖∇g‖ is
+    below this floor the iterate is optimal to rounding, and the solvers stop and count the
+    step as converged instead of warning.
+
+    Returns
+    -------
+    float
+        The floor [N·s²].
+    """
+    force = float(np.linalg.norm(model.springs.spring_stiffness)) * float(np.abs(x).max())
+    if problem.f_ext is not None:
+        force += float(np.linalg.norm(problem.f_ext))
+    return float(np.finfo(float).eps) * problem.h ** 2 * force
+
+
+def relative(norm: float, norm0: float) -> float:
+    """norm / norm0, with 0 when both vanish (the initial guess is already the solution)."""
+    if norm0 == 0.0 or not math.isfinite(norm0):
+        return 0.0 if norm == 0.0 else math.inf
+    return norm / norm0
