@@ -2,12 +2,12 @@
 
 Run from the repository root::
 
-    .venv/bin/python benchmarks/stability_figures.py            # everything, ~3–4 min
-    .venv/bin/python benchmarks/stability_figures.py --quick    # without the full flag
+    .venv/bin/python -m benchmarks.stability_figures            # everything, ~3–4 min
+    .venv/bin/python -m benchmarks.stability_figures --quick    # without the full flag
 
 The figures come from the same ``measure_*`` helpers the tests assert on
 (tests/test_stability_{solver,exact,contact,long}.py), so the table and the tests cannot
-drift apart. Cases 7 and 8 also re-measure the set-ups of tests/test_effects.py (imported
+drift apart. Cases 7 and 8 also re-measure the set-ups of tests/effects/test_effects.py (imported
 from there: same cloth, same obstacles, same step counts).
 """
 
@@ -16,22 +16,19 @@ from __future__ import annotations
 import argparse
 import sys
 import warnings
-from pathlib import Path
 
-sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "tests"))
+import numpy as np
 
-import numpy as np  # noqa: E402
-import test_effects as ef  # noqa: E402
-import test_stability_contact as co  # noqa: E402
-import test_stability_exact as ex  # noqa: E402
-import test_stability_long as lo  # noqa: E402
-import test_stability_solver as so  # noqa: E402
-
-import clothsim as cs  # noqa: E402
+import clothsim as cs
+from tests import test_stability_contact as co
+from tests import test_stability_exact as ex
+from tests import test_stability_long as lo
+from tests import test_stability_solver as so
+from tests.effects import test_effects as ef
 
 
 def measure_slab_in_simulation() -> dict:
-    """tests/test_effects.py::test_thin_box_no_tunnelling_in_simulation, measured."""
+    """tests/effects/test_effects.py::test_thin_box_no_tunnelling_in_simulation, measured."""
     model = ef.grid_model(6, size=0.3, center=(0.0, 0.08, 0.0))
     box = cs.Box((-1, 0, -1), (1, 0.01, 1))
     sim = cs.Simulation(model, h=ef.H, effects=[box],
@@ -45,7 +42,7 @@ def measure_slab_in_simulation() -> dict:
 
 
 def measure_small_sphere_direct() -> float:
-    """tests/test_effects.py::test_small_sphere_no_tunnelling: min |x − c| − R [m]."""
+    """tests/effects/test_effects.py::test_small_sphere_no_tunnelling: min |x − c| − R [m]."""
     rng = np.random.default_rng(2)
     c, R, k = np.array([0.1, 0.2, 0.3]), 0.005, 400
     offset = rng.uniform(-0.2 * R, 0.2 * R, (k, 2))

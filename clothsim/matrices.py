@@ -100,13 +100,3 @@ def system_matrix(model: Model, h: float, *, expand: bool = False,
                                         shape=(n, n)).tocsr()
     A = A.tocsc()
     return expand3(A).tocsc() if expand else A
-
-
-def flatten(x: np.ndarray) -> np.ndarray:
-    """(n, 3) array → 3n vector in the interleaved layout (a view when possible)."""
-    return np.asarray(x).reshape(-1)
-
-
-def unflatten(x: np.ndarray) -> np.ndarray:
-    """3n vector → (n, 3) array (inverse of :func:`flatten`)."""
-    return np.asarray(x).reshape(-1, 3)

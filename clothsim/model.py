@@ -11,7 +11,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from .errors import InputError, check_finite, check_positive
+from .errors import InputError, check_positive
 from .mesh import Mesh
 from .springs import Springs
 
@@ -42,6 +42,11 @@ class Model:
         m = np.broadcast_to(m, (n,)).copy() if m.ndim == 0 else m
         if m.shape != (n,):
             raise InputError(f"vertex_mass: expected {n} values (one per vertex), got {m.shape}")
+        if not isinstance(self.springs, Springs):
+            raise InputError(f"springs: expected Springs, got {type(self.springs).__name__}")
+        if self.springs.vertex_count is not None and self.springs.vertex_count != n:
+            raise InputError(f"springs: built for a mesh of {self.springs.vertex_count} "
+                             f"vertices, this mesh has {n}")
         sv = self.springs.spring_vertices
         if sv.size and sv.max() >= n:
             bad = int(np.flatnonzero(sv.max(axis=1) >= n)[0])
@@ -105,21 +110,3 @@ class Model:
     @property
     def total_mass(self) -> float:
         return float(self.vertex_mass.sum())
-
-    @property
-    def vertex_position(self) -> np.ndarray:
-        """Initial positions, shape (n, 3) [m]."""
-        return self.mesh.vertices
-
-    def with_stiffness(self, stiffness) -> Model:
-        """A new model with other spring stiffnesses (a solver must be rebuilt for it)."""
-        return Model(self.mesh, self.springs.with_stiffness(stiffness), self.vertex_mass)
-
-    def with_vertex_mass(self, vertex_mass) -> Model:
-        return Model(self.mesh, self.springs, vertex_mass)
-
-    def with_positions(self, positions) -> Model:
-        """A new model whose initial positions differ but whose rest lengths are kept."""
-        x = check_finite("positions", positions)
-        mesh = Mesh(x, self.mesh.triangles, self.mesh.strands, self.mesh.grid_shape)
-        return Model(mesh, self.springs, self.vertex_mass)

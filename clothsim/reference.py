@@ -4,8 +4,13 @@ One spring at a time, written literally as the paper's sums (Liu et al. 2013, Eq
 
     L = (Σ_i k_i A_i A_iᵀ) ⊗ I3,     J = (Σ_i k_i A_i S_iᵀ) ⊗ I3,     M = diag(m) ⊗ I3.
 
+It also holds one local/global iteration written literally in the paper's 3n form
+(:func:`local_step`, :func:`global_step`, :func:`iteration`) and the spring gradient one
+spring at a time (:func:`spring_gradient`).
+
 These are dense and O(s n²): use them on small models only. The fast, vectorized versions
-in :mod:`clothsim.matrices` must agree with them (tests/test_matrices.py).
+(:mod:`clothsim.matrices`, :class:`clothsim.solvers.LocalGlobalSolver`,
+:mod:`clothsim.energy`) must agree with them; the tests check that they do.
 """
 
 from __future__ import annotations
@@ -74,3 +79,80 @@ def spring_energy(model: Model, x: np.ndarray) -> float:
                             model.springs.spring_rest_length):
         e += 0.5 * k * (np.linalg.norm(x[a] - x[b]) - r) ** 2
     return e
+
+
+def spring_gradient(model: Model, x: np.ndarray) -> np.ndarray:
+    """∇E_springs(x) one spring at a time, shape (n, 3) [N].
+
+    Spring i adds k_i (|p_i| − r_i) p_i / |p_i| to vertex a_i and subtracts it from b_i,
+    p_i = x_{a_i} − x_{b_i} (nothing when the ends coincide).
+    """
+    grad = np.zeros((model.vertex_count, 3))
+    for (a, b), k, r in zip(model.springs.spring_vertices, model.springs.spring_stiffness,
+                            model.springs.spring_rest_length):
+        p = x[a] - x[b]
+        length = np.sqrt(p @ p)
+        if length > 0:
+            g = k * (length - r) * p / length
+            grad[a] += g
+            grad[b] -= g
+    return grad
+
+
+def global_step(model: Model, problem, d: np.ndarray) -> np.ndarray:
+    """The global step in the paper's 3n form: (M + h² L) x = h² J d + M y + h² f.
+
+    Dense and literal: the 3n × 3n matrix and the 3n right-hand side in the interleaved
+    layout, penalty anchors adding h² k to the diagonal and h² k q to b, exactly pinned
+    vertices P moved to the right-hand side (A_FF x_F = b_F − A_FP x_P), then one dense
+    solve.
+
+    Parameters
+    ----------
+    model : Model
+    problem : clothsim.problem.StepProblem
+        The step's h, y, f_ext and pins (read only; not imported here, so that this
+        module stays below the solvers in the pipeline).
+    d : ndarray, shape (s, 3)
+        Spring directions from the local step [m].
+
+    Returns
+    -------
+    ndarray, shape (n, 3)
+        x after the global step [m].
+    """
+    n, h2 = model.vertex_count, problem.h ** 2
+    M = mass_matrix(model)
+    A = M + h2 * stiffness_matrix(model)
+    b = h2 * spring_matrix(model) @ d.reshape(-1) + M @ problem.y.reshape(-1)
+    if problem.f_ext is not None:
+        b += h2 * problem.f_ext.reshape(-1)
+    for v, q, k in zip(problem.anchor_vertices, problem.anchor_positions,
+                       problem.anchor_stiffness):
+        for c in range(3):
+            A[3 * v + c, 3 * v + c] += h2 * k
+            b[3 * v + c] += h2 * k * q[c]
+    x = np.zeros(3 * n)
+    fixed = np.zeros(3 * n, bool)
+    for v, q in zip(problem.fixed_vertices, problem.fixed_positions):
+        x[3 * v:3 * v + 3] = q
+        fixed[3 * v:3 * v + 3] = True
+    free = ~fixed
+    rhs = b[free] - A[np.ix_(free, fixed)] @ x[fixed]
+    x[free] = np.linalg.solve(A[np.ix_(free, free)], rhs)
+    return x.reshape(n, 3)
+
+
+def iteration(model: Model, problem, x: np.ndarray) -> tuple[np.ndarray,
+                                                                           np.ndarray]:
+    """One local/global iteration from x: the local step, then the global step.
+
+    Returns
+    -------
+    x_next : ndarray, shape (n, 3)
+        The next iterate [m].
+    d : ndarray, shape (s, 3)
+        The local step's directions at x [m].
+    """
+    d = local_step(model, x)
+    return global_step(model, problem, d), d

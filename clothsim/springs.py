@@ -41,22 +41,27 @@ class Springs:
         r_i [m], >= 0.
     spring_family : ndarray, shape (s,), int8
         Index into :data:`FAMILIES`.
+    vertex_count : int or None
+        Vertices of the mesh the springs were built for (set by the builders below; a
+        :class:`~clothsim.model.Model` refuses springs built for a mesh of another size).
     """
 
     spring_vertices: np.ndarray
     spring_stiffness: np.ndarray
     spring_rest_length: np.ndarray
     spring_family: np.ndarray
+    vertex_count: int | None = None
 
     def __post_init__(self):
-        idx = np.asarray(self.spring_vertices, dtype=np.int64).reshape(-1, 2)
+        idx = _vertex_pairs(self.spring_vertices)
         s = len(idx)
-        k = check_positive("spring_stiffness", self.spring_stiffness, allow_zero=True)
-        r = check_positive("spring_rest_length", self.spring_rest_length, allow_zero=True)
-        fam = np.asarray(self.spring_family, dtype=np.int8)
-        k = np.broadcast_to(k, (s,)).copy()
-        r = np.broadcast_to(r, (s,)).copy()
-        fam = np.broadcast_to(fam, (s,)).copy()
+        k = _per_spring("spring_stiffness",
+                        check_positive("spring_stiffness", self.spring_stiffness,
+                                       allow_zero=True), s)
+        r = _per_spring("spring_rest_length",
+                        check_positive("spring_rest_length", self.spring_rest_length,
+                                       allow_zero=True), s)
+        fam = _per_spring("spring_family", np.asarray(self.spring_family, dtype=np.int8), s)
         self_loops = np.flatnonzero(idx[:, 0] == idx[:, 1])
         if len(self_loops):
             raise InputError(f"spring_vertices[{self_loops[0]}]: a spring joins vertex "
@@ -77,20 +82,55 @@ class Springs:
     def with_stiffness(self, stiffness) -> Springs:
         """A copy with new stiffnesses (scalar or per spring)."""
         return Springs(self.spring_vertices, stiffness, self.spring_rest_length,
-                       self.spring_family)
+                       self.spring_family, self.vertex_count)
 
     @staticmethod
     def concatenate(parts: list[Springs]) -> Springs:
-        """Join several spring sets into one."""
+        """Join several spring sets into one (built for the same mesh)."""
         if not parts:
             return Springs(np.zeros((0, 2), np.int64), np.zeros(0), np.zeros(0),
                            np.zeros(0, np.int8))
+        counts = {p.vertex_count for p in parts} - {None}
+        if len(counts) > 1:
+            raise InputError(f"springs: the parts were built for meshes of different sizes "
+                             f"({', '.join(map(str, sorted(counts)))} vertices)")
         return Springs(
             np.concatenate([p.spring_vertices for p in parts]),
             np.concatenate([p.spring_stiffness for p in parts]),
             np.concatenate([p.spring_rest_length for p in parts]),
             np.concatenate([p.spring_family for p in parts]),
+            counts.pop() if counts else None,
         )
+
+
+def _vertex_pairs(value) -> np.ndarray:
+    """Spring end vertices as int64 (s, 2); non-integer or negative indices are rejected."""
+    arr = np.asarray(value)
+    if arr.size and not np.issubdtype(arr.dtype, np.integer):
+        if arr.dtype.kind != "f":
+            raise InputError(f"spring_vertices: must be integer vertex indices, got dtype "
+                             f"{arr.dtype}")
+        check_finite("spring_vertices", arr)
+        if not np.all(np.mod(arr, 1) == 0):
+            bad = int(np.flatnonzero(np.mod(arr, 1).reshape(-1) != 0)[0])
+            raise InputError(f"spring_vertices[{bad // 2}]: must be integer vertex indices, "
+                             f"got {arr.reshape(-1)[bad]!r}")
+    if arr.size % 2:
+        raise InputError(f"spring_vertices: expected shape (s, 2), got {arr.shape}")
+    idx = arr.astype(np.int64).reshape(-1, 2)
+    neg = np.flatnonzero(idx.min(axis=1) < 0) if len(idx) else idx[:0, 0]
+    if len(neg):
+        raise InputError(f"spring_vertices[{neg[0]}]: vertex index {int(idx[neg[0]].min())} "
+                         f"is negative")
+    return idx
+
+
+def _per_spring(name: str, value: np.ndarray, s: int) -> np.ndarray:
+    """One value, or one per spring, as a writable (s,) array; other shapes are an error."""
+    if value.ndim == 0 or value.shape == (s,):
+        return np.broadcast_to(value, (s,)).copy()
+    raise InputError(f"{name}: expected one value or {s} (one per spring), got shape "
+                     f"{value.shape}")
 
 
 def _check_stiffness(family: str, k) -> float | None:
@@ -103,7 +143,7 @@ def _family(vertices: np.ndarray, pairs: np.ndarray, k: float, family: str) -> S
     pairs = pairs.reshape(-1, 2).astype(np.int64)
     rest = np.linalg.norm(vertices[pairs[:, 0]] - vertices[pairs[:, 1]], axis=1)
     return Springs(pairs, np.full(len(pairs), k), rest,
-                   np.full(len(pairs), FAMILIES.index(family), np.int8))
+                   np.full(len(pairs), FAMILIES.index(family), np.int8), len(vertices))
 
 
 def grid_pairs(nx: int, ny: int, family: str, bending_pattern: str = "every") -> np.ndarray:
@@ -205,17 +245,39 @@ def mesh_springs(
         parts.append(_family(mesh.vertices, mesh.edges, k, "structural"))
     k = _check_stiffness("bending", bending)
     if k is not None:
-        parts.append(_family(mesh.vertices, mesh.interior_edge_opposites, k, "bending"))
+        parts.append(_family(mesh.vertices, bending_pairs(mesh), k, "bending"))
     return Springs.concatenate(parts)
+
+
+def bending_pairs(mesh: Mesh) -> np.ndarray:
+    """The pairs of vertices opposite each interior edge, each unordered pair once.
+
+    Two interior edges can share their opposite pair (on a grid triangulated with
+    alternating diagonals, the two diagonals of a "diamond"); one bending spring joins
+    such a pair, not two.
+
+    Returns
+    -------
+    ndarray, shape (k, 2), int64
+        Pairs (min, max), in the order of their first occurrence.
+    """
+    pairs = np.sort(np.asarray(mesh.interior_edge_opposites, np.int64).reshape(-1, 2), axis=1)
+    if len(pairs) == 0:
+        return pairs
+    _, first = np.unique(pairs, axis=0, return_index=True)
+    return pairs[np.sort(first)]
 
 
 def springs_from_pairs(mesh: Mesh, pairs, stiffness, *, family: str = "structural") -> Springs:
     """Springs on explicit vertex pairs with rest lengths from ``mesh``'s shape."""
-    pairs = np.asarray(pairs, dtype=np.int64).reshape(-1, 2)
+    pairs = _vertex_pairs(pairs)
     n = mesh.vertex_count
     if pairs.size and (pairs.min() < 0 or pairs.max() >= n):
         raise InputError(f"springs: vertex index out of range 0..{n - 1}")
     k = check_finite("spring_stiffness", stiffness)
     rest = np.linalg.norm(mesh.vertices[pairs[:, 0]] - mesh.vertices[pairs[:, 1]], axis=1)
+    if k.ndim > 1 or (k.ndim == 1 and k.shape != (len(pairs),)):
+        raise InputError(f"spring_stiffness: expected one value or {len(pairs)} (one per "
+                         f"pair), got shape {k.shape}")
     return Springs(pairs, np.broadcast_to(k, (len(pairs),)), rest,
-                   np.full(len(pairs), FAMILIES.index(family), np.int8))
+                   np.full(len(pairs), FAMILIES.index(family), np.int8), n)

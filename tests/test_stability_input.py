@@ -6,12 +6,13 @@ from __future__ import annotations
 
 import numpy as np
 import pytest
-from conftest import GRAVITY, make_grid_model
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
 import clothsim as cs
 from clothsim.errors import InputError
+from clothsim.gallery import GRAVITY
+from clothsim.gallery import grid_cloth as make_grid_model
 
 NAN, INF = float("nan"), float("inf")
 

@@ -13,7 +13,6 @@ import warnings
 import numpy as np
 import pytest
 import scipy.sparse as sp
-from conftest import GRAVITY, make_grid_model
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
@@ -21,6 +20,8 @@ import clothsim as cs
 from clothsim import energy, matrices
 from clothsim.errors import ConditioningWarning, ConvergenceWarning, FactorizationError
 from clothsim.factorization import CONDITION_WARNING_THRESHOLD, Factor, cholmod_available
+from clothsim.gallery import GRAVITY
+from clothsim.gallery import grid_cloth as make_grid_model
 from clothsim.solvers import LocalGlobalSolver, NewtonSolver, augmented_objective
 
 BACKENDS = ["splu", pytest.param("cholmod", marks=pytest.mark.skipif(

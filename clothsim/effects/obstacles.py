@@ -43,6 +43,9 @@ import numpy as np
 from ..errors import InputError, check_finite
 from .base import Effect
 
+#: Largest sphere radius [m]: R² and the contact quadratic stay far inside float range.
+MAX_RADIUS = 1e100
+
 
 def _vector3(name: str, value) -> np.ndarray:
     a = check_finite(name, value)
@@ -192,10 +195,11 @@ class Plane(Obstacle):
         super().__init__(friction)
         self.point = _vector3("plane.point", point)
         normal = _vector3("plane.normal", normal)
-        norm = float(np.linalg.norm(normal))
-        if norm == 0.0:
+        scale = float(np.abs(normal).max())
+        if scale == 0.0:
             raise InputError("plane.normal: must not be the zero vector")
-        self.normal = normal / norm
+        normal = normal / scale          # largest entry ±1: the norm cannot overflow
+        self.normal = normal / float(np.linalg.norm(normal))
         self.thickness = _non_negative("plane.thickness", thickness)
         self._offset = float(self.point @ self.normal) + self.thickness
 
@@ -248,6 +252,9 @@ class Sphere(Obstacle):
         r = check_finite("sphere.radius", radius)
         if r.ndim != 0 or r <= 0:
             raise InputError(f"sphere.radius: must be one positive number, got {radius!r}")
+        if r > MAX_RADIUS:
+            raise InputError(f"sphere.radius: must be at most {MAX_RADIUS:g} m (its square "
+                             f"must stay far from overflow), got {float(r)!r}")
         self.radius = float(r)
 
     def inside(self, x):

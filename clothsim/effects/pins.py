@@ -77,6 +77,8 @@ class Pin(Effect):
             raise InputError(f"pin.stiffness: must be positive, got {k!r}")
         self.stiffness = k
         self.release = None if release is None else float(check_finite("pin.release", release))
+        if self.release is not None and self.release < 0:
+            raise InputError(f"pin.release: must be a time >= 0 [s], got {self.release!r}")
         self.velocity = None if velocity is None else check_finite("pin.velocity", velocity)
         if self.velocity is not None and self.velocity.shape != (3,):
             raise InputError(f"pin.velocity: expected 3 numbers, got shape {self.velocity.shape}")

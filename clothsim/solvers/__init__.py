@@ -47,5 +47,6 @@ def make_solver(method: str, model, **options) -> Solver:
 
 __all__ = ["StepProblem", "StepResult", "Iterate", "Solver", "LocalGlobalSolver", "ChebyshevSolver",
            "NewtonSolver", "SymplecticEulerSolver", "StabilityWarning", "SOLVERS",
-           "make_solver", "PinSet", "gradient_noise_floor", "objective", "augmented_objective", "objective_gradient",
+           "make_solver", "PinSet", "gradient_noise_floor", "objective", "augmented_objective",
+           "objective_gradient",
            "estimate_spectral_radius", "stable_time_step"]

@@ -11,6 +11,7 @@ from hypothesis import strategies as st
 import clothsim as cs
 from clothsim import reference
 from clothsim.factorization import cholmod_available
+from clothsim.gallery import grid_cloth
 from clothsim.solvers import (
     LocalGlobalSolver,
     NewtonSolver,
@@ -24,9 +25,7 @@ G = np.array([0.0, -9.81, 0.0])
 
 
 def hanging(n=7, k=200.0, plane="xy", total_mass=0.5):
-    mesh = cs.grid(n, n, size=(1.0, 1.0), plane=plane)
-    springs = cs.grid_springs(mesh, structural=k, shear=k, bending=k / 10)
-    return cs.Model.build(mesh, springs, total_mass=total_mass)
+    return grid_cloth(n, k=k, plane=plane, total_mass=total_mass)
 
 
 def random_model(data):

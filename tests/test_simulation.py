@@ -1,0 +1,108 @@
+"""Simulation: the effect protocol as the simulation applies it, and bad input."""
+
+import logging
+
+import numpy as np
+import pytest
+
+import clothsim as cs
+from clothsim.effects.base import HOOKS, Effect, overrides
+from clothsim.errors import InputError
+from clothsim.gallery import GRAVITY, grid_cloth, hanging_cloth
+
+
+def test_a_pin_shared_by_two_simulations_is_an_error():
+    model, (gravity, pin) = hanging_cloth(5)
+    first = cs.Simulation(model, h=1 / 30, effects=[gravity, pin])
+    with pytest.raises(InputError, match=r"effects\[0\] \(pin\): already bound to another "
+                                         r"simulation; create one effect per simulation"):
+        cs.Simulation(model, h=1 / 30, effects=[pin])
+    # the first simulation is untouched: its pinned corners stay put
+    first.run(5)
+    top = [20, 24]
+    np.testing.assert_array_equal(first.state.positions[top], model.mesh.vertices[top])
+
+
+def test_failed_construction_does_not_claim_the_effects():
+    model = grid_cloth(4)
+    pin = cs.Pin([0, 3])
+    with pytest.raises(InputError):
+        cs.Simulation(model, h=-1.0, effects=[pin])
+    cs.Simulation(model, h=0.1, effects=[pin])   # still free to use
+
+
+def test_hooks_receive_h_from_bind():
+    seen = {}
+
+    class Recorder(Effect):
+        kind = "recorder"
+
+        def adjust_target(self, t, state, y):
+            seen["h"] = self.h
+            return y
+
+    sim = cs.Simulation(grid_cloth(3), h=0.025, effects=[Recorder()])
+    sim.step()
+    assert seen["h"] == 0.025
+    assert HOOKS[-1] == "connect_pins"
+    assert [h for h in HOOKS if overrides(Recorder(), h)] == ["adjust_target"]
+
+
+def test_connect_pins_is_handed_the_pin_query():
+    class Listener(Effect):
+        kind = "listener"
+
+        def connect_pins(self, pinned):
+            self.pinned = pinned
+
+    model = grid_cloth(4)
+    listener = Listener()
+    cs.Simulation(model, h=0.1, effects=[cs.Pin([3, 0]), listener])
+    np.testing.assert_array_equal(listener.pinned(0.1), [0, 3])
+
+
+@pytest.mark.parametrize("state, match", [
+    (lambda x: cs.State(x, np.zeros_like(x), time=float("nan")), "state.time"),
+    (lambda x: cs.State(x[:-1], np.zeros_like(x[:-1])), r"state.positions: expected shape"),
+    (lambda x: cs.State(x, np.zeros((3, 3))), "state.velocities: expected shape"),
+])
+def test_bad_state_is_named(state, match):
+    model = grid_cloth(4)
+    with pytest.raises(InputError, match=match):
+        cs.Simulation(model, h=0.1, state=state(model.mesh.vertices.copy()))
+
+
+def test_record_converged_is_none_without_tolerance_and_a_bool_with_one():
+    model, effects = hanging_cloth(5)
+    rec = cs.Simulation(model, h=1 / 30, effects=effects).step()
+    assert rec.converged is None
+    model, effects = hanging_cloth(5)
+    rec = cs.Simulation(model, h=1 / 30, effects=effects, tolerance=1e-6,
+                        iterations=500).step()
+    assert rec.converged is True and rec.residual <= 1e-6
+
+
+def test_obstacle_overlapping_the_cloth_at_start_warns_with_the_count(caplog):
+    model = grid_cloth(5, center=(0.0, 0.0, 0.0))          # flat in xz at y = 0
+    with caplog.at_level(logging.WARNING, logger="clothsim.simulation"):
+        cs.Simulation(model, h=0.1, effects=[cs.Gravity(GRAVITY),
+                                             cs.Sphere((0.0, 0.0, 0.0), 0.3)])
+    inside = int(np.count_nonzero(np.linalg.norm(model.mesh.vertices, axis=1) < 0.3))
+    assert inside > 0
+    assert f"{inside} of 25 cloth vertices start inside" in caplog.text
+    caplog.clear()
+    with caplog.at_level(logging.WARNING, logger="clothsim.simulation"):
+        cs.Simulation(model, h=0.1, effects=[cs.Sphere((0.0, -1.0, 0.0), 0.3)])
+    assert "start inside" not in caplog.text
+
+
+def test_pin_release_must_not_be_negative():
+    with pytest.raises(InputError, match="pin.release: must be a time >= 0"):
+        cs.Pin([0], release=-1.0)
+
+
+def test_huge_plane_normal_is_normalized_and_huge_sphere_rejected():
+    plane = cs.Plane((0, 0, 0), (1e300, 1e300, 0))
+    np.testing.assert_allclose(plane.normal, [2 ** -0.5, 2 ** -0.5, 0.0], rtol=1e-15)
+    with pytest.raises(InputError, match="sphere.radius: must be at most"):
+        cs.Sphere((0, 0, 0), 1e200)
