@@ -9,7 +9,6 @@ from __future__ import annotations
 
 import numpy as np
 import pytest
-from conftest import GRAVITY, make_grid_model
 from hypothesis import given, settings
 from hypothesis import strategies as st
 from scipy.integrate import solve_ivp
@@ -18,6 +17,7 @@ from scipy.spatial.transform import Rotation
 import clothsim as cs
 from clothsim import energy
 from clothsim.factorization import cholmod_available
+from tests.conftest import GRAVITY, make_grid_model
 
 BACKENDS = ["splu", pytest.param("cholmod", marks=pytest.mark.skipif(
     not cholmod_available(), reason="scikit-sparse (CHOLMOD) not installed"))]

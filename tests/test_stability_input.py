@@ -6,12 +6,12 @@ from __future__ import annotations
 
 import numpy as np
 import pytest
-from conftest import GRAVITY, make_grid_model
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
 import clothsim as cs
 from clothsim.errors import InputError
+from tests.conftest import GRAVITY, make_grid_model
 
 NAN, INF = float("nan"), float("inf")
 

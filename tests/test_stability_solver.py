@@ -13,7 +13,6 @@ import warnings
 import numpy as np
 import pytest
 import scipy.sparse as sp
-from conftest import GRAVITY, make_grid_model
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
@@ -22,6 +21,7 @@ from clothsim import energy, matrices
 from clothsim.errors import ConditioningWarning, ConvergenceWarning, FactorizationError
 from clothsim.factorization import CONDITION_WARNING_THRESHOLD, Factor, cholmod_available
 from clothsim.solvers import LocalGlobalSolver, NewtonSolver, augmented_objective
+from tests.conftest import GRAVITY, make_grid_model
 
 BACKENDS = ["splu", pytest.param("cholmod", marks=pytest.mark.skipif(
     not cholmod_available(), reason="scikit-sparse (CHOLMOD) not installed"))]
