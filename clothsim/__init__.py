@@ -21,8 +21,10 @@ from .errors import (
                       InputError,
                       MeshWarning,
 )
-from .mesh import Mesh, grid, load, polygon
+from .io.meshes import load_mesh as load
+from .mesh import Mesh, grid
 from .model import Model
+from .polygon import polygon
 from .scene import load_scene
 from .simulation import Simulation, State
 from .solvers import (

@@ -9,7 +9,7 @@ is a :class:`SceneError`, whose message is one line::
 
 Built-in scenes live in ``clothsim/scenes/*.toml`` and are loaded by name
 (:func:`list_builtin_scenes`). A ``.json`` file is read as an assignment scene
-(:mod:`clothsim.jacobson`).
+(:mod:`clothsim.io.assignment`).
 
 Examples
 --------
@@ -34,6 +34,7 @@ from pathlib import Path
 from typing import Any
 
 from .errors import InputError
+from .io.assignment import AssignmentError
 
 DEFAULT_SCENE = "drop-on-square"
 SHAPES = ("grid", "mesh", "polygon", "jacobson")
@@ -507,14 +508,16 @@ class Scene:
         Model
         """
         from . import mesh as mesh_mod
+        from .io.assignment import read_assignment
+        from .io.meshes import load_mesh
         from .model import Model
+        from .polygon import polygon
         from .springs import grid_springs, mesh_springs, springs_from_pairs
 
         c, sp = self.data["cloth"], self.data["springs"]
         shape = c["shape"]
         try:
             if shape == "jacobson":
-                from .jacobson import read_assignment
                 a = read_assignment(c["file"])
                 springs = springs_from_pairs(a.mesh, a.spring_pairs, a.stiffness)
                 return Model(a.mesh, springs, a.vertex_mass)
@@ -527,10 +530,10 @@ class Scene:
                                        bending_pattern=sp["bending_pattern"])
             else:
                 if shape == "mesh":
-                    mesh = mesh_mod.load(c["mesh"], field="cloth.mesh")
+                    mesh = load_mesh(c["mesh"], field="cloth.mesh")
                 else:
-                    mesh = mesh_mod.polygon(c["outline"], spacing=c["spacing"],
-                                            center=c["center"], plane=c["plane"])
+                    mesh = polygon(c["outline"], spacing=c["spacing"],
+                                   center=c["center"], plane=c["plane"])
                 springs = mesh_springs(mesh, structural=sp.get("structural"),
                                        bending=sp.get("bending"))
             return Model.build(mesh, springs, total_mass=c.get("mass"),
@@ -538,6 +541,8 @@ class Scene:
                                mass_lumping=c["mass_lumping"])
         except SceneError:
             raise
+        except AssignmentError as exc:
+            raise SceneError(exc.source, exc.path, exc.detail) from None
         except InputError as exc:
             raise SceneError(self.source, *_split_message(str(exc), "cloth")) from None
 
@@ -550,7 +555,7 @@ class Scene:
         out = []
         if self.data["cloth"]["shape"] == "jacobson":
             from .effects import Pin
-            from .jacobson import read_pins
+            from .io.assignment import read_pins
             out.append(Pin(read_pins(self.data["cloth"]["file"])))
         for i, e in enumerate(self.data["effects"]):
             params = {k: v for k, v in e.items() if k != "kind"}
@@ -675,8 +680,12 @@ def load_scene(path_or_name) -> Scene:
                                                              "built-in scenes:"))
     source = str(p)
     if p.suffix.lower() == ".json":
-        from .jacobson import scene_dict
-        return Scene.from_dict(scene_dict(p), source=source, base_dir=p.parent)
+        from .io.assignment import scene_dict
+        try:
+            doc = scene_dict(p)
+        except AssignmentError as exc:
+            raise SceneError(exc.source, exc.path, exc.detail) from None
+        return Scene.from_dict(doc, source=source, base_dir=p.parent)
     try:
         text = p.read_text(encoding="utf-8")
     except (OSError, UnicodeDecodeError) as exc:

@@ -35,9 +35,9 @@ from pathlib import Path
 
 import numpy as np
 
-from . import io
-from .errors import InputError
-from .mesh import Mesh, fan_triangles
+from ..errors import InputError
+from ..mesh import Mesh, fan_triangles
+from .obj import read_obj_cells
 
 
 @dataclass(frozen=True, eq=False)
@@ -68,9 +68,28 @@ class Assignment:
     source: Path
 
 
-def _error(source, path: str, detail: str):
-    from .scene import SceneError
-    return SceneError(str(source), path, detail)
+class AssignmentError(InputError):
+    """An assignment file is wrong; the message is ``"<file>: <key>: <what is wrong>"``.
+
+    Attributes
+    ----------
+    source : str
+        The JSON (or OBJ) file.
+    path : str
+        Key inside it, e.g. ``"b[0]"`` (may be empty).
+    detail : str
+        What is wrong.
+    """
+
+    def __init__(self, source: str, path: str, detail: str):
+        self.source, self.path = str(source), path
+        self.detail = " ".join(str(detail).split())  # always one line
+        where = f"{self.source}: {path}: " if path else f"{self.source}: "
+        super().__init__(where + self.detail)
+
+
+def _error(source, path: str, detail: str) -> AssignmentError:
+    return AssignmentError(str(source), path, detail)
 
 
 def _sides(faces: list[np.ndarray]) -> np.ndarray:
@@ -142,7 +161,7 @@ def _read_cached(path: str, stamp: int) -> Assignment:
     if not obj.is_file():
         raise _error(p, "obj", f"file not found: {obj}")
     try:  # the springs need the faces as written (quad sides, no diagonals)
-        vertices, cells = io.read_obj_cells(obj, field="obj")
+        vertices, cells = read_obj_cells(obj, field="obj")
         faces = [c for kind, c in cells if kind != "line"]
         strands = np.concatenate([c for kind, c in cells if kind == "line"]
                                  or [np.zeros((0, 2), np.int64)])
@@ -189,4 +208,4 @@ def scene_dict(path, *, frames: int = 60, iterations: int = 50) -> dict:
     }
 
 
-__all__ = ["Assignment", "read_assignment", "read_pins", "scene_dict"]
+__all__ = ["Assignment", "AssignmentError", "read_assignment", "read_pins", "scene_dict"]

@@ -1,0 +1,59 @@
+"""Helpers shared by clothsim's file readers and writers: meshio loaded on demand and kept
+quiet, one-line messages, and atomic writes (temporary file, then :func:`os.replace`)."""
+
+from __future__ import annotations
+
+import os
+from contextlib import contextmanager, redirect_stderr, redirect_stdout
+from io import StringIO
+from pathlib import Path
+
+
+def load_meshio():
+    """The meshio module (imported here, so ``import clothsim`` stays light)."""
+    try:
+        import meshio
+    except ImportError as exc:  # pragma: no cover - meshio is a declared dependency
+        raise ImportError("clothsim needs meshio for mesh files: pip install meshio") from exc
+    return meshio
+
+
+def one_line(exc: BaseException) -> str:
+    """An exception as one line of at most 200 characters."""
+    text = " ".join(str(exc).split()) or type(exc).__name__
+    return text if len(text) < 200 else text[:197] + "..."
+
+
+class MeshioFailure(Exception):
+    """meshio failed; the message is one line."""
+
+
+def quietly(call, *args, **kwargs):
+    """Run a meshio function without letting it print or exit.
+
+    On a file it cannot parse, meshio 5.3.5 prints the reason and calls ``sys.exit(1)``;
+    here the output is captured and any failure becomes :class:`MeshioFailure`.
+    """
+    buffer = StringIO()
+    try:
+        with redirect_stdout(buffer), redirect_stderr(buffer):
+            return call(*args, **kwargs)
+    except (Exception, SystemExit) as exc:
+        said = " ".join(buffer.getvalue().split())
+        text = one_line(exc) if not isinstance(exc, SystemExit) else ""
+        text = "; ".join(t for t in (said, text) if t) or type(exc).__name__
+        raise MeshioFailure(text if len(text) < 300 else text[:297] + "...") from exc
+
+
+@contextmanager
+def atomic_path(path):
+    """Yield a temporary name beside ``path``; on success move it onto ``path``
+    (:func:`os.replace`, atomic), otherwise delete it. Readers never see a partial file."""
+    path = Path(path)
+    tmp = path.with_name(f".{path.name}.{os.getpid()}.tmp")
+    try:
+        yield tmp
+        os.replace(tmp, path)
+    finally:
+        if tmp.exists():
+            tmp.unlink()

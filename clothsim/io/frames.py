@@ -1,0 +1,177 @@
+"""Frames of a run: one VTK ``.vtu`` file per frame and the ParaView collection
+``trajectory.pvd`` listing them.
+
+:class:`FrameWriter` writes them (each file to a temporary name, then :func:`os.replace`,
+so an interrupted run leaves only complete files); :func:`read_frame` reads a frame back bit
+for bit; :func:`read_pvd` lists a collection.
+"""
+
+from __future__ import annotations
+
+import logging
+import re
+import xml.etree.ElementTree as ET
+from pathlib import Path
+
+import numpy as np
+
+from ..errors import InputError
+from ..mesh import Mesh
+from .cells import cell_blocks
+from .common import MeshioFailure, atomic_path, load_meshio, one_line, quietly
+
+logger = logging.getLogger(__name__)
+
+PVD_NAME = "trajectory.pvd"
+
+
+class FrameWriter:
+    """Write a simulation frame by frame: ``<basename>_%06d.vtu`` + ``trajectory.pvd``.
+
+    Each frame file holds the positions as points, the triangles and the strands (line
+    cells) of ``mesh``, and the velocities [m/s] as float64 point data ``"velocity"``.
+    ``trajectory.pvd`` (a ParaView collection) lists every frame written so far with its
+    time [s] and is rewritten after each frame. Both are written to a temporary file and
+    then :func:`os.replace` d, so after an interruption every listed file is complete.
+
+    Resuming: the first :meth:`write` at index k > 0 keeps the entries of an existing
+    ``trajectory.pvd`` with index < k (files already on disk) and drops those >= k; a
+    first write at index 0 starts a new collection. Old frame files are never deleted.
+
+    Parameters
+    ----------
+    out_dir : str or os.PathLike
+        Created if missing.
+    mesh : Mesh
+        Connectivity written into every frame.
+    basename : str
+        Frame file prefix.
+
+    Examples
+    --------
+    >>> import tempfile, numpy as np, clothsim as cs
+    >>> mesh = cs.grid(3, 3)
+    >>> with tempfile.TemporaryDirectory() as out:
+    ...     writer = FrameWriter(out, mesh)
+    ...     _ = writer.write(0, 0.0, mesh.vertices, np.zeros((9, 3)))
+    ...     [p.name for _, _, p in writer.frames()]
+    ['frame_000000.vtu']
+    """
+
+    def __init__(self, out_dir, mesh: Mesh, *, basename: str = "frame"):
+        if not re.fullmatch(r"[A-Za-z0-9_.-]+", basename):
+            raise InputError(f"basename: only letters, digits, '_', '.', '-' allowed, got "
+                             f"{basename!r}")
+        self.out_dir = Path(out_dir)
+        self.out_dir.mkdir(parents=True, exist_ok=True)
+        self.mesh = mesh
+        self.basename = basename
+        self.pvd_path = self.out_dir / PVD_NAME
+        self._pattern = re.compile(re.escape(basename) + r"_(\d+)\.vtu")
+        self._entries: dict[int, float] = {}
+        self._started = False
+        self._cells = cell_blocks(mesh)
+
+    def filename(self, index: int) -> str:
+        """File name of frame ``index``, e.g. ``frame_000012.vtu``."""
+        return f"{self.basename}_{index:06d}.vtu"
+
+    def write(self, index: int, time: float, positions, velocities) -> Path:
+        """Write frame ``index`` at ``time`` [s]; return its path.
+
+        Parameters
+        ----------
+        index : int
+            Frame number, >= 0.
+        time : float
+            Simulated time [s].
+        positions, velocities : ndarray, shape (n, 3)
+            [m] and [m/s]; stored as float64 bit for bit.
+        """
+        if int(index) != index or index < 0:
+            raise InputError(f"index: must be a non-negative integer, got {index!r}")
+        index = int(index)
+        n = self.mesh.vertex_count
+        x = np.ascontiguousarray(positions, dtype=np.float64)
+        v = np.ascontiguousarray(velocities, dtype=np.float64)
+        for name, a in (("positions", x), ("velocities", v)):
+            if a.shape != (n, 3):
+                raise InputError(f"{name}: expected shape ({n}, 3), got {a.shape}")
+        if not self._started:
+            self._started = True
+            if index > 0:
+                self._entries = {i: t for i, t in self._read_pvd().items() if i < index}
+        meshio = load_meshio()
+        path = self.out_dir / self.filename(index)
+        with atomic_path(path) as tmp:
+            meshio.write(tmp, meshio.Mesh(x, self._cells, point_data={"velocity": v}),
+                         file_format="vtu")
+        self._entries[index] = float(time)
+        self._write_pvd()
+        logger.debug("wrote %s (t = %g s)", path, time)
+        return path
+
+    def frames(self) -> list[tuple[int, float, Path]]:
+        """(index, time [s], path) of every frame in the collection, by index."""
+        return [(i, t, self.out_dir / self.filename(i)) for i, t in sorted(self._entries.items())]
+
+    def _read_pvd(self) -> dict[int, float]:
+        """Entries of an existing trajectory.pvd whose frame file exists ({} if none)."""
+        if not self.pvd_path.exists():
+            return {}
+        try:
+            root = ET.parse(self.pvd_path).getroot()
+        except ET.ParseError as exc:
+            logger.warning("ignoring unreadable %s: %s", self.pvd_path, exc)
+            return {}
+        entries = {}
+        for ds in root.iter("DataSet"):
+            match = self._pattern.fullmatch(ds.get("file", ""))
+            if match and (self.out_dir / match.group(0)).exists():
+                entries[int(match.group(1))] = float(ds.get("timestep", "nan"))
+        return entries
+
+    def _write_pvd(self) -> None:
+        root = ET.Element("VTKFile", type="Collection", version="0.1",
+                          byte_order="LittleEndian")
+        collection = ET.SubElement(root, "Collection")
+        for i, t in sorted(self._entries.items()):
+            ET.SubElement(collection, "DataSet", timestep=repr(t), group="", part="0",
+                          file=self.filename(i))
+        ET.indent(root)
+        with atomic_path(self.pvd_path) as tmp:
+            ET.ElementTree(root).write(tmp, encoding="utf-8", xml_declaration=True)
+
+
+def read_pvd(path) -> list[tuple[float, Path]]:
+    """(time [s], frame path) of each DataSet in a ParaView collection, in file order."""
+    path = Path(path)
+    try:
+        root = ET.parse(path).getroot()
+    except (OSError, ET.ParseError) as exc:
+        raise InputError(f"{path}: cannot read collection ({one_line(exc)})") from None
+    return [(float(ds.get("timestep")), path.parent / ds.get("file"))
+            for ds in root.iter("DataSet")]
+
+
+def read_frame(path) -> tuple[np.ndarray, np.ndarray]:
+    """Read a frame written by :class:`FrameWriter`.
+
+    Returns
+    -------
+    positions, velocities : ndarray, shape (n, 3), float64
+        [m] and [m/s], exactly as written.
+    """
+    path = Path(path)
+    if not path.is_file():
+        raise InputError(f"frame: file not found: {path}")
+    meshio = load_meshio()
+    try:
+        m = quietly(meshio.read, path, file_format="vtu")
+    except MeshioFailure as exc:
+        raise InputError(f"{path}: cannot read frame ({exc})") from None
+    if "velocity" not in m.point_data:
+        raise InputError(f"{path}: point data 'velocity' missing")
+    x = np.asarray(m.points, dtype=np.float64)
+    v = np.asarray(m.point_data["velocity"], dtype=np.float64)
+    return x, v
