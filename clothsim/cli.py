@@ -3,7 +3,7 @@
 ::
 
     clothsim run [SCENE] [--out DIR] [--frames N] [--resume] [--no-preview]
-    clothsim scenes
+    clothsim scenes [--show NAME]
     clothsim validate SCENE
     clothsim accuracy [SCENE] [...]
     clothsim export SCENE [--out DIR]
@@ -75,7 +75,9 @@ def build_parser() -> argparse.ArgumentParser:
     run.add_argument("--no-preview", action="store_true",
                      help="skip preview.gif and final.png")
 
-    sub.add_parser("scenes", help="list the built-in scenes")
+    scn = sub.add_parser("scenes", help="list the built-in scenes (or print one: --show NAME)")
+    scn.add_argument("--show", metavar="NAME", default=None,
+                     help="print the TOML of the built-in scene NAME (a template to start from)")
 
     val = sub.add_parser("validate", help="check a scene file without running it")
     val.add_argument("scene", metavar="SCENE", help="scene file or built-in name")
@@ -125,8 +127,11 @@ def _configure_logging(verbose: int):
 
 
 def _cmd_scenes(args) -> int:
-    from .scene import DEFAULT_SCENE, list_builtin_scenes
+    from .scene import DEFAULT_SCENE, builtin_scene_text, list_builtin_scenes
 
+    if args.show is not None:
+        sys.stdout.write(builtin_scene_text(args.show))
+        return 0
     scenes = list_builtin_scenes()
     width = max(map(len, scenes), default=0)
     for name, desc in scenes.items():

@@ -14,7 +14,44 @@ class ClothsimError(Exception):
 
 
 class InputError(ClothsimError, ValueError):
-    """Bad input: the message names the field and what is wrong with it."""
+    """Bad input: the message names the field and what is wrong with it.
+
+    Parameters
+    ----------
+    message : str
+        One line, conventionally ``"<field>: <what is wrong>"``.
+    field : str, optional
+        The field (argument, key path or index) the message is about, e.g.
+        ``"vertex_mass[3]"``; ``None`` when the raiser did not name it separately.
+    """
+
+    def __init__(self, message: str = "", field: str | None = None):
+        super().__init__(message)
+        self.field = field
+
+
+class SceneError(InputError):
+    """A scene file is wrong; the message is ``"<file>: <key.path>: <what is wrong>"``.
+
+    Attributes
+    ----------
+    source : str
+        The scene file (or ``"<dict>"``).
+    path : str
+        Key path inside it, e.g. ``"effects[2].radius"`` (may be empty); also ``.field``
+        (``None`` when empty).
+    detail : str
+        What is wrong (one line).
+    """
+
+    def __init__(self, source: str, path: str, detail: str):
+        self.source, self.path = str(source), path
+        self.detail = " ".join(str(detail).split())  # always one line
+        where = f"{self.source}: {path}: " if path else f"{self.source}: "
+        super().__init__(where + self.detail, field=path or None)
+
+    def __reduce__(self):
+        return type(self), (self.source, self.path, self.detail)
 
 
 class FactorizationError(ClothsimError):

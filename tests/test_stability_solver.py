@@ -23,7 +23,6 @@ from clothsim.factorization import CONDITION_WARNING_THRESHOLD, Factor, cholmod_
 from clothsim.gallery import GRAVITY
 from clothsim.gallery import grid_cloth as make_grid_model
 from clothsim.solvers import LocalGlobalSolver, NewtonSolver, augmented_objective
-from tests.conftest import GRAVITY, make_grid_model
 
 BACKENDS = ["splu", pytest.param("cholmod", marks=pytest.mark.skipif(
     not cholmod_available(), reason="scikit-sparse (CHOLMOD) not installed"))]

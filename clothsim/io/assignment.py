@@ -35,7 +35,7 @@ from pathlib import Path
 
 import numpy as np
 
-from ..errors import InputError
+from ..errors import InputError, SceneError
 from ..mesh import Mesh, fan_triangles
 from .obj import read_obj_cells
 
@@ -68,24 +68,8 @@ class Assignment:
     source: Path
 
 
-class AssignmentError(InputError):
-    """An assignment file is wrong; the message is ``"<file>: <key>: <what is wrong>"``.
-
-    Attributes
-    ----------
-    source : str
-        The JSON (or OBJ) file.
-    path : str
-        Key inside it, e.g. ``"b[0]"`` (may be empty).
-    detail : str
-        What is wrong.
-    """
-
-    def __init__(self, source: str, path: str, detail: str):
-        self.source, self.path = str(source), path
-        self.detail = " ".join(str(detail).split())  # always one line
-        where = f"{self.source}: {path}: " if path else f"{self.source}: "
-        super().__init__(where + self.detail)
+#: Errors in an assignment file are scene errors: ``"<file>: <key>: <what is wrong>"``.
+AssignmentError = SceneError
 
 
 def _error(source, path: str, detail: str) -> AssignmentError:

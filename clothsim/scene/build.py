@@ -1,0 +1,326 @@
+"""The :class:`Scene`: a validated scene document and what it builds.
+
+``Scene.from_dict`` validates (:mod:`.validate`); ``build_model``, ``build_effects`` and
+``build_simulation`` make the model, fresh effect objects and a ready simulation. Errors of
+the core raised while building are reported at the scene key they come from.
+"""
+
+from __future__ import annotations
+
+import copy
+import re
+from dataclasses import dataclass, field
+from pathlib import Path
+
+import numpy as np
+
+from ..errors import InputError, SceneError
+from .checks import Invalid, integer
+from .effects import constructor_params
+from .schema import MAX_SUBSTEPS
+from .tables import read_index_list, read_spring_table, read_triangles, read_values, read_vertices
+from .validate import locate, validate, validate_solver
+
+EPS = float(np.finfo(np.float64).eps)
+
+
+@dataclass(frozen=True, eq=False)
+class Scene:
+    """A validated scene.
+
+    Attributes
+    ----------
+    data : dict
+        The resolved document: every table with defaults filled in and file paths made
+        absolute (see ``docs/scenes.md``).
+    source : str
+        Where it came from (file path, or ``"<dict>"``); starts every error message.
+    base_dir : Path
+        Directory that relative paths were resolved against.
+    """
+
+    data: dict
+    source: str = "<dict>"
+    base_dir: Path = field(default_factory=Path.cwd)
+
+    @classmethod
+    def from_dict(cls, d: dict, *, source: str = "<dict>", base_dir=None) -> Scene:
+        """Validate a scene document (as parsed from TOML) and return the scene.
+
+        Raises
+        ------
+        SceneError
+            ``"<source>: <key.path>: <what is wrong>"`` for the first problem found.
+        """
+        base = Path.cwd() if base_dir is None else Path(base_dir)
+        default_name = Path(source).stem if source != "<dict>" else "scene"
+        default_name = re.sub(r"[^\w.-]+", "-", default_name, flags=re.ASCII)
+        default_name = default_name.lstrip(".")[:100] or "scene"
+        try:
+            data = validate(d, base, default_name)
+        except Invalid as exc:
+            raise SceneError(source, exc.path, exc.detail) from None
+        except RecursionError:
+            raise SceneError(source, "", "nested too deeply") from None
+        return cls(data, str(source), base)
+
+    # -- plain properties
+    @property
+    def name(self) -> str:
+        return self.data["scene"]["name"]
+
+    @property
+    def description(self) -> str:
+        return self.data["scene"]["description"]
+
+    @property
+    def frames(self) -> int:
+        """Frames written after the initial one."""
+        return self.data["scene"]["frames"]
+
+    @property
+    def fps(self) -> float:
+        """Frames per second [1/s] (1 / h when the scene gives ``h``)."""
+        return self.data["scene"]["fps"]
+
+    @property
+    def substeps(self) -> int:
+        """Implicit Euler steps per frame."""
+        return self.data["scene"]["substeps"]
+
+    @property
+    def h(self) -> float:
+        """Time step [s]: ``scene.h`` as written, else 1 / (fps · substeps)."""
+        given = self.data["scene"].get("h")
+        return given if given is not None else 1.0 / (self.fps * self.substeps)
+
+    def to_dict(self) -> dict:
+        """The resolved document (JSON-ready deep copy; ``tolerance`` may be None)."""
+        return copy.deepcopy(self.data)
+
+    def _error(self, path: str, detail: str) -> SceneError:
+        return SceneError(self.source, path, detail)
+
+    # -- building
+    def _files_mesh(self):
+        from ..mesh import Mesh
+        c = self.data["cloth"]
+        x = read_vertices(c["vertices"], "cloth.vertices")
+        tris = (read_triangles(c["triangles"], "cloth.triangles", c["index_base"], len(x))
+                if "triangles" in c else np.zeros((0, 3), np.int64))
+        return Mesh(x, tris)
+
+    def _spring_table(self, vertex_count: int):
+        sp = self.data["springs"]
+        if "table" not in sp:
+            return None
+        return read_spring_table(sp["table"], "springs.table", sp["columns"],
+                                 sp["index_base"], vertex_count)
+
+    def build_model(self):
+        """Build the mesh, springs and masses of ``[cloth]`` and ``[springs]``.
+
+        Returns
+        -------
+        Model
+        """
+        try:
+            return self._build_model()
+        except Invalid as exc:
+            raise self._error(exc.path, exc.detail) from None
+        except SceneError:
+            raise
+        except InputError as exc:
+            raise self._error(*locate(exc, "cloth")) from None
+
+    def _build_model(self):
+        from .. import mesh as mesh_mod
+        from ..io.meshes import load_mesh
+        from ..model import Model
+        from ..polygon import polygon
+        from ..springs import FAMILIES, Springs, grid_springs, mesh_springs, springs_from_pairs
+
+        c, sp = self.data["cloth"], self.data["springs"]
+        shape = c["shape"]
+        if shape == "jacobson":
+            from ..io.assignment import read_assignment
+            a = read_assignment(c["file"])
+            springs = springs_from_pairs(a.mesh, a.spring_pairs, a.stiffness)
+            return Model(a.mesh, springs, a.vertex_mass)
+        if shape == "grid":
+            nx, ny = c["resolution"]
+            mesh = mesh_mod.grid(nx, ny, size=tuple(c["size"]), center=c["center"],
+                                 plane=c["plane"])
+            springs = grid_springs(mesh, structural=sp.get("structural"),
+                                   shear=sp.get("shear"), bending=sp.get("bending"),
+                                   bending_pattern=sp["bending_pattern"])
+        else:
+            if shape == "mesh":
+                mesh = load_mesh(c["mesh"], field="cloth.mesh")
+            elif shape == "polygon":
+                mesh = polygon(c["outline"], spacing=c["spacing"], center=c["center"],
+                               plane=c["plane"])
+            else:
+                mesh = self._files_mesh()
+            springs = mesh_springs(mesh, structural=sp.get("structural"),
+                                   bending=sp.get("bending"))
+        _check_extent(mesh.vertices, shape)
+        table = self._spring_table(mesh.vertex_count)
+        if table is not None and len(table.pairs):
+            x = mesh.vertices
+            rest = np.where(np.isnan(table.rest),
+                            np.linalg.norm(x[table.pairs[:, 0]] - x[table.pairs[:, 1]], axis=1),
+                            table.rest)
+            fam = np.full(len(rest), FAMILIES.index("structural"), np.int8)
+            springs = Springs.concatenate([springs, Springs(table.pairs, table.stiffness,
+                                                            rest, fam)])
+        vm = c.get("vertex_mass")
+        if isinstance(vm, str):
+            vm = read_values(vm, "cloth.vertex_mass")
+            if len(vm) != mesh.vertex_count:
+                raise Invalid("cloth.vertex_mass", f"expected {mesh.vertex_count} values (one "
+                                                   f"per vertex), got {len(vm)}")
+        return Model.build(mesh, springs, total_mass=c.get("mass"), vertex_mass=vm,
+                           mass_lumping=c["mass_lumping"])
+
+    def _implicit_pins(self, vertex_count: int | None = None) -> list:
+        """Pins the cloth's files declare: the assignment's ``b``, the table's attachments."""
+        from ..effects import Pin
+        out = []
+        if self.data["cloth"]["shape"] == "jacobson":
+            from ..io.assignment import read_pins
+            out.append(("cloth.file", Pin(read_pins(self.data["cloth"]["file"]))))
+        if "table" in self.data["springs"]:
+            if vertex_count is None:
+                vertex_count = self.build_model().vertex_count
+            t = self._spring_table(vertex_count)
+            for k in dict.fromkeys(t.attached_stiffness.tolist()):
+                vs = t.attached[t.attached_stiffness == k]
+                out.append(("springs.table", Pin(vs, method="penalty", stiffness=k)))
+        return out
+
+    def build_effects(self, model=None) -> list:
+        """Fresh effect objects: the cloth files' pins first, then the declared effects.
+
+        The pins a cloth's files declare come first: a ``jacobson`` cloth's exact pins (its
+        JSON's ``b`` list), then a spring table's attachments as penalty pins.
+        """
+        try:
+            return [e for _, e in self._effects(model)]
+        except Invalid as exc:
+            raise self._error(exc.path, exc.detail) from None
+
+    def _effects(self, model=None) -> list[tuple[str, object]]:
+        from ..effects import EFFECTS
+        out = self._implicit_pins(None if model is None else model.vertex_count)
+        for i, e in enumerate(self.data["effects"]):
+            params = constructor_params(e["kind"], e)
+            path = f"effects[{i}]"
+            if e["kind"] == "pin" and isinstance(params.get("vertices"), str):
+                n = (self.build_model() if model is None else model).vertex_count
+                params["vertices"] = read_index_list(params["vertices"], f"{path}.vertices",
+                                                     e.get("index_base", 0), n)
+            try:
+                out.append((path, EFFECTS[e["kind"]](**params)))
+            except (InputError, TypeError, ValueError) as exc:
+                raise Invalid(*locate(exc, path, e["kind"], path)) from None
+        return out
+
+    def build_simulation(self, model=None, *, method: str | None = None,
+                         iterations: int | None = None, tolerance: float | None = None,
+                         substeps: int | None = None):
+        """A :class:`~clothsim.simulation.Simulation` of this scene, ready to step.
+
+        Parameters
+        ----------
+        model : Model, optional
+            Default: :meth:`build_model`.
+        method, iterations, tolerance
+            Override ``[solver]``.
+        substeps : int, optional
+            Override the steps per frame (h = 1 / (fps · substeps), or ``scene.h`` /
+            substeps when the scene gives ``h``).
+        """
+        from ..simulation import Simulation
+
+        so = self.data["solver"]
+        try:
+            solver = validate_solver(so["method"] if method is None else method,
+                                     so["iterations"] if iterations is None else iterations,
+                                     so["tolerance"] if tolerance is None else tolerance,
+                                     so["backend"])
+            if substeps is not None:
+                substeps = integer(substeps, "scene.substeps", minimum=1, maximum=MAX_SUBSTEPS)
+        except Invalid as exc:
+            raise self._error(exc.path, exc.detail) from None
+        if substeps is None:
+            h = self.h
+        elif self.data["scene"].get("h") is not None:
+            h = self.data["scene"]["h"] / substeps
+        else:
+            h = 1.0 / (self.fps * substeps)
+        model = self.build_model() if model is None else model
+        self._check_stiffness(model, h)
+        effects = self.build_effects(model)
+        try:
+            return Simulation(model, h=h, effects=effects, solver=solver["method"],
+                              iterations=solver["iterations"], tolerance=solver["tolerance"],
+                              backend=solver["backend"])
+        except InputError as exc:
+            raise self._locate(exc, model, h) from None
+
+    def _check_stiffness(self, model, h: float) -> None:
+        """Reject springs so stiff that M + h²L cannot be factored in float64."""
+        from ..springs import FAMILIES
+        sv, k = model.springs.spring_vertices, model.springs.spring_stiffness
+        if not len(k):
+            return
+        m = model.vertex_mass
+        ratio = (h * h) * k / np.minimum(m[sv[:, 0]], m[sv[:, 1]])
+        i = int(np.argmax(ratio))
+        if not ratio[i] * EPS > 0.5:
+            return
+        shape = self.data["cloth"]["shape"]
+        generated = model.spring_count - (len(self._spring_table(model.vertex_count).pairs)
+                                          if "table" in self.data["springs"] else 0)
+        key = ("cloth.file" if shape == "jacobson" else "springs.table" if i >= generated
+               else f"springs.{FAMILIES[model.springs.spring_family[i]]}")
+        raise self._error(key, f"stiffness {float(k[i]):.3g} N/m is too large for h = {h:.3g} s "
+                               f"and vertex mass {float(min(m[sv[i]])):.3g} kg: h²k/m = "
+                               f"{float(ratio[i]):.3g} is beyond 1/(2ε) = {0.5 / EPS:.3g}, "
+                               f"so M + h²L cannot be factored in float64")
+
+    def _locate(self, exc: InputError, model, h: float) -> SceneError:
+        """Name the effect whose binding failed (bind each one alone to find it)."""
+        for path, effect in self._effects(model):
+            try:
+                effect.bind(model, h)
+            except InputError as err:
+                if not path.startswith("effects["):  # a pin the cloth's files declare
+                    label = "b" if path == "cloth.file" else "attachments"
+                    return self._error(path, f"{label}: {err}")
+                return self._error(*locate(err, path, effect.kind, path))
+        msg = " ".join(str(exc).split())
+        fld, _, rest = msg.partition(": ")
+        fld = getattr(exc, "field", None) or fld
+        if rest and fld.startswith("solver."):
+            return self._error(fld, rest)
+        if rest and fld.startswith("effects."):
+            return self._error("effects", rest)
+        return self._error("", msg)
+
+
+def _check_extent(x: np.ndarray, shape: str) -> None:
+    """A cloth whose size is below the rounding of its coordinates is meaningless."""
+    if len(x) < 2:
+        return
+    scale = float(np.max(np.abs(x)))
+    extent = float(np.max(np.ptp(x, axis=0)))
+    if extent <= 1e3 * EPS * scale:
+        key = {"grid": "cloth.center", "polygon": "cloth.center", "mesh": "cloth.mesh",
+               "files": "cloth.vertices"}.get(shape, "cloth")
+        raise Invalid(key, f"the cloth's extent {extent:.3g} m is below the rounding of its "
+                           f"coordinates near {scale:.3g} m; move it nearer the origin")
+
+
+__all__ = ["Scene"]

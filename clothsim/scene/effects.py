@@ -1,0 +1,158 @@
+"""Validation of one ``[[effects]]`` table: kind, keys, and the type of every parameter.
+
+The types of the parameters a scene file may give (:data:`PARAMETERS`) are checked here,
+with the key path, before the effect's own constructor sees them; the constructor's checks
+(ranges, shapes) then run, and their complaints are reported at the effect's key path.
+"""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+from ..errors import InputError
+from .checks import (
+    Invalid,
+    check_keys,
+    integer,
+    is_number,
+    number,
+    show,
+    string,
+    suggest,
+    table,
+    type_name,
+)
+from .files import resolve_path
+from .schema import MAX_ITERATIONS
+
+MAX_LENGTH = 1e100  # [m]: coordinates and radii whose squares stay finite
+
+# kind -> key -> type: "vec3" (3 numbers), "point" (3 numbers, a position), "number",
+# "nonneg", "positive", "length" (positive, at most MAX_LENGTH), "string", "strings",
+# "count" (an iteration count), "vertices" (indices or a file), "region", "time" (>= 0)
+PARAMETERS = {
+    "gravity": {"acceleration": "vec3"},
+    "pin": {"vertices": "vertices", "region": "region", "method": "string",
+            "stiffness": "positive", "release": "time", "velocity": "vec3",
+            "index_base": "base"},
+    "plane": {"point": "point", "normal": "vec3", "friction": "nonneg", "thickness": "nonneg"},
+    "sphere": {"center": "point", "radius": "length", "friction": "nonneg"},
+    "box": {"min": "point", "max": "point", "friction": "nonneg"},
+    "impulse": {"center": "point", "radius": "length", "force": "vec3", "start": "number",
+                "duration": "positive"},
+    "wind": {"velocity": "vec3", "drag": "nonneg", "density": "nonneg"},
+    "damping": {"model": "string", "coefficient": "number"},
+    "strain-limit": {"max_strain": "positive", "iterations": "count", "families": "strings"},
+}
+_SCENE_ONLY = {"pin": ("index_base",)}       # read by the scene, not given to the effect
+_PYTHON_ONLY_KEYS = {"pin": ("motion",)}     # callables: Python API only, not in scene files
+
+
+def _vec3(v, path: str, *, point=False) -> list[float]:
+    if isinstance(v, (list, tuple)) and len(v) != 3:
+        raise Invalid(path, f"expected 3 numbers, got {show(v)}")
+    if not isinstance(v, (list, tuple)) or not all(is_number(x) for x in v):
+        raise Invalid(path, f"must be a list of 3 numbers, got {show(v)}")
+    out = [number(x, f"{path}[{i}]") for i, x in enumerate(v)]
+    if point:
+        for i, x in enumerate(out):
+            if abs(x) > MAX_LENGTH:
+                raise Invalid(f"{path}[{i}]", f"must be within ±{MAX_LENGTH:g} m, got {x!r}")
+    return out
+
+
+def check_parameter(kind: str, key: str, v, path: str, base_dir: Path):
+    """The value of ``effects[i].key`` checked for its type; returns it (paths resolved)."""
+    t = PARAMETERS.get(kind, {}).get(key)
+    if t is None:
+        return v
+    if t in ("vec3", "point"):
+        return _vec3(v, path, point=t == "point")
+    if t == "number":
+        return number(v, path)
+    if t == "nonneg":
+        return number(v, path, nonnegative=True)
+    if t in ("positive", "time"):
+        if t == "time":
+            return number(v, path, nonnegative=True)
+        return number(v, path, positive=True)
+    if t == "length":
+        return number(v, path, positive=True, maximum=MAX_LENGTH)
+    if t == "string":
+        return string(v, path)
+    if t == "count":
+        return integer(v, path, minimum=1, maximum=MAX_ITERATIONS)
+    if t == "base":
+        return integer(v, path, minimum=0, maximum=1)
+    if t == "strings":
+        if not isinstance(v, list):
+            raise Invalid(path, f"expected an array of strings, got {type_name(v)}")
+        return [string(x, f"{path}[{i}]") for i, x in enumerate(v)]
+    if t == "region":
+        r = table(v, path)
+        check_keys(r, path, ("min", "max"))
+        for corner in ("min", "max"):
+            if corner not in r:
+                raise Invalid(f"{path}.{corner}", "missing: a region needs 'min' and 'max'")
+        return {c: _vec3(r[c], f"{path}.{c}", point=True) for c in ("min", "max")}
+    if t == "vertices":
+        if isinstance(v, str):
+            return str(resolve_path(v, base_dir, path))
+        if not isinstance(v, (list, tuple)):
+            raise Invalid(path, f"expected an array of vertex indices or a file, got "
+                                f"{type_name(v)}")
+        return [integer(x, f"{path}[{i}]", minimum=0) for i, x in enumerate(v)]
+    raise AssertionError(t)  # pragma: no cover
+
+
+def validate_effect(e, path: str, vertex_count: int | None, base_dir: Path) -> dict:
+    """Check one effect table; return ``{"kind": ..., **parameters}`` (paths resolved)."""
+    from ..effects import EFFECTS
+    from .validate import constructor_keys, locate
+    e = table(e, path)
+    if "kind" not in e:
+        raise Invalid(f"{path}.kind", f"missing: every effect needs a kind ({', '.join(EFFECTS)})")
+    kind = string(e["kind"], f"{path}.kind")
+    if kind not in EFFECTS:
+        raise Invalid(f"{path}.kind", f"unknown effect kind {show(kind)}" + suggest(kind, EFFECTS))
+    names, any_key = constructor_keys(EFFECTS[kind])
+    names = [k for k in names if k not in _PYTHON_ONLY_KEYS.get(kind, ())]
+    names += list(_SCENE_ONLY.get(kind, ()))
+    if not any_key:
+        check_keys(e, path, ["kind"] + names)
+    params = {k: check_parameter(kind, k, v, f"{path}.{k}", base_dir)
+              for k, v in e.items() if k != "kind"}
+    if kind == "plane" and "normal" in params:
+        big = max(abs(x) for x in params["normal"])
+        if big == 0:
+            raise Invalid(f"{path}.normal", "must not be the zero vector")
+        if big > 1e150 or big < 1e-150:  # rescaled so that its length neither over- nor
+            params["normal"] = [x / big for x in params["normal"]]  # underflows
+    if kind == "pin":
+        if "index_base" in params and not isinstance(params.get("vertices"), str):
+            raise Invalid(f"{path}.index_base", "only used when 'vertices' is a file")
+        vs = params.get("vertices")
+        if isinstance(vs, list):
+            seen = set()
+            for i, v in enumerate(vs):
+                if vertex_count is not None and v >= vertex_count:
+                    raise Invalid(f"{path}.vertices[{i}]", f"vertex {v} out of range "
+                                                           f"0..{vertex_count - 1}")
+                if v in seen:
+                    raise Invalid(f"{path}.vertices[{i}]", f"vertex {v} is listed twice")
+                seen.add(v)
+    if not (kind == "pin" and isinstance(params.get("vertices"), str)):
+        try:  # the constructor checks its own parameters; nothing is bound to a model here
+            EFFECTS[kind](**constructor_params(kind, params))
+        except (InputError, TypeError, ValueError) as exc:
+            raise Invalid(*locate(exc, path, kind, path)) from None
+    return {"kind": kind, **params}
+
+
+def constructor_params(kind: str, params: dict) -> dict:
+    """The parameters the effect's constructor takes (scene-only keys removed)."""
+    return {k: v for k, v in params.items() if k != "kind"
+            and k not in _SCENE_ONLY.get(kind, ())}
+
+
+__all__ = ["validate_effect", "check_parameter", "constructor_params", "PARAMETERS"]

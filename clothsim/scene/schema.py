@@ -1,0 +1,233 @@
+"""The scene schema as data: every key of a scene file, its type, default, unit and meaning.
+
+The validator (:mod:`clothsim.scene.validate`) takes the known keys and the defaults from
+:data:`KEYS`, and :func:`schema_markdown` renders the same entries as the key reference of
+``docs/scenes.md``, so the documentation cannot drift from what is accepted.
+
+Examples
+--------
+>>> from clothsim.scene.schema import default
+>>> default("scene", "fps"), default("solver", "iterations")
+(30.0, 10)
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from typing import Any
+
+REQUIRED = object()   #: marker: the key has no default and must be given (when it applies)
+NONE = object()       #: marker: absent means "not used" (no default value)
+
+SHAPES = ("grid", "mesh", "polygon", "jacobson", "files")
+TABLES = ("scene", "cloth", "springs", "solver")
+
+# Upper bounds that keep a run finite (a larger value is almost surely a typo, and would
+# otherwise hang without a word). Documented in docs/scenes.md through the schema.
+MAX_FRAMES = 10_000_000
+MAX_SUBSTEPS = 10_000
+MAX_ITERATIONS = 100_000
+MAX_NAME = 100
+
+
+def sci(n: float) -> str:
+    """``1e7`` rather than ``1e+07``."""
+    return f"{n:.0e}".replace("e+0", "e").replace("e+", "e")
+
+
+@dataclass(frozen=True)
+class Key:
+    """One key of a scene table.
+
+    Attributes
+    ----------
+    table : str
+        ``"scene"``, ``"cloth"``, ``"springs"`` or ``"solver"``.
+    name : str
+        The key.
+    type : str
+        Its TOML type, in words (``"number"``, ``"[3] numbers"``, ``"string"``, ...).
+    default : Any
+        Default value, or :data:`REQUIRED` / :data:`NONE`.
+    unit : str
+        SI unit (empty when dimensionless).
+    meaning : str
+        One sentence or two: what it does and its range.
+    shapes : tuple of str
+        For ``[cloth]`` and ``[springs]``: the cloth shapes that use it (empty: all).
+    """
+
+    table: str
+    name: str
+    type: str
+    default: Any
+    unit: str
+    meaning: str
+    shapes: tuple[str, ...] = ()
+
+
+_ALL_BUT_JACOBSON = ("grid", "mesh", "polygon", "files")
+
+KEYS: tuple[Key, ...] = (
+    # [scene]
+    Key("scene", "name", "string", "file name", "",
+        f"Scene name; names the default output folder `out/<name>`. Letters, digits, `_ . -`; "
+        f"no leading `.`, at most {MAX_NAME} characters."),
+    Key("scene", "description", "string", "", "", "One line, shown by `clothsim scenes`."),
+    Key("scene", "frames", "integer", 60, "",
+        f"Frames written after the initial one (frame 0 is the initial state); "
+        f"0 ≤ frames ≤ {sci(MAX_FRAMES)}."),
+    Key("scene", "fps", "number", 30.0, "1/s",
+        "Frames per second, > 0. Frame k is at t = k / fps."),
+    Key("scene", "substeps", "integer", 1, "",
+        f"Implicit Euler steps per frame, 1 ≤ substeps ≤ {sci(MAX_SUBSTEPS)}. "
+        f"The time step is h = 1 / (fps · substeps)."),
+    Key("scene", "h", "number", NONE, "s",
+        "The time step itself, used exactly as written (e.g. `h = 0.0333` for a port whose "
+        "step is not 1/integer); one step per frame, frame k at t = k h. Give either `h` or "
+        "`fps`/`substeps`, not both."),
+    # [cloth]
+    Key("cloth", "shape", "string", "grid", "",
+        "How the cloth is made: `\"grid\"`, `\"mesh\"`, `\"polygon\"`, `\"jacobson\"` or "
+        "`\"files\"`; each shape has its own keys below."),
+    Key("cloth", "mass", "number", 1.0, "kg",
+        "Total mass, > 0, spread over the vertices by `mass_lumping`.", _ALL_BUT_JACOBSON),
+    Key("cloth", "vertex_mass", "number, array or file", NONE, "kg",
+        "Mass of every vertex (one number, one per vertex, or a text file of n numbers), > 0. "
+        "Replaces `mass`; give one of the two.", _ALL_BUT_JACOBSON),
+    Key("cloth", "mass_lumping", "string", "uniform", "",
+        "`\"uniform\"`: every vertex the same. `\"area\"`: proportional to a third of the "
+        "adjacent triangles' area.", _ALL_BUT_JACOBSON),
+    Key("cloth", "size", "[2] numbers", [1.0, 1.0], "m",
+        "Extent along the two grid axes, > 0.", ("grid",)),
+    Key("cloth", "resolution", "[2] integers", [21, 21], "",
+        "Vertices `[nx, ny]` along the two axes, each ≥ 2. Vertex (row i, column j) has "
+        "index `i * nx + j`.", ("grid",)),
+    Key("cloth", "center", "[3] numbers", [0.0, 0.0, 0.0], "m",
+        "Centre of the rectangle (grid) or offset of the outline's origin (polygon).",
+        ("grid", "polygon")),
+    Key("cloth", "plane", "string", "xz", "",
+        "`\"xz\"`: lies flat, normal +y, rows run along −z. `\"xy\"`: hangs vertically, "
+        "row `ny − 1` is the top.", ("grid", "polygon")),
+    Key("cloth", "mesh", "string (file)", REQUIRED, "m",
+        "Mesh file `clothsim.mesh.load` reads (OBJ, PLY, STL, MSH, VTU, …).", ("mesh",)),
+    Key("cloth", "outline", "array of [2] numbers", REQUIRED, "m",
+        "At least 3 corners of a closed outline in the cloth's plane.", ("polygon",)),
+    Key("cloth", "spacing", "number", 0.05, "m", "Target edge length, > 0.", ("polygon",)),
+    Key("cloth", "file", "string (file)", REQUIRED, "",
+        "An assignment `.json` file; mesh, springs, masses and pins all come from it.",
+        ("jacobson",)),
+    Key("cloth", "vertices", "string (file)", REQUIRED, "m",
+        "Initial positions: a text file of n lines of 3 numbers, or one line of 3n numbers "
+        "(x y z per vertex); `#` starts a comment.", ("files",)),
+    Key("cloth", "triangles", "string (file)", NONE, "",
+        "Triangles: a text file of lines of 3 vertex indices (base `index_base`). Without it "
+        "the cloth has no triangles (springs only).", ("files",)),
+    Key("cloth", "index_base", "integer", 0, "",
+        "0 or 1: the number of the first vertex in `triangles`.", ("files",)),
+    # [springs]
+    Key("springs", "structural", "number", NONE, "N/m",
+        "Grid: (i,j)–(i,j+1) and (i,j)–(i+1,j). Mesh, polygon, files: every edge. ≥ 0.",
+        _ALL_BUT_JACOBSON),
+    Key("springs", "shear", "number", NONE, "N/m",
+        "Grid only: the two diagonals of each cell. ≥ 0.", ("grid",)),
+    Key("springs", "bending", "number", NONE, "N/m",
+        "Grid: (i,j)–(i,j+2) and (i,j)–(i+2,j). Mesh, polygon, files: the two vertices "
+        "opposite each interior edge. ≥ 0.", _ALL_BUT_JACOBSON),
+    Key("springs", "bending_pattern", "string", "every", "",
+        "Grid only. `\"every\"`: a bending spring starts at every vertex. `\"alternate\"`: "
+        "at every other vertex (the C++ ports).", ("grid",)),
+    Key("springs", "table", "string (file)", NONE, "",
+        "A spring table, one spring a line (columns in `columns`; `#` starts a comment), "
+        "added to the generated families. A row whose `b` is −1 is an attachment: a "
+        "penalty pin of the row's stiffness holding vertex `a` at its initial position "
+        "(rest must be 0).", _ALL_BUT_JACOBSON),
+    Key("springs", "columns", "array of strings", ["a", "b", "stiffness", "rest"], "",
+        "Column names of `table`: `a`, `b` (vertex indices, required), `stiffness` [N/m] "
+        "(required), `rest` [m] (default: the initial distance); any other name (e.g. "
+        "`type`) is read and ignored.", _ALL_BUT_JACOBSON),
+    Key("springs", "index_base", "integer", 0, "",
+        "0 or 1: the number of the first vertex in `table` (−1 in `b` always marks an "
+        "attachment).", _ALL_BUT_JACOBSON),
+    # [solver]
+    Key("solver", "method", "string", "local-global", "",
+        "A name in `clothsim.solvers.SOLVERS`: `\"local-global\"` (the paper), `\"newton\"` "
+        "(exact reference), `\"chebyshev\"`, …"),
+    Key("solver", "iterations", "integer", 10, "",
+        f"Iterations per step; the maximum when `tolerance` is set. "
+        f"1 ≤ iterations ≤ {sci(MAX_ITERATIONS)}."),
+    Key("solver", "tolerance", "number", NONE, "",
+        "Stop a step once ‖∇g(x_k)‖ / ‖∇g(x_0)‖ ≤ tolerance (> 0). Without it, exactly "
+        "`iterations` are done."),
+    Key("solver", "backend", "string", "auto", "",
+        "Sparse factorization: `\"auto\"` (CHOLMOD if installed, else SuperLU), "
+        "`\"cholmod\"`, `\"splu\"`."),
+)
+
+
+def keys(table: str, shape: str | None = None) -> tuple[str, ...]:
+    """Names of the keys of ``table`` (those a cloth ``shape`` uses, when given)."""
+    return tuple(k.name for k in KEYS
+                 if k.table == table and (shape is None or not k.shapes or shape in k.shapes))
+
+
+def spec(table: str, name: str) -> Key:
+    """The :class:`Key` entry of ``table.name``."""
+    for k in KEYS:
+        if k.table == table and k.name == name:
+            return k
+    raise KeyError(f"{table}.{name}")
+
+
+def default(table: str, name: str):
+    """Default of ``table.name`` (a fresh copy for lists; None for REQUIRED/NONE)."""
+    d = spec(table, name).default
+    if d is REQUIRED or d is NONE:
+        return None
+    return list(d) if isinstance(d, list) else d
+
+
+def _show_default(d) -> str:
+    if d is REQUIRED:
+        return "required"
+    if d is NONE:
+        return "—"
+    if d == "file name":
+        return "file name"
+    if isinstance(d, str):
+        return f'`"{d}"`'
+    if isinstance(d, list):
+        return "`[" + ", ".join(f'"{v}"' if isinstance(v, str) else repr(v) for v in d) + "]`"
+    return f"`{d!r}`"
+
+
+def schema_markdown() -> str:
+    """The Markdown reference of every scene key, generated from :data:`KEYS`.
+
+    Returns
+    -------
+    str
+        One section per table (``[scene]``, ``[cloth]``, ``[springs]``, ``[solver]``), each a
+        table of key, type, default, unit, the cloth shapes that use it, and meaning.
+    """
+    out = []
+    for table in TABLES:
+        out.append(f"### `[{table}]`\n")
+        shaped = table in ("cloth", "springs")
+        head = "| key | type | default | unit |" + (" shapes |" if shaped else "") + " meaning |"
+        out.append(head)
+        out.append("|" + "---|" * (head.count("|") - 1))
+        for k in KEYS:
+            if k.table != table:
+                continue
+            row = (f"| `{k.name}` | {k.type} | {_show_default(k.default)} | "
+                   f"{k.unit or '—'} |")
+            if shaped:
+                row += f" {', '.join(k.shapes) if k.shapes else 'all'} |"
+            out.append(f"{row} {k.meaning} |")
+        out.append("")
+    return "\n".join(out).rstrip() + "\n"
+
+
+__all__ = ["KEYS", "Key", "SHAPES", "TABLES", "REQUIRED", "NONE", "keys", "spec", "default",
+           "schema_markdown", "MAX_FRAMES", "MAX_SUBSTEPS", "MAX_ITERATIONS", "MAX_NAME"]

@@ -1,0 +1,315 @@
+"""Validation of a whole scene document, in one place, before anything is built.
+
+:func:`validate` checks every key (known keys and defaults from :mod:`.schema`, values with
+:mod:`.checks`) and returns the resolved document: defaults filled in, file paths
+absolute. Effects' parameters are type-checked here and then given to the effect's own
+constructor, whose complaints are mapped to the effect's key path.
+"""
+
+from __future__ import annotations
+
+import inspect
+import math
+from pathlib import Path
+from typing import Any
+
+from ..errors import InputError
+from . import schema
+from .checks import (
+    Invalid,
+    check_finite_everywhere,
+    check_keys,
+    integer,
+    is_number,
+    number,
+    safe_name,
+    show,
+    string,
+    suggest,
+    table,
+    type_name,
+    vector,
+)
+from .files import resolve_path
+from .schema import MAX_FRAMES, MAX_ITERATIONS, MAX_SUBSTEPS, SHAPES
+
+TOP_KEYS = ("scene", "cloth", "springs", "solver", "effects")
+MAX_LENGTH = 1e100  # coordinates and lengths [m]: squares and sums stay finite
+
+
+def _scene_table(raw: dict, default_name: str) -> dict:
+    s = table(raw.get("scene", {}), "scene")
+    check_keys(s, "scene", schema.keys("scene"))
+    d = schema.default
+    out = {
+        "name": safe_name(s.get("name", default_name)),
+        "description": string(s.get("description", d("scene", "description")),
+                              "scene.description"),
+        "frames": integer(s.get("frames", d("scene", "frames")), "scene.frames", minimum=0,
+                          maximum=MAX_FRAMES),
+    }
+    if "h" in s:
+        for key in ("fps", "substeps"):
+            if key in s:
+                raise Invalid(f"scene.{key}", "give either 'h' or 'fps'/'substeps', not both")
+        h = number(s["h"], "scene.h", positive=True)
+        if 1.0 / h > 1e300:
+            raise Invalid("scene.h", f"too small to be a time step, got {h!r}")
+        out.update(h=h, fps=1.0 / h, substeps=1)
+        return out
+    out["fps"] = number(s.get("fps", d("scene", "fps")), "scene.fps", positive=True)
+    out["substeps"] = integer(s.get("substeps", d("scene", "substeps")), "scene.substeps",
+                              minimum=1, maximum=MAX_SUBSTEPS)
+    rate = out["fps"] * out["substeps"]
+    if not math.isfinite(rate) or 1.0 / rate == 0.0:
+        raise Invalid("scene.fps", f"fps · substeps = {out['fps']!r} · {out['substeps']} "
+                                   f"overflows: the time step h = 1 / (fps · substeps) would "
+                                   f"be 0")
+    return out
+
+
+def _grid(c: dict, cloth: dict) -> int:
+    from ..mesh import PLANES
+    d = schema.default
+    cloth["size"] = vector(c.get("size", d("cloth", "size")), "cloth.size", 2, positive=True)
+    for i, v in enumerate(cloth["size"]):
+        if v > MAX_LENGTH:
+            raise Invalid(f"cloth.size[{i}]", f"must be at most {MAX_LENGTH:g} m, got {v!r}")
+    res = c.get("resolution", d("cloth", "resolution"))
+    if not isinstance(res, (list, tuple)) or len(res) != 2:
+        raise Invalid("cloth.resolution", f"expected an array of 2 integers, got "
+                                          f"{type_name(res)}")
+    cloth["resolution"] = [integer(r, f"cloth.resolution[{i}]", minimum=2, maximum=100_000)
+                           for i, r in enumerate(res)]
+    cloth["center"] = _point(c.get("center", d("cloth", "center")), "cloth.center")
+    cloth["plane"] = string(c.get("plane", d("cloth", "plane")), "cloth.plane", choices=PLANES)
+    # the spacing must be resolvable at the grid's coordinates (else every vertex collapses)
+    spacing = min(s / (r - 1) for s, r in zip(cloth["size"], cloth["resolution"]))
+    reach = max(abs(x) for x in cloth["center"]) + max(cloth["size"])
+    if spacing <= 1e3 * 2.220446049250313e-16 * reach:
+        raise Invalid("cloth.center", f"the grid spacing {spacing:.3g} m is below the rounding "
+                                      f"of coordinates near {reach:.3g} m; move the cloth "
+                                      f"nearer the origin")
+    return cloth["resolution"][0] * cloth["resolution"][1]
+
+
+def _point(v, path) -> list[float]:
+    p = vector(v, path, 3)
+    for i, x in enumerate(p):
+        if abs(x) > MAX_LENGTH:
+            raise Invalid(f"{path}[{i}]", f"must be within ±{MAX_LENGTH:g} m, got {x!r}")
+    return p
+
+
+def _cloth(raw: dict, base_dir: Path) -> tuple[dict, int | None]:
+    from ..model import MASS_LUMPINGS
+    c = table(raw.get("cloth", {}), "cloth")
+    check_keys(c, "cloth", schema.keys("cloth"))
+    shape = string(c.get("shape", "grid"), "cloth.shape", choices=SHAPES)
+    allowed = schema.keys("cloth", shape)
+    for key in c:
+        if key not in allowed:
+            users = schema.spec("cloth", key).shapes
+            raise Invalid(f"cloth.{key}", f"not used with cloth.shape = '{shape}' (only with "
+                                          f"{' or '.join(repr(u) for u in users)})")
+    cloth: dict[str, Any] = {"shape": shape}
+    vertex_count = None
+    if shape == "grid":
+        vertex_count = _grid(c, cloth)
+    elif shape == "mesh":
+        if "mesh" not in c:
+            raise Invalid("cloth.mesh", "missing: give the mesh file (relative to the scene)")
+        cloth["mesh"] = str(resolve_path(string(c["mesh"], "cloth.mesh"), base_dir,
+                                         "cloth.mesh"))
+    elif shape == "polygon":
+        from ..mesh import PLANES
+        if "outline" not in c:
+            raise Invalid("cloth.outline", "missing: give at least 3 [x, y] points")
+        outline = c["outline"]
+        if not isinstance(outline, (list, tuple)) or len(outline) < 3:
+            raise Invalid("cloth.outline", f"expected an array of at least 3 [x, y] points, "
+                                           f"got {type_name(outline)}")
+        cloth["outline"] = [vector(p, f"cloth.outline[{i}]", 2) for i, p in enumerate(outline)]
+        for i, p in enumerate(cloth["outline"]):
+            _point(p + [0.0], f"cloth.outline[{i}]")
+        cloth["spacing"] = number(c.get("spacing", schema.default("cloth", "spacing")),
+                                  "cloth.spacing", positive=True)
+        cloth["center"] = _point(c.get("center", schema.default("cloth", "center")),
+                                 "cloth.center")
+        cloth["plane"] = string(c.get("plane", "xz"), "cloth.plane", choices=PLANES)
+    elif shape == "files":
+        if "vertices" not in c:
+            raise Invalid("cloth.vertices", "missing: give the file of initial positions")
+        cloth["vertices"] = str(resolve_path(string(c["vertices"], "cloth.vertices"),
+                                             base_dir, "cloth.vertices"))
+        if "triangles" in c:
+            cloth["triangles"] = str(resolve_path(string(c["triangles"], "cloth.triangles"),
+                                                  base_dir, "cloth.triangles"))
+        cloth["index_base"] = integer(c.get("index_base", 0), "cloth.index_base", minimum=0,
+                                      maximum=1)
+    else:  # jacobson
+        if "file" not in c:
+            raise Invalid("cloth.file", "missing: give the assignment .json file")
+        cloth["file"] = str(resolve_path(string(c["file"], "cloth.file"), base_dir,
+                                         "cloth.file"))
+    if shape != "jacobson":
+        if "mass" in c and "vertex_mass" in c:
+            raise Invalid("cloth.vertex_mass", "give either 'mass' or 'vertex_mass', not both")
+        if "vertex_mass" in c:
+            vm = c["vertex_mass"]
+            if isinstance(vm, (list, tuple)):
+                vm = [number(m, f"cloth.vertex_mass[{i}]", positive=True)
+                      for i, m in enumerate(vm)]
+                if vertex_count is not None and len(vm) != vertex_count:
+                    raise Invalid("cloth.vertex_mass", f"expected {vertex_count} values (one "
+                                                       f"per vertex), got {len(vm)}")
+            elif isinstance(vm, str):
+                vm = str(resolve_path(vm, base_dir, "cloth.vertex_mass"))
+            else:
+                vm = number(vm, "cloth.vertex_mass", positive=True)
+            cloth["vertex_mass"] = vm
+        else:
+            cloth["mass"] = number(c.get("mass", 1.0), "cloth.mass", positive=True)
+        cloth["mass_lumping"] = string(c.get("mass_lumping", "uniform"), "cloth.mass_lumping",
+                                       choices=MASS_LUMPINGS)
+    return cloth, vertex_count
+
+
+def _springs(raw: dict, shape: str, base_dir: Path) -> dict:
+    from ..springs import BENDING_PATTERNS
+    sp = table(raw.get("springs", {}), "springs")
+    check_keys(sp, "springs", schema.keys("springs"))
+    allowed = schema.keys("springs", shape)
+    for key in sp:
+        if key not in allowed:
+            if shape == "jacobson":
+                raise Invalid(f"springs.{key}", "not used with cloth.shape = 'jacobson' (the "
+                                                "JSON's k sets every spring)")
+            raise Invalid(f"springs.{key}", f"only grid cloths have it; a '{shape}' cloth "
+                                            f"gets structural (edges) and bending springs")
+    springs: dict[str, Any] = {}
+    for fam in ("structural", "shear", "bending"):
+        if fam in sp:
+            springs[fam] = number(sp[fam], f"springs.{fam}", nonnegative=True)
+    if shape == "grid":
+        springs["bending_pattern"] = string(sp.get("bending_pattern", "every"),
+                                            "springs.bending_pattern",
+                                            choices=BENDING_PATTERNS)
+    if "table" in sp:
+        springs["table"] = str(resolve_path(string(sp["table"], "springs.table"), base_dir,
+                                            "springs.table"))
+        cols = sp.get("columns", schema.default("springs", "columns"))
+        if not isinstance(cols, list) or not cols:
+            raise Invalid("springs.columns", f"expected an array of column names, got "
+                                             f"{type_name(cols)}")
+        cols = [string(v, f"springs.columns[{i}]") for i, v in enumerate(cols)]
+        for need in ("a", "b", "stiffness"):
+            if need not in cols:
+                raise Invalid("springs.columns", f"needs a column '{need}', got {show(cols)}")
+        for i, v in enumerate(cols):
+            if v in cols[:i] and v in ("a", "b", "stiffness", "rest"):
+                raise Invalid(f"springs.columns[{i}]", f"column '{v}' is named twice")
+        springs["columns"] = cols
+        springs["index_base"] = integer(sp.get("index_base", 0), "springs.index_base",
+                                        minimum=0, maximum=1)
+    else:
+        for key in ("columns", "index_base"):
+            if key in sp:
+                raise Invalid(f"springs.{key}", "only used with springs.table")
+    return springs
+
+
+def validate_solver(method, iterations, tolerance, backend) -> dict:
+    """Check the ``[solver]`` values (also used for overrides)."""
+    from ..factorization import BACKENDS
+    from ..solvers import SOLVERS
+    return {
+        "method": string(method, "solver.method", choices=tuple(SOLVERS)),
+        "iterations": integer(iterations, "solver.iterations", minimum=1,
+                              maximum=MAX_ITERATIONS),
+        "tolerance": None if tolerance is None else number(tolerance, "solver.tolerance",
+                                                           positive=True),
+        "backend": string(backend, "solver.backend", choices=BACKENDS),
+    }
+
+
+def validate(raw: dict, base_dir: Path, default_name: str) -> dict:
+    """Check every key of a scene document; return it resolved (defaults, absolute paths).
+
+    Raises
+    ------
+    Invalid
+        The first problem, with its key path.
+    """
+    from .effects import validate_effect
+    table(raw, "")
+    check_finite_everywhere(raw, "")
+    check_keys(raw, "", TOP_KEYS)
+    out: dict[str, Any] = {"scene": _scene_table(raw, default_name)}
+    out["cloth"], vertex_count = _cloth(raw, base_dir)
+    out["springs"] = _springs(raw, out["cloth"]["shape"], base_dir)
+    so = table(raw.get("solver", {}), "solver")
+    check_keys(so, "solver", schema.keys("solver"))
+    d = schema.default
+    out["solver"] = validate_solver(so.get("method", d("solver", "method")),
+                                    so.get("iterations", d("solver", "iterations")),
+                                    so.get("tolerance"), so.get("backend", d("solver",
+                                                                             "backend")))
+    effects = raw.get("effects", [])
+    if not isinstance(effects, list):
+        raise Invalid("effects", f"expected an array of tables ([[effects]]), got "
+                                 f"{type_name(effects)}")
+    out["effects"] = [validate_effect(e, f"effects[{i}]", vertex_count, base_dir)
+                      for i, e in enumerate(effects)]
+    pinned: dict[int, int] = {}
+    for i, e in enumerate(out["effects"]):
+        if e["kind"] == "pin" and isinstance(e.get("vertices"), list):
+            for v in e["vertices"]:
+                if v in pinned:
+                    raise Invalid(f"effects[{i}].vertices", f"vertex {v} is already pinned by "
+                                                            f"effects[{pinned[v]}]")
+                pinned[v] = i
+    return out
+
+
+def constructor_keys(cls) -> tuple[list[str], bool]:
+    """Constructor keyword names of an effect class, and whether it takes **kwargs."""
+    params = inspect.signature(cls).parameters.values()
+    names = [p.name for p in params if p.kind not in (p.VAR_POSITIONAL, p.VAR_KEYWORD)]
+    return names, any(p.kind is p.VAR_KEYWORD for p in params)
+
+
+def locate(exc: InputError, default_path: str, kind: str | None = None,
+           prefix: str | None = None) -> tuple[str, str]:
+    """(key path, reason) of a core :class:`InputError`.
+
+    Uses ``exc.field`` when the raiser set it; otherwise the core's convention that a
+    message starts with ``"<field>: "``. A field ``"<kind>.<key>"`` of an effect becomes
+    ``"<prefix>.<key>"``; other fields are prefixed with ``default_path``'s table.
+    """
+    message = " ".join(str(exc).split())
+    fld = getattr(exc, "field", None)
+    if fld is not None:
+        rest = message[len(fld) + 2:] if message.startswith(f"{fld}: ") else message
+    else:
+        head, sep, rest = message.partition(": ")
+        if not sep or not head or " " in head.replace(", ", ","):
+            return default_path, message
+        fld = head
+    if kind is not None and prefix is not None:
+        for lead in (f"effects.{kind}", kind):
+            if fld == lead or fld.startswith((lead + ".", lead + "[")):
+                return prefix + fld[len(lead):], rest
+        return prefix, message
+    if fld.split(".")[0].split("[")[0] in TOP_KEYS:
+        return fld, rest
+    if fld.split(".")[0].split("[")[0] in _CLOTH_FIELDS:
+        return f"cloth.{fld}", rest
+    return default_path, message
+
+
+_CLOTH_FIELDS = ("vertex_mass", "mass_lumping", "mass", "resolution", "size", "center", "plane",
+                 "outline", "spacing", "vertices", "triangles", "strands")
+
+__all__ = ["validate", "validate_solver", "locate", "constructor_keys", "TOP_KEYS",
+           "is_number", "suggest"]
