@@ -117,6 +117,9 @@ class SystemFactor:
         Coupling of free to fixed vertices (moves fixed positions to the right-hand side).
     h2J_F : csr_matrix, shape (f, s)
         h² J_s restricted to the free rows (the right-hand side's d-dependent part).
+    free_runs : list of (start, stop, offset) or None
+        The free vertices as runs of consecutive indices (vertex start..stop−1 is unknown
+        offset..), when there are few runs; None otherwise.
     """
 
     A: sp.csc_matrix
@@ -125,6 +128,7 @@ class SystemFactor:
     A_FF_factor: Factor
     A_FP: sp.csr_matrix
     h2J_F: sp.csr_matrix
+    free_runs: list | None = None
 
 
 class LocalGlobalSolver(Solver):
@@ -211,7 +215,14 @@ class LocalGlobalSolver(Solver):
         log.info("factored M + h^2 L: %d free of %d vertices, h=%g, backend=%s",
                  len(free), n, problem.h, factor.backend)
         h2J_F = (problem.h ** 2 * self._Js[free]).tocsr()
-        return SystemFactor(A, free, fixed, factor, A_FP.tocsr(), h2J_F)
+        breaks = np.flatnonzero(np.diff(free) != 1) + 1
+        runs = None
+        if len(breaks) < 64:
+            starts = np.concatenate([[0], breaks]).astype(int)
+            stops = np.concatenate([breaks, [len(free)]]).astype(int)
+            runs = [(int(free[i]), int(free[j - 1]) + 1, int(i)) for i, j in zip(starts, stops)
+                    if j > i]
+        return SystemFactor(A, free, fixed, factor, A_FP.tocsr(), h2J_F, runs)
 
     # -- the two half steps ---------------------------------------------------------------
     def _directions_into(self, xT: np.ndarray) -> np.ndarray:
@@ -319,25 +330,28 @@ class LocalGlobalSolver(Solver):
         yielded ``x`` is a view of the solver's buffer: copy it to keep it.
         """
         sysf = self.system(problem)
-        free, fixed = sysf.free, sysf.fixed
+        free, fixed, h2 = sysf.free, sysf.fixed, problem.h ** 2
         x = problem.initial_guess() if x0 is None else np.array(x0, dtype=np.float64)
         xT = np.ascontiguousarray(x.T)
-        # per-step constants: p(y); c_F = (h² f + h² K_anchor (q − y))_F − A_FP δ_P
+        # per-step constants: y, p(y) = D y, c_F = (h² f + h² K_anchor (q − y))_F − A_FP δ_P
         y = problem.y
-        pyT = np.ascontiguousarray((y[self._a] - y[self._b]).T)
-        c = self.displacement_right_hand_side(problem, pyT.T)     # its J part is exactly 0
+        yT = np.ascontiguousarray(y.T)
+        pyT = np.zeros((3, self.model.spring_count))
+        for c in range(3):
+            _spmv_add(self._D, yT[c], pyT[c])
+        c = np.zeros_like(y) if problem.f_ext is None else h2 * problem.f_ext
+        problem.anchors.add_rhs(c, h2, origin=y)
         cT = np.ascontiguousarray(c[free].T)
         x_fixed_T = None
         if len(fixed):
             x_pinned = np.array(y)
             x_pinned[problem.fixed_vertices] = problem.fixed_positions
-            x_fixed = x_pinned[fixed]
-            cT -= (sysf.A_FP @ (x_fixed - y[fixed])).T
-            x_fixed_T = np.ascontiguousarray(x_fixed.T)
-        all_free = len(free) == self.model.vertex_count
-        yT = np.ascontiguousarray(y.T)
-        yFT = yT if all_free else np.ascontiguousarray(yT[:, free])
-        xFT = np.empty_like(yFT)
+            x_fixed_T = np.ascontiguousarray(x_pinned[fixed].T)
+            cT -= (sysf.A_FP @ (x_pinned[fixed] - y[fixed])).T
+        # free vertices as runs of consecutive indices: x_F = y_F + δ_F by slices
+        runs = sysf.free_runs
+        yFT = np.ascontiguousarray(yT[:, free]) if runs is None else None
+        xFT = np.empty_like(yFT) if runs is None else None
         eT = np.empty_like(pyT)
         rhsT, rhs_nextT, gradT = np.empty_like(cT), np.empty_like(cT), np.empty_like(cT)
 
@@ -348,24 +362,33 @@ class LocalGlobalSolver(Solver):
                 _spmv_add(sysf.h2J_F, eT[c], out[c])
             return out
 
+        def norm(aT):
+            flat = aT.reshape(-1)
+            return math.sqrt(float(np.dot(flat, flat)))
+
         dT = self._directions_into(xT)                 # local step at x_0
         right_hand_side(dT, rhsT)
-        yield Iterate(0, x, float(np.linalg.norm(self.gradient(problem, x, dT.T))))
+        if x0 is None:    # δ_F = 0 at x_0, so ∇g(x_0)_F = (A δ)_F − (b − A y)_F = −rhs_F
+            yield Iterate(0, x, norm(rhsT))
+        else:
+            yield Iterate(0, x, float(np.linalg.norm(self.gradient(problem, x, dT.T))))
+        if x_fixed_T is not None:
+            xT[:, fixed] = x_fixed_T
         k = 0
         while True:
-            # global step: A_FF δ_F = h² (J d)_F + c_F, x = y + δ
+            # global step: A_FF δ_F = h² (J (d − p(y)))_F + c_F, x = y + δ
             deltaT = sysf.A_FF_factor.solve_columns(rhsT)
-            if all_free:
-                np.add(yT, deltaT, out=xT)
-            else:
+            if runs is None:
                 np.add(yFT, deltaT, out=xFT)
                 xT[:, free] = xFT
-                xT[:, fixed] = x_fixed_T
+            else:
+                for start, stop, offset in runs:
+                    np.add(yT[:, start:stop], deltaT[:, offset:offset + stop - start],
+                           out=xT[:, start:stop])
             # local step at x_{k+1}, and the next right-hand side
             dT = self._directions_into(xT)
             right_hand_side(dT, rhs_nextT)
             np.subtract(rhsT, rhs_nextT, out=gradT)    # ∇g(x_{k+1}) over the free vertices
-            flat = gradT.reshape(-1)
             k += 1
-            yield Iterate(k, xT.T, math.sqrt(float(np.dot(flat, flat))))
+            yield Iterate(k, xT.T, norm(gradT))
             rhsT, rhs_nextT = rhs_nextT, rhsT
