@@ -69,19 +69,28 @@ class Case:
         self.rhs = np.asfortranarray(rng.normal(size=(A_FF.shape[0], 3)))
         self.inner = max(1, int(40_000 / n ** 2))   # repeat tiny solves to time them
         self.times = {k: [] for k in ("iteration", "simplicial", "supernodal", "setup",
-                                      "condition")}
+                                      "condition", "iteration_cpu", "simplicial_cpu",
+                                      "supernodal_cpu")}
+
+    def _timed(self, key: str, fn, count: int) -> None:
+        """Wall and CPU time of ``fn`` per unit (``count`` units per call)."""
+        t0, c0 = time.perf_counter(), time.process_time()
+        fn()
+        c1, t1 = time.process_time(), time.perf_counter()
+        self.times[key].append((t1 - t0) / count)
+        self.times[key + "_cpu"].append((c1 - c0) / count)
 
     def measure_iteration(self) -> None:
-        t0 = time.perf_counter()
-        self.solver.solve(self.problem)
-        self.times["iteration"].append((time.perf_counter() - t0) / ITERATIONS)
+        self._timed("iteration", lambda: self.solver.solve(self.problem), ITERATIONS)
 
     def measure_bare(self, mode: str) -> None:
         F, b = self.factors[mode], self.rhs
-        t0 = time.perf_counter()
-        for _ in range(self.inner):
-            F(b)
-        self.times[mode].append((time.perf_counter() - t0) / self.inner)
+
+        def solves():
+            for _ in range(self.inner):
+                F(b)
+
+        self._timed(mode, solves, self.inner)
 
     def measure_setup(self) -> None:
         t0 = time.perf_counter()
@@ -131,11 +140,16 @@ def run(sizes=SIZES, *, repeats: int = 15, setup_repeats: int = 3) -> dict:
     for case in cases:
         med = {k: spread(v) for k, v in case.times.items() if v}
         fastest = min(med["simplicial"][0], med["supernodal"][0])
+        fastest_cpu = min(med["simplicial_cpu"][0], med["supernodal_cpu"][0])
         rows.append({"n": case.n, "vertices": case.n ** 2,
                      "springs": case.model.spring_count,
                      "iteration_ms": med["iteration"], "simplicial_ms": med["simplicial"],
                      "supernodal_ms": med["supernodal"],
                      "ratio": med["iteration"][0] / fastest,
+                     "iteration_cpu_ms": med["iteration_cpu"],
+                     "simplicial_cpu_ms": med["simplicial_cpu"],
+                     "supernodal_cpu_ms": med["supernodal_cpu"],
+                     "ratio_cpu": med["iteration_cpu"][0] / fastest_cpu,
                      "setup_s": med["setup"], "condition_s": med["condition"]})
     verts = np.array([r["vertices"] for r in rows], float)
     setup = np.array([r["setup_s"][0] for r in rows])
@@ -149,12 +163,16 @@ def write_csv(result: dict) -> None:
         w = csv.writer(fh)
         w.writerow(["grid", "vertices", "springs", "iteration_ms", "iteration_q25_ms",
                     "iteration_q75_ms", "simplicial_ms", "supernodal_ms", "ratio",
-                    "setup_s", "condition_s"])
+                    "iteration_cpu_ms", "simplicial_cpu_ms", "supernodal_cpu_ms",
+                    "ratio_cpu", "setup_s", "condition_s"])
         for r in result["rows"]:
             w.writerow([f"{r['n']}x{r['n']}", r["vertices"], r["springs"],
                         *(f"{1e3 * v:.4f}" for v in r["iteration_ms"]),
                         f"{1e3 * r['simplicial_ms'][0]:.4f}",
                         f"{1e3 * r['supernodal_ms'][0]:.4f}", f"{r['ratio']:.3f}",
+                        f"{1e3 * r['iteration_cpu_ms'][0]:.4f}",
+                        f"{1e3 * r['simplicial_cpu_ms'][0]:.4f}",
+                        f"{1e3 * r['supernodal_cpu_ms'][0]:.4f}", f"{r['ratio_cpu']:.3f}",
                         f"{r['setup_s'][0]:.4f}", f"{r['condition_s'][0]:.4f}"])
 
 
@@ -185,14 +203,18 @@ def plot(result: dict) -> None:
 
 
 def report(result: dict) -> None:
-    print(f"{'grid':>8} {'springs':>8} {'iteration ms (IQR)':>22} {'simplicial':>10} "
-          f"{'supernodal':>10} {'ratio':>6} {'setup s':>8} {'cond s':>7}")
+    print("wall time (CPU time in brackets), ms; ratio = iteration / fastest bare solve")
+    print(f"{'grid':>8} {'springs':>8} {'iteration (IQR)':>26} {'simplicial':>16} "
+          f"{'supernodal':>16} {'ratio':>11} {'setup s':>8} {'cond s':>7}")
     for r in result["rows"]:
         it = r["iteration_ms"]
         print(f"{r['n']:>4}x{r['n']:<3} {r['springs']:>8} "
-              f"{1e3 * it[0]:>8.3f} ({1e3 * it[1]:.3f}-{1e3 * it[2]:.3f}) "
-              f"{1e3 * r['simplicial_ms'][0]:>10.3f} {1e3 * r['supernodal_ms'][0]:>10.3f} "
-              f"{r['ratio']:>6.2f} {r['setup_s'][0]:>8.3f} {r['condition_s'][0]:>7.3f}")
+              f"{1e3 * it[0]:>7.3f} ({1e3 * it[1]:.3f}-{1e3 * it[2]:.3f}) "
+              f"[{1e3 * r['iteration_cpu_ms'][0]:.3f}] "
+              f"{1e3 * r['simplicial_ms'][0]:>7.3f} [{1e3 * r['simplicial_cpu_ms'][0]:.3f}] "
+              f"{1e3 * r['supernodal_ms'][0]:>7.3f} [{1e3 * r['supernodal_cpu_ms'][0]:.3f}] "
+              f"{r['ratio']:>5.2f} [{r['ratio_cpu']:.2f}] "
+              f"{r['setup_s'][0]:>8.3f} {r['condition_s'][0]:>7.3f}")
     print(f"setup grows as vertices^{result['setup_exponent']:.2f}")
     f = result["frame_s"]
     print(f"81x81 frame, 10 iterations, CPU: {1e3 * f[0]:.1f} ms (IQR {1e3 * f[1]:.1f}-"
