@@ -14,6 +14,7 @@ import time
 from pathlib import Path
 
 import clothsim as cs
+from clothsim import gallery
 
 ROOT = Path(__file__).resolve().parent.parent
 DOCS_IMG = ROOT / "docs" / "img"
@@ -23,20 +24,16 @@ def curtain(n: int, *, stiffness: float = 800.0, bending: float = 80.0, mass: fl
             plane: str = "xy", method: str = "local-global", h: float = 1 / 30,
             iterations: int | None = 10, tolerance: float | None = None,
             **solver_options) -> cs.Simulation:
-    """An n × n, 1 m × 1 m cloth of ``mass`` kg hanging from its two top corners.
+    """An n × n, 1 m × 1 m cloth of ``mass`` kg hanging from its two top corners
+    (:func:`clothsim.gallery.curtain` with the benchmarks' parameter names).
 
     ``plane="xy"``: a vertical curtain (the documented accuracy scene); ``plane="xz"``: a
     horizontal sheet held at two corners that falls and swings (the paper's Fig. 1 setup).
     Structural and shear springs of ``stiffness`` [N/m], bending springs of ``bending``.
     """
-    mesh = cs.grid(n, n, size=(1.0, 1.0), center=(0.0, 1.0, 0.0), plane=plane)
-    springs = cs.grid_springs(mesh, structural=stiffness, shear=stiffness, bending=bending,
-                              bending_pattern="every")
-    model = cs.Model.build(mesh, springs, total_mass=mass)
-    corners = [n * (n - 1), n * n - 1] if plane == "xy" else [0, n - 1]
-    return cs.Simulation(model, h=h, effects=[cs.Gravity((0.0, -9.81, 0.0)), cs.Pin(corners)],
-                         solver=method, iterations=iterations or 10, tolerance=tolerance,
-                         **solver_options)
+    return gallery.curtain(n, k=stiffness, bending=bending, total_mass=mass, plane=plane,
+                           h=h, method=method, iterations=iterations, tolerance=tolerance,
+                           **solver_options)
 
 
 def swing(n: int, *, stiffness: float = 800.0, bending: float = 80.0, mass: float = 1.0,
@@ -49,13 +46,8 @@ def swing(n: int, *, stiffness: float = 800.0, bending: float = 80.0, mass: floa
     about 1 m in 0.5 s: a slow, large motion next to the springs' fast vibrations.
     Structural and shear springs of ``stiffness`` [N/m], bending springs of ``bending``.
     """
-    mesh = cs.grid(n, n, size=(1.0, 1.0), center=(0.0, 1.0, 0.0), plane="xz")
-    springs = cs.grid_springs(mesh, structural=stiffness, shear=stiffness, bending=bending,
-                              bending_pattern="every")
-    model = cs.Model.build(mesh, springs, total_mass=mass)
-    return cs.Simulation(model, h=h, effects=[cs.Gravity((0.0, -9.81, 0.0)),
-                                              cs.Pin(list(range(n)))],
-                         solver=method, iterations=iterations or 10, tolerance=tolerance,
+    return gallery.swing(n, k=stiffness, bending=bending, total_mass=mass, h=h,
+                         method=method, iterations=iterations, tolerance=tolerance,
                          **solver_options)
 
 

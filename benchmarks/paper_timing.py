@@ -4,7 +4,7 @@
   iteration against one Newton iteration (paper: 10 iterations = 50 ms per frame, i.e.
   5 ms per iteration, against 13 s per frame for Newton's exact solution).
 - 129 × 129 and 257 × 257: one local/global iteration against the C++/Eigen float32 port
-  in PAPER.md (4.9 ms and 28 ms).
+  measured elsewhere (4.9 ms and 28 ms).
 
 Each figure is the median of several iterations on a mid-motion step of the horizontal
 sheet held at two corners (the paper's setup). The factorization is done once and not timed.

@@ -1,6 +1,7 @@
 """Stiffness slows local/global: relative error after 200 iterations on an 11 × 11 sheet.
 
-PAPER.md: about 1e-12 at k = 1e2, 2e-9 at k = 1e4, 4e-5 at k = 1e6 (scene not stated).
+Reported in the paper's lineage: about 1e-12 at k = 1e2, 2e-9 at k = 1e4, 4e-5 at k = 1e6
+(scene not stated).
 Measured on two 1 kg, 1 m, 11 × 11 scenes at h = 1/30 s, bending springs at k / 10, the
 step after 5 steps of motion, x* = Newton's converged step:
 

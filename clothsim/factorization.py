@@ -3,8 +3,11 @@
 =============  ==========================================================================
 backend        what runs
 =============  ==========================================================================
-``"cholmod"``  CHOLMOD (SuiteSparse) sparse Cholesky through scikit-sparse 0.4.x; supernodal
-               on the system BLAS. Fails loudly if the matrix is not positive definite.
+``"cholmod"``  CHOLMOD (SuiteSparse) sparse Cholesky through scikit-sparse 0.4.x. Fails
+               loudly if the matrix is not positive definite. ``cholmod_mode`` picks
+               "simplicial" (LDLᵀ, column by column), "supernodal" (dense blocks on the
+               system BLAS) or "auto" (CHOLMOD's own choice: supernodal for the cloth
+               matrices from about 30 × 30 vertices up).
 ``"splu"``     scipy's SuperLU (``scipy.sparse.linalg.splu``); the fallback where CHOLMOD is
                missing. Positive definiteness is checked from the LU factor's pivots.
 ``"auto"``     CHOLMOD when importable, else SuperLU with a logged warning.
@@ -12,6 +15,11 @@ backend        what runs
 
 :class:`Factor` records which backend ran (``factor.backend``) and can estimate the
 matrix's 1-norm condition number.
+
+Which CHOLMOD mode is faster depends on the number of right-hand sides: for the global
+step's n × n matrix with three right-hand sides (x, y, z), simplicial solves 1.6–2×
+faster than supernodal on the cloth grids measured in docs/performance.md, so
+:class:`~clothsim.solvers.LocalGlobalSolver` asks for it explicitly.
 """
 
 from __future__ import annotations
@@ -29,6 +37,7 @@ from .errors import ConditioningWarning, FactorizationError, InputError
 log = logging.getLogger(__name__)
 
 BACKENDS = ("auto", "cholmod", "splu")
+CHOLMOD_MODES = ("auto", "simplicial", "supernodal")
 CONDITION_WARNING_THRESHOLD = 1e12
 _warned_fallback = False
 
@@ -74,6 +83,8 @@ class Factor:
     check_conditioning : bool
         Estimate cond₁(A) and warn (:class:`ConditioningWarning`) above
         :data:`CONDITION_WARNING_THRESHOLD`.
+    cholmod_mode : {"auto", "simplicial", "supernodal"}
+        CHOLMOD's factorization (ignored by SuperLU); see the module docstring.
 
     Attributes
     ----------
@@ -81,7 +92,11 @@ class Factor:
         The backend that ran ("cholmod" or "splu").
     """
 
-    def __init__(self, A, *, backend: str = "auto", check_conditioning: bool = True):
+    def __init__(self, A, *, backend: str = "auto", check_conditioning: bool = True,
+                 cholmod_mode: str = "auto"):
+        if cholmod_mode not in CHOLMOD_MODES:
+            raise InputError(f"cholmod_mode: must be one of "
+                             f"{', '.join(map(repr, CHOLMOD_MODES))}, got {cholmod_mode!r}")
         self.A = sp.csc_matrix(A)
         self.shape = self.A.shape
         self.backend = resolve_backend(backend)
@@ -89,7 +104,7 @@ class Factor:
             from sksparse.cholmod import CholmodNotPositiveDefiniteError, cholesky
 
             try:
-                self._factor = cholesky(self.A)
+                self._factor = cholesky(self.A, mode=cholmod_mode)
             except CholmodNotPositiveDefiniteError as exc:
                 raise FactorizationError(f"system matrix is not positive definite: {exc}") from exc
             # For small or very sparse matrices CHOLMOD picks a simplicial LDLᵀ, which does not
@@ -134,6 +149,18 @@ class Factor:
         return self._solve(np.ascontiguousarray(b, dtype=np.float64))
 
     __call__ = solve
+
+    def solve_columns(self, bT: np.ndarray) -> np.ndarray:
+        """x = A⁻¹ b for right-hand sides stored coordinate-major, bT of shape (k, n).
+
+        Returns xᵀ, shape (k, n). CHOLMOD works on column-major (n, k) blocks, so passing
+        the transpose of a C-ordered (k, n) array avoids the copy :meth:`solve` makes.
+        """
+        if self.shape[0] == 0:
+            return np.zeros_like(bT, dtype=np.float64)
+        if self.backend == "cholmod":
+            return self._factor(bT.T).T
+        return np.ascontiguousarray(self._solve(np.ascontiguousarray(bT.T)).T)
 
     @cached_property
     def condition_estimate(self) -> float:

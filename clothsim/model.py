@@ -74,7 +74,7 @@ class Model:
         vertex_mass : float or (n,) array_like, optional
             Mass of each vertex [kg]; overrides ``total_mass``.
         mass_lumping : {"uniform", "area"}
-            ``"uniform"``: every vertex the same (the seed). ``"area"``: proportional to a
+            ``"uniform"``: every vertex the same (the student report). ``"area"``: proportional to a
             third of the adjacent triangles' area (strand length for strand meshes).
         """
         if vertex_mass is not None:

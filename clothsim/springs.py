@@ -3,7 +3,7 @@
 Second stage of the pipeline. Two builders:
 
 grid_springs
-    The seed report's three families on a :func:`clothsim.mesh.grid`:
+    the student report's three families on a :func:`clothsim.mesh.grid`:
     structural (i,j)–(i,j+1), (i,j)–(i+1,j); shear (i,j)–(i+1,j+1), (i+1,j)–(i,j+1);
     bending (i,j)–(i,j+2), (i,j)–(i+2,j).
 mesh_springs
@@ -155,7 +155,7 @@ def grid_pairs(nx: int, ny: int, family: str, bending_pattern: str = "every") ->
     bending_pattern : {"every", "alternate"}
         ``"every"``: a bending spring starts at every vertex. ``"alternate"``: only at every
         other vertex along the spring's direction (columns/rows 0, 2, 4, …), as the C++
-        ports do; for an odd n × n grid this gives the seed's count s = (n − 1)(5n − 2).
+        ports do; for an odd n × n grid this gives the student report's count s = (n − 1)(5n − 2).
 
     Returns
     -------
@@ -194,7 +194,7 @@ def grid_springs(
     bending: float | None = None,
     bending_pattern: str = "every",
 ) -> Springs:
-    """The seed report's spring families on a grid mesh.
+    """The student report's spring families on a grid mesh.
 
     Parameters
     ----------

@@ -105,7 +105,7 @@ def test_spring_counts_match_formulas(n):
     assert every.family_count("shear") == 2 * (n - 1) ** 2
     assert every.spring_count == 6 * n * n - 10 * n + 2
     alt = cs.grid_springs(mesh, structural=1.0, shear=1.0, bending=1.0, bending_pattern="alternate")
-    if n % 2 == 1:  # the seed's count holds for odd n
+    if n % 2 == 1:  # the student report's count holds for odd n
         assert alt.spring_count == (n - 1) * (5 * n - 2)
     # rectangular grids, either pattern: count bending pairs directly
     for nx, ny in ((n, n + 3), (n + 1, n)):

@@ -50,7 +50,10 @@ def test_chebyshev_without_acceleration_is_local_global(step):
     a = ChebyshevSolver(model, iterations=7, rho=0.0, gamma=1.0).solve(problem)
     b = LocalGlobalSolver(model, iterations=7).solve(problem)
     np.testing.assert_allclose(a.x, b.x, rtol=0, atol=1e-14)
-    np.testing.assert_allclose(a.residual_history, b.residual_history, rtol=1e-12)
+    # local/global's iteration reports ‖∇g‖ as the difference of consecutive right-hand
+    # sides (computed on other buffers): equal to rounding, which moves this ‖∇g‖ (1e-7,
+    # near its noise floor) by about 1e-9 of itself
+    np.testing.assert_allclose(a.residual_history, b.residual_history, rtol=1e-8)
 
 
 def test_chebyshev_converges_to_newton_in_fewer_iterations(step):

@@ -1,4 +1,4 @@
-"""Tunnelling through a small sphere inside a running simulation (issue 5, case 7).
+"""Tunnelling through a small sphere inside a running simulation.
 
 tests/test_effects.py checks the obstacles' continuous detection directly (a thin slab and a
 small sphere, 5 thicknesses per step) and a cloth falling onto the thin slab. This adds the

@@ -1,4 +1,4 @@
-"""Closed forms and invariances the time stepping must reproduce (issue 5): free fall,
+"""Closed forms and invariances the time stepping must reproduce: free fall,
 full pinning, pin release, rotation/translation invariance, the 1-D oscillator recurrence,
 and first-order convergence in h.
 

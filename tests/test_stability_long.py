@@ -1,4 +1,4 @@
-"""Long run (issue 5, case 9): 10⁴ steps of the built-in "flag" scene stay finite, stay
+"""Long run: 10⁴ steps of the built-in "flag" scene stay finite, stay
 inside the scene's bounding volume, and do not get slower step after step.
 
 The full 31 × 21 flag takes ~10 ms a step (~105 s for 10⁴ steps), so the test runs the same

@@ -1,4 +1,4 @@
-"""Numerical stability of the solvers (issue 5): stiffness, large steps, degenerate springs,
+"""Numerical stability of the solvers: stiffness, large steps, degenerate springs,
 extreme deformation, mass extremes, and the system matrix / factorization checks.
 
 Each test states its pass criterion as a figure. The ``measure_*`` helpers return the

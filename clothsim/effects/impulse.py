@@ -1,4 +1,4 @@
-"""A push on a disk of cloth: the seed's second demo (a force straight up on a circle).
+"""A push on a disk of cloth: the student report's second demo (an upward force on a circle).
 
 The total force F [N] is shared by the selected vertices in proportion to their mass,
 

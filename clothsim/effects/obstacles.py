@@ -1,6 +1,6 @@
 """Static obstacles: a half-space (plane), a sphere and an axis-aligned box.
 
-As in the paper and the seed, collisions are not part of the optimization: after the
+As in the paper and the student report, collisions are not part of the optimization: after the
 solve, vertices that end a step inside an obstacle are moved out (the ``correct_positions``
 hook), and the simulation then derives v = (x − x_n)/h, which is the collision response.
 

@@ -134,7 +134,7 @@ class Solver:
                     or (self.tolerance is not None
                         and (history[-1] <= self.tolerance or rn <= floor))):
                 break
-        return self._finish(np.array(last.x), last.k, history,
+        return self._finish(np.array(last.x, order="C"), last.k, history,
                             at_floor=last.gradient_norm <= floor)
 
     def invalidate(self) -> None:
