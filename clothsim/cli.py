@@ -294,7 +294,7 @@ def _cmd_compare(args) -> int:
 
 def _cmd_check(args) -> int:
     from .ports.check import check_steps
-    from .ports.formats import read_trajectory
+    from .ports.formats import read_trajectory, read_velocities
     from .scene import load_scene
 
     bad = _positive(args, ("tolerance", "steps"))
@@ -302,10 +302,7 @@ def _cmd_check(args) -> int:
         return _fail(bad, 2)
     scene = load_scene(args.scene)
     x = read_trajectory(args.port)
-    try:
-        v = read_trajectory(args.port, key="velocities")
-    except InputError:
-        v = None
+    v = read_velocities(args.port)
     report = check_steps(scene, x, v, precision=args.precision, tolerance=args.tolerance,
                          steps=args.steps)
     if args.verbose_steps:

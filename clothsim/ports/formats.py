@@ -185,3 +185,23 @@ def write_trajectory(path, frames, *, key: str = "positions", fmt: str | None = 
         raise InputError(f"{path}: cannot write format {fmt!r} (one of npz, npy, text, "
                          f"frames, raw)")
     return p
+
+
+def read_velocities(path, **options) -> np.ndarray | None:
+    """The velocities stored with a trajectory, or None when the format holds none.
+
+    Folders (``velocities.txt``, ``trajectory.npz``, ``trajectory.pvd``), ``.npz`` files with a
+    ``velocities`` array and ``.pvd`` collections hold them; other files hold one field only.
+    """
+    p = Path(path)
+    if p.is_dir():
+        if not any((p / f).is_file() for f in ("velocities.txt", "trajectory.npz",
+                                                "trajectory.pvd")):
+            return None
+    elif p.suffix.lower() == ".npz":
+        with np.load(p) as data:
+            if "velocities" not in data:
+                return None
+    elif p.suffix.lower() != ".pvd":
+        return None
+    return read_trajectory(p, key="velocities", **options)
