@@ -20,7 +20,8 @@ Euler objective of the paper, Eq. 4):
 ``model differs``
     Not optimal, more than half of the vertices disagree, and the port's answer is far from
     the nearest minimizer of g (Newton's method from it) at more than half of the vertices
-    (not one local error): the port solves another problem (other springs, masses, pins, forces or h); see :mod:`clothsim.ports.diff`.
+    (not one local error): the port solves another problem (other springs, masses, pins,
+    forces or h); see :mod:`clothsim.ports.diff`.
 ``velocities differ``
     Positions agree but the port's v_{k+1} differs by more than tolerance / h (a damping
     model or velocity update that differs).
