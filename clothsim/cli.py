@@ -188,7 +188,8 @@ def _add_port_commands(sub) -> None:
 
     cmp_ = sub.add_parser("compare", help="compare a trajectory with a reference: per-vertex "
                           "distance per frame, relative to the cloth size")
-    cmp_.add_argument("trajectory", help="npz, npy, text/CSV, raw, .pvd, or a folder")
+    cmp_.add_argument("trajectory", help="npz, npy, text/CSV, raw, .pvd, a folder, or a .mtx "
+                      "matrix (then REFERENCE is one too)")
     cmp_.add_argument("reference", help="the reference, in any of the same forms")
     cmp_.add_argument("--key", default=None, help="array name in .npz files (positions)")
     cmp_.add_argument("--field", default=None, choices=("positions", "velocities"),
@@ -215,6 +216,9 @@ def _add_port_commands(sub) -> None:
     cmp_.add_argument("--table", action="store_true", help="print the per-frame table")
     cmp_.add_argument("--plot", metavar="PNG", default=None,
                       help="write the deviation-over-time plot")
+    cmp_.add_argument("--drop-attachments", action="store_true",
+                      help="two .mtx files: leave out TRAJECTORY's leading single-vertex "
+                      "columns (a J storing attachments as extra constraint columns)")
 
     chk = sub.add_parser("check", help="check a port step by step: clothsim's step from the "
                          "port's (x_k, v_k) against the port's x_{k+1}")
@@ -269,6 +273,15 @@ def _cmd_compare(args) -> int:
     bad = _positive(args, ("rtol", "atol", "kappa"))
     if bad:
         return _fail(bad, 2)
+    if Path(args.trajectory).suffix == ".mtx":
+        from .ports.compare import compare_matrices
+
+        mres = compare_matrices(args.trajectory, args.reference,
+                                rtol=1e-12 if args.rtol is None else args.rtol,
+                                atol=args.atol or 0.0,
+                                drop_columns="attachments" if args.drop_attachments else None)
+        print(mres.summary())
+        return 0 if mres.passed else 1
     kappa = args.kappa
     if kappa is None and args.scene is not None:
         from .ports.check import _simulation
