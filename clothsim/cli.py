@@ -297,6 +297,8 @@ def _cmd_compare(args) -> int:
         frames=args.frames, match=args.match_vertices, kappa=kappa, fmt=args.fmt,
         dtype=args.dtype, vertex_count=args.vertices, rtol=args.rtol, atol=args.atol,
         precision=args.precision)
+    for note in result.notes:
+        print(f"note: {note}")
     print(result.summary())
     if args.table:
         print(result.table())

@@ -195,6 +195,8 @@ def check_steps(simulation, positions, velocities=None, *, precision: str = "flo
     else:
         vs = np.asarray(velocities, np.float64).reshape(xs.shape[0], -1, 3)
         notes = []
+    if steps is not None and steps < 1:
+        raise InputError(f"steps: must be >= 1, got {steps}")
     tol = tolerance if tolerance is not None else step_tolerance(sim, xs[0], precision)
     count = len(xs) - 1 if steps is None else min(int(steps), len(xs) - 1)
     model = sim.model
@@ -221,6 +223,13 @@ def check_steps(simulation, positions, velocities=None, *, precision: str = "flo
                                      note=f"|v_clothsim - v_port| = {verr.max():.3e} m/s"))
             continue
         out.append(_judge(model, problem, k, x_cs, x_port, err, tol, optimality, precision))
+    first = next((s for s in out if not s.passed), None)
+    if first is not None and precision == "float64" and tolerance is None:
+        bound = step_tolerance(sim, xs[first.k], "float32")
+        if first.error <= bound:
+            notes.append(f"the first failing step's error {first.error:.3e} m is within float32 "
+                         f"rounding (κ ε32 max|x| = {bound:.3e} m): if the port computes in "
+                         f"float32, check with precision float32")
     return CheckReport(out, float(tol), precision, notes)
 
 

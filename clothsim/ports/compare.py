@@ -84,15 +84,16 @@ class Comparison:
     def summary(self) -> str:
         """One line: verdict, largest error, the first failing frame and vertex."""
         worst = float(np.max(self.max_error)) if self.frames else 0.0
+        u, what = ("m/s", "largest speed") if self.field == "velocities" else ("m", "cloth size")
         head = (f"{'PASS' if self.passed else 'FAIL'}: {self.field}, {self.frames} frames, "
-                f"max error {worst:.3e} m ({worst / self.size:.2e} of the cloth size "
-                f"{self.size:.3g} m)")
+                f"max error {worst:.3e} {u} ({worst / self.size:.2e} of the {what} "
+                f"{self.size:.3g} {u})")
         if self.passed:
             return head
         f, v = self.first_frame, self.first_vertex
         return (f"{head}; first failing frame {f} vertex {v}: error "
-                f"{self.max_error[f]:.3e} m > tolerance {self.tolerance[f]:.3e} m; worst at "
-                f"frame {self.worst_frame} vertex {self.worst_vertex}")
+                f"{self.max_error[f]:.3e} {u} > tolerance {self.tolerance[f]:.3e} {u}; worst "
+                f"at frame {self.worst_frame} vertex {self.worst_vertex}")
 
 
 def cloth_size(x: np.ndarray) -> float:
@@ -174,14 +175,28 @@ def condition_number(model, h: float, *, anchor_vertices=(), anchor_stiffness=()
     return float(hi / lo)
 
 
+def _scale(reference: np.ndarray, field: str) -> float:
+    """What relative tolerances refer to: the cloth size in frame 0, or for velocities the
+    largest speed of the reference (1 when it never moves)."""
+    if field == "velocities":
+        speed = float(np.linalg.norm(reference, axis=-1).max()) if reference.size else 0.0
+        return speed if speed > 0 else 1.0
+    return cloth_size(reference[0])
+
+
 def tolerances(reference: np.ndarray, *, precision: str = "float64", rtol: float | None = None,
-               atol: float | None = None, kappa: float | None = None) -> np.ndarray:
-    """Allowed per-vertex error per frame [m], shape (frames,) (see the module docstring)."""
+               atol: float | None = None, kappa: float | None = None,
+               field: str = "positions") -> np.ndarray:
+    """Allowed per-vertex error per frame [m], shape (frames,) (see the module docstring).
+
+    For ``field="velocities"`` the scale is the reference's largest speed [m/s] and the
+    float32 bound is divided by the frame time (not known here: use rtol/atol instead).
+    """
     if precision not in ("float32", "float64"):
         raise InputError(f"precision: must be 'float32' or 'float64', got {precision!r}")
     ref = np.asarray(reference)
     frames = len(ref)
-    size = cloth_size(ref[0])
+    size = _scale(ref, field)
     base = np.full(frames, (atol or 0.0) + (RTOL64 if rtol is None else rtol) * size)
     if rtol is None and atol is not None:
         base = np.full(frames, float(atol))
@@ -219,7 +234,7 @@ def compare_arrays(a, b, *, rtol: float | None = None, atol: float | None = None
         raise InputError(f"{field}: shapes differ: {a.shape} vs reference {b.shape}")
     err = np.linalg.norm(a - b, axis=-1)
     err = np.where(np.isfinite(err), err, np.inf)
-    tol = tolerances(b, precision=precision, rtol=rtol, atol=atol, kappa=kappa)
+    tol = tolerances(b, precision=precision, rtol=rtol, atol=atol, kappa=kappa, field=field)
     excess = err - tol[:, None]
     bad = np.flatnonzero((excess > 0).any(axis=1))
     f, v = np.unravel_index(int(np.argmax(excess)), excess.shape) if excess.size else (0, 0)
@@ -228,7 +243,7 @@ def compare_arrays(a, b, *, rtol: float | None = None, atol: float | None = None
     with np.errstate(over="ignore", invalid="ignore"):
         rms = np.sqrt(np.mean(err ** 2, axis=1))
     return Comparison(
-        passed=not len(bad), frames=len(a), field=field, size=cloth_size(b[0]),
+        passed=not len(bad), frames=len(a), field=field, size=_scale(b, field),
         max_error=err.max(axis=1), rms_error=rms,
         tolerance=tol, first_frame=first,
         first_vertex=None if first is None else int(np.argmax(err[first])),
@@ -256,14 +271,22 @@ def compare_trajectories(path, reference, *, key: str = "positions", frames: int
     manifest = Path(reference) / "manifest.json"
     if kappa is None and manifest.is_file():
         kappa = json.loads(manifest.read_text()).get("condition_number")
+    notes = []
     if frames is not None:
         if frames < 1 or frames > min(len(a), len(b)):
             raise InputError(f"frames: must be between 1 and {min(len(a), len(b))}, got {frames}")
         a, b = a[:frames], b[:frames]
     elif len(a) != len(b):
         n = min(len(a), len(b))
+        notes.append(f"compared the first {n} frames ({path} has {len(a)}, {reference} has "
+                     f"{len(b)})")
         a, b = a[:n], b[:n]
-    return compare_arrays(a, b, kappa=kappa, field=key, match=match, **options)
+    if key == "velocities" and options.get("precision") == "float32":
+        raise InputError("precision: the float32 bound is for positions; compare velocities "
+                         "with --rtol/--atol")
+    result = compare_arrays(a, b, kappa=kappa, field=key, match=match, **options)
+    result.notes = notes
+    return result
 
 
 @dataclass

@@ -103,6 +103,16 @@ def test_bad_input_is_one_clear_error():
         check_steps(hanging, xs[:1], vs[:1])
     with pytest.raises(cs.InputError, match="precision"):
         check_steps(hanging, xs, vs, precision="float16")
+    with pytest.raises(cs.InputError, match="steps: must be >= 1"):
+        check_steps(hanging, xs, vs, steps=0)
+
+
+def test_float32_port_checked_at_float64_gets_a_hint():
+    xs, vs = run(hanging, 3)
+    x32, v32 = (a.astype(np.float32).astype(np.float64) for a in (xs, vs))
+    report = check_steps(hanging, x32, v32)
+    assert not report.passed and any("precision float32" in n for n in report.notes)
+    assert check_steps(hanging, x32, v32, precision="float32").passed
 
 
 def test_cli_check_on_a_scene_file(tmp_path, capsys):

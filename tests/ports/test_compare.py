@@ -86,6 +86,9 @@ def test_cli_compare_prints_table_and_plot(traj, tmp_path, capsys):
     assert out.startswith("PASS") and "max/size" in out and (tmp_path / "p.png").is_file()
     assert main(["compare", str(tmp_path / "a.npy"), str(tmp_path / "b.csv"),
                  "--precision", "float32"]) == 2
+    np.save(tmp_path / "short.npy", traj[:5])
+    assert main(["compare", str(tmp_path / "short.npy"), str(tmp_path / "b.csv")]) == 0
+    assert "note: compared the first 5 frames" in capsys.readouterr().out
 
 
 def test_sparse_matrices_with_attachment_columns():
