@@ -108,23 +108,29 @@ def pin_table(sim) -> np.ndarray:
     return np.array(rows, dtype=np.float64).reshape(-1, 6)
 
 
+class _RecordingSolver(LocalGlobalSolver):
+    """Local/global solver that keeps a copy of every iterate x_k and its local step d_k."""
+
+    def iterates(self, problem, x0=None):
+        for it in super().iterates(problem, x0):
+            self.record.append((it.x.copy(), self._d.copy(), it.gradient_norm))
+            yield it
+
+
 def record_iterates(sim, steps: int) -> list[dict]:
     """Local/global iterates (x_k, d_k) of the next ``steps`` steps, advancing ``sim``.
 
-    Uses a separate :class:`LocalGlobalSolver` with the simulation's iteration count, so the
-    simulation's own solver (and its results) are untouched.
+    A separate local/global solver with the simulation's iteration count and tolerance (so
+    the same stop rule) records them; the simulation's own solver is untouched.
     """
-    solver = LocalGlobalSolver(sim.model, iterations=sim.solver.iterations)
+    solver = _RecordingSolver(sim.model, iterations=sim.solver.iterations,
+                              tolerance=sim.solver.tolerance)
     out = []
     for _ in range(steps):
         problem = sim.problem(sim.state)
-        xs, ds, gs = [], [], []
-        for it in solver.iterates(problem):
-            xs.append(it.x.copy())
-            ds.append(solver.local_step(it.x).copy())
-            gs.append(it.gradient_norm)
-            if it.k >= solver.iterations:
-                break
+        solver.record = []
+        solver.solve(problem)
+        xs, ds, gs = zip(*solver.record)
         out.append({"x": np.stack(xs), "d": np.stack(ds), "gradient_norm": np.array(gs),
                     "y": problem.y, "f_ext": (np.zeros_like(problem.y) if problem.f_ext is None
                                               else problem.f_ext)})

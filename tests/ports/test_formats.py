@@ -81,3 +81,21 @@ def test_export_compares_with_itself_in_every_format(tmp_path, capsys):
                   "--key", "velocities"]):
         assert main(["compare", *args, "--rtol", "0", "--atol", "0"]) == 0, args
     assert "PASS" in capsys.readouterr().out
+
+
+def test_export_iterates_follow_the_solver_stop_rule(tmp_path):
+    import clothsim as cs
+    from clothsim.ports.export import export_port
+
+    def converged():
+        model, effects = cs.gallery.hanging_cloth(5)
+        return cs.Simulation(model, h=1 / 30, effects=effects, iterations=500, tolerance=1e-8)
+
+    manifest = export_port(converged, tmp_path, frames=2, iterate_steps=2)
+    assert manifest["solver"]["tolerance"] == 1e-8
+    x = np.load(tmp_path / "trajectory.npz")["positions"]
+    for k in range(2):
+        it = np.load(tmp_path / "iterates" / f"step_{k:04d}.npz")
+        assert 1 < len(it["x"]) < 501
+        np.testing.assert_array_equal(it["x"][-1], x[k + 1])
+        assert it["gradient_norm"][-1] <= 1e-8 * it["gradient_norm"][0]
