@@ -6,3 +6,25 @@ compares trajectories and matrices, :mod:`~clothsim.ports.check` checks a port o
 time, :mod:`~clothsim.ports.diff` compares two models and :mod:`~clothsim.ports.conformance`
 writes the conformance set. See docs/ports.md.
 """
+
+from .check import CheckReport, StepCheck, check_steps
+from .compare import (
+    Comparison,
+    MatrixComparison,
+    compare_arrays,
+    compare_matrices,
+    compare_trajectories,
+    condition_number,
+    match_vertices,
+)
+from .conformance import write_conformance
+from .diff import ModelDiff, diff_models
+from .export import export_matrices, export_port
+from .formats import read_trajectory, read_velocities, write_trajectory
+
+__all__ = [
+    "CheckReport", "StepCheck", "check_steps", "Comparison", "MatrixComparison",
+    "compare_arrays", "compare_matrices", "compare_trajectories", "condition_number",
+    "match_vertices", "write_conformance", "ModelDiff", "diff_models", "export_matrices",
+    "export_port", "read_trajectory", "read_velocities", "write_trajectory",
+]

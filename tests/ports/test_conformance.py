@@ -56,3 +56,16 @@ def test_a_wrong_port_fails_its_case(conformance, tmp_path, capsys):
 def test_subset(tmp_path):
     assert write_conformance(tmp_path, cases=["wind"], frames=2) == ["wind"]
     assert not (tmp_path / "plane").exists()
+
+
+def test_contact_case_failure_names_the_projection(conformance):
+    from clothsim.ports.check import check_steps
+
+    d = conformance / "plane"
+    x = np.loadtxt(d / "positions.txt").reshape(21, -1, 3)
+    v = np.loadtxt(d / "velocities.txt").reshape(21, -1, 3)
+    x[10:, 12, 0] += 1e-3
+    report = check_steps(load_scene(d / "scene.toml"), x, v)
+    first = report.first_failure
+    assert (first.k, first.vertex) == (9, 12), first.line()
+    assert "corrected after the solve by plane" in first.note
