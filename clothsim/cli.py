@@ -213,7 +213,8 @@ def _add_port_commands(sub) -> None:
                       help="compare only the first N frames")
     cmp_.add_argument("--match-vertices", action="store_true",
                       help="pair vertices by their initial positions (other vertex order)")
-    cmp_.add_argument("--table", action="store_true", help="print the per-frame table")
+    cmp_.add_argument("--no-table", action="store_true",
+                      help="print only the verdict line, not the per-frame table")
     cmp_.add_argument("--plot", metavar="PNG", default=None,
                       help="write the deviation-over-time plot")
     cmp_.add_argument("--drop-attachments", action="store_true",
@@ -300,7 +301,7 @@ def _cmd_compare(args) -> int:
     for note in result.notes:
         print(f"note: {note}")
     print(result.summary())
-    if args.table:
+    if not args.no_table:
         print(result.table())
     if args.plot:
         plot_deviation(result, args.plot)

@@ -80,14 +80,15 @@ def test_float32_tolerance_comes_from_the_condition_number(traj, tmp_path):
 def test_cli_compare_prints_table_and_plot(traj, tmp_path, capsys):
     np.save(tmp_path / "a.npy", traj)
     np.savetxt(tmp_path / "b.csv", traj.reshape(8, -1), delimiter=",", fmt="%.17g")
-    assert main(["compare", str(tmp_path / "a.npy"), str(tmp_path / "b.csv"), "--table",
+    assert main(["compare", str(tmp_path / "a.npy"), str(tmp_path / "b.csv"),
                  "--plot", str(tmp_path / "p.png")]) == 0
     out = capsys.readouterr().out
     assert out.startswith("PASS") and "max/size" in out and (tmp_path / "p.png").is_file()
     assert main(["compare", str(tmp_path / "a.npy"), str(tmp_path / "b.csv"),
                  "--precision", "float32"]) == 2
     np.save(tmp_path / "short.npy", traj[:5])
-    assert main(["compare", str(tmp_path / "short.npy"), str(tmp_path / "b.csv")]) == 0
+    assert main(["compare", str(tmp_path / "short.npy"), str(tmp_path / "b.csv"),
+                 "--no-table"]) == 0
     assert "note: compared the first 5 frames" in capsys.readouterr().out
 
 
