@@ -359,7 +359,14 @@ def attachment_columns(J) -> np.ndarray:
 
 
 def plot_deviation(comparison: Comparison, path) -> None:
-    """Write the max and RMS error per frame, with the tolerance, as an image (log scale)."""
+    """Write the max and RMS error per frame, with the tolerance, as an image (log scale).
+
+    Parameters
+    ----------
+    comparison : Comparison
+    path : path
+        Image file (``.png``, ``.svg``, … by matplotlib).
+    """
     import matplotlib
 
     matplotlib.use("Agg")
@@ -367,9 +374,11 @@ def plot_deviation(comparison: Comparison, path) -> None:
 
     f = np.arange(comparison.frames)
     fig, ax = plt.subplots(figsize=(6, 3.5))
-    tiny = 1e-300
-    ax.semilogy(f, np.maximum(comparison.max_error, tiny), label="max error")
-    ax.semilogy(f, np.maximum(comparison.rms_error, tiny), label="RMS error")
+    def positive(e):  # exact zeros (frame 0) are left out of the log scale
+        return np.where(e > 0, e, np.nan)
+
+    ax.semilogy(f, positive(comparison.max_error), ".-", label="max error")
+    ax.semilogy(f, positive(comparison.rms_error), ".-", label="RMS error")
     ax.semilogy(f, comparison.tolerance, "k--", label="tolerance")
     if comparison.first_frame is not None:
         ax.axvline(comparison.first_frame, color="r", lw=0.8, label="first failure")
