@@ -230,6 +230,9 @@ def _add_port_commands(sub) -> None:
     chk.add_argument("--tolerance", type=float, default=None,
                      help="allowed per-vertex distance [m] (default from --precision)")
     chk.add_argument("--steps", type=int, default=None, help="check only the first N steps")
+    chk.add_argument("--optimality", type=float, default=1e-6,
+                     help="largest relative gradient |grad g(x)| / |grad g(x0)| of a port's "
+                     "answer counted as a minimizer (1e-6)")
     chk.add_argument("--verbose-steps", action="store_true", help="print every step")
 
     dif = sub.add_parser("diff-model", help="compare two models: springs, stiffness, rest "
@@ -313,14 +316,14 @@ def _cmd_check(args) -> int:
     from .ports.formats import read_trajectory, read_velocities
     from .scene import load_scene
 
-    bad = _positive(args, ("tolerance", "steps"))
+    bad = _positive(args, ("tolerance", "steps", "optimality"))
     if bad:
         return _fail(bad, 2)
     scene = load_scene(args.scene)
     x = read_trajectory(args.port)
     v = read_velocities(args.port)
     report = check_steps(scene, x, v, precision=args.precision, tolerance=args.tolerance,
-                         steps=args.steps)
+                         steps=args.steps, optimality=args.optimality)
     if args.verbose_steps:
         for step in report.steps:
             print(step.line())

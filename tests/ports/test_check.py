@@ -137,3 +137,5 @@ def test_cli_check_on_a_scene_file(tmp_path, capsys):
     write_trajectory(tmp_path / "x.npy", np.stack(xs))
     assert main(["check", "hanging", str(tmp_path / "x.npy"), "--steps", "1"]) == 0
     assert main(["check", "hanging", str(port), "--tolerance", "-1"]) == 2
+    assert main(["check", "hanging", str(port), "--optimality", "1e-3", "--verbose-steps"]) == 1
+    assert "step 0 -> 1: agrees" in capsys.readouterr().out
