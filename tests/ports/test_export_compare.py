@@ -7,9 +7,9 @@ import pytest
 
 import clothsim as cs
 from clothsim import io, matrices, reference
-from clothsim.compare import compare_arrays, compare_matrices, compare_trajectories
 from clothsim.errors import InputError
-from clothsim.export import export_matrices
+from clothsim.ports.compare import compare_arrays, compare_matrices, compare_trajectories
+from clothsim.ports.export import export_matrices
 
 
 @pytest.fixture
