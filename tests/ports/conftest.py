@@ -1,22 +1,24 @@
 """Fixtures of the port-checking tests: the paper authors' default scene, from its own files.
 
-``liu13_simulation()`` is THE one place that rebuilds the port's model in Python; it is to be
-replaced by ``load_scene("examples/ports/liu13-default.toml")`` once scenes can take a model
-from files.
+The model comes from ``examples/ports/liu13-default.toml``, a scene built only from the
+port's own files (no Python glue); the data is read from the data root.
 """
 
 from __future__ import annotations
 
 import os
+import tempfile
+import tomllib
 from pathlib import Path
 
 import numpy as np
 import pytest
 
 import clothsim as cs
-from clothsim.springs import Springs
+from clothsim.scene import Scene
 
 REPO = Path(__file__).resolve().parents[2]
+SCENE = REPO / "examples" / "ports" / "liu13-default.toml"
 H = 0.0333
 
 
@@ -36,23 +38,24 @@ def port_dir() -> Path:
     return root / "liu13-port" / "default-scene"
 
 
-def liu13_simulation(*, attachments: bool = True, iterations: int = 10) -> cs.Simulation:
-    """The port's default scene as a clothsim Simulation (replaced by the scene file at merge)."""
+def liu13_simulation(*, attachments: bool = True, iterations: int = 10,
+                     tmp_dir: Path | None = None) -> cs.Simulation:
+    """The port's default scene as a clothsim Simulation, from the scene file.
+
+    ``attachments=False`` leaves the two attachment rows out of the spring table (a model
+    that differs from the port's: the model diff must name them).
+    """
     d = port_dir()
-    x0 = np.loadtxt(d / "x0.txt").reshape(-1, 3)
-    tri = np.loadtxt(d / "triangles.txt", dtype=np.int64)
-    rows = np.loadtxt(d / "springs.txt", comments="#")
-    springs = rows[rows[:, 0] == 1]
-    attach = rows[rows[:, 0] == 0]
-    mesh = cs.mesh.from_cells(x0, [("triangle", tri)])
-    sp = Springs(springs[:, 1:3].astype(np.int64), springs[:, 3], springs[:, 4],
-                 np.zeros(len(springs), np.int8))
-    model = cs.Model.build(mesh, sp, total_mass=1.0)
-    effects = [cs.Gravity((0.0, -100.0, 0.0)), cs.Damping("rigid", 0.001)]
-    if attachments:
-        effects.insert(0, cs.Pin(attach[:, 1].astype(np.int64), method="penalty",
-                                 stiffness=float(attach[0, 3])))
-    return cs.Simulation(model, h=H, effects=effects, iterations=iterations)
+    scene = cs.load_scene(SCENE)
+    if not attachments:
+        rows = [r for r in (d / "springs.txt").read_text().splitlines()
+                if not r.startswith("0 ")]
+        folder = Path(tempfile.mkdtemp()) if tmp_dir is None else tmp_dir
+        (folder / "springs.txt").write_text("\n".join(rows) + "\n")
+        data = tomllib.loads(SCENE.read_text(encoding="utf-8"))
+        data["springs"]["table"] = str(folder / "springs.txt")
+        scene = Scene.from_dict(data, source=str(SCENE), base_dir=SCENE.parent)
+    return scene.build_simulation(iterations=iterations)
 
 
 def liu13_trajectory() -> tuple[np.ndarray, np.ndarray]:
