@@ -65,7 +65,13 @@ def _fail(message: str, code: int) -> int:
 
 
 def build_parser() -> argparse.ArgumentParser:
-    """The argument parser of the ``clothsim`` command."""
+    """The argument parser of the ``clothsim`` command.
+
+    Returns
+    -------
+    argparse.ArgumentParser
+        Every subcommand wired; ``-v`` is accepted before and after the subcommand.
+    """
     parser = _Parser(prog=PROG, description="Cloth simulation with mass-spring systems by the "
                      "local/global method of Liu et al. (2013).")
     parser.add_argument("-v", "--verbose", action="count", default=0,
@@ -296,7 +302,19 @@ COMMANDS = {"run": _cmd_run, "scenes": _cmd_scenes, "validate": _cmd_validate,
 
 
 def main(argv: list[str] | None = None) -> int:
-    """Run the command line; returns the exit status (the entry point exits with it)."""
+    """Run the command line.
+
+    Parameters
+    ----------
+    argv : list of str, optional
+        Arguments without the program name (default: ``sys.argv[1:]``).
+
+    Returns
+    -------
+    int
+        The exit status (the entry point exits with it): 0 success, 1 error, 2 bad input,
+        130 interrupted.
+    """
     parser = build_parser()
     try:
         args = parser.parse_args(argv)

@@ -160,6 +160,11 @@ def pinned_points(effects, positions=None, t: float = 0.0) -> np.ndarray:
 def surfaces_mesh(surfaces):
     """Merge surfaces into one vertex array, triangle array and per-vertex obstacle index.
 
+    Parameters
+    ----------
+    surfaces : sequence of Surface
+        As :func:`obstacle_surfaces` returns them.
+
     Returns
     -------
     vertices : ndarray, shape (k, 3)

@@ -6,7 +6,7 @@ A chain of three unit masses, the first pinned, the others stretched and at rest
 paper's block coordinate descent by hand with public functions and watch the augmented
 objective ĝ(x, d) after every half step:
 
-* local step (x fixed): d_i = r_i (x_a − x_b) / |x_a − x_b|
+* local step (x fixed): d_i = r_i (x_a − x_b) / ‖x_a − x_b‖
   (:meth:`~clothsim.LocalGlobalSolver.local_step`),
 * right-hand side b = h² J d + M y + h² f_ext
   (:meth:`~clothsim.LocalGlobalSolver.right_hand_side`),
