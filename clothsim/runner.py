@@ -308,9 +308,24 @@ OBSTACLES_NAME = "obstacles.vtu"
 
 
 def write_obstacles(path: Path, effects, positions) -> Path | None:
-    """Write the obstacles' surfaces (plane as a quad framed on ``positions``, sphere, box)
-    as one triangle mesh with point data ``obstacle`` (index of the surface); None (and
-    nothing written) when the scene has no obstacle."""
+    """Write the obstacles' surfaces as one triangle mesh (``obstacles.vtu`` for ParaView).
+
+    Parameters
+    ----------
+    path : Path
+        Output file (any format :func:`clothsim.io.write_mesh` writes).
+    effects : iterable of Effect
+        The simulation's effects; planes (a square framed on ``positions``), spheres and
+        boxes are written, the others skipped.
+    positions : ndarray, shape (n, 3)
+        Cloth positions [m] the plane's square is framed on.
+
+    Returns
+    -------
+    Path or None
+        ``path``, or None (nothing written) when there is no obstacle. Point data
+        ``obstacle`` holds the index of the surface each vertex belongs to.
+    """
     surfaces = obstacle_surfaces(effects, positions)
     if not surfaces:
         return None
