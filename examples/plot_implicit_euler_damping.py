@@ -15,7 +15,7 @@ import clothsim as cs
 
 k, m, r = 100.0, 1.0, 1.0
 omega = np.sqrt(k / m)
-T = 3.0
+T = 2.0
 
 
 def simulate(h):
@@ -35,8 +35,10 @@ def simulate(h):
 
 
 fig, ax = plt.subplots(figsize=(5, 3.2))
+final = {}
 for h in (0.01, 0.03, 0.1):
     t, a = simulate(h)
+    final[h] = a[-1]
     predicted = 0.1 * (1 + omega ** 2 * h ** 2) ** (-np.arange(len(t)) / 2)
     # the measured decay matches (1 + ω²h²)^(-1/2) per step
     assert np.allclose(a, predicted, rtol=1e-6), h
@@ -46,7 +48,7 @@ for h in (0.01, 0.03, 0.1):
 
 # %%
 # A larger step damps more, at the same simulated time.
-assert simulate(0.1)[1][-1] < simulate(0.01)[1][-1]
+assert final[0.1] < final[0.03] < final[0.01]
 ax.set(xlabel="time [s]", ylabel="amplitude [m]",
        title="one spring, ω = 10 rad/s (dotted: (1 + ω²h²)^(-n/2))")
 ax.legend()
