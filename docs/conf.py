@@ -104,4 +104,55 @@ def _scene_reference() -> None:
         out.write_text(text, encoding="utf-8")
 
 
+#: API pages: title, intro and candidate modules. A module that does not exist in this
+#: checkout (the package is being reorganised: io/, scene/, accuracy/, ports/) is skipped,
+#: so the reference always lists exactly the modules there are.
+API_PAGES = {
+    "model": ("Meshes, springs, models", [
+        "clothsim.mesh", "clothsim.polygon", "clothsim.mesh_checks", "clothsim.validate_mesh",
+        "clothsim.springs", "clothsim.model", "clothsim.gallery"]),
+    "solvers": ("Solvers and the time step", [
+        "clothsim.simulation", "clothsim.problem", "clothsim.solvers.base",
+        "clothsim.solvers.local_global", "clothsim.solvers.chebyshev",
+        "clothsim.solvers.anderson", "clothsim.solvers.lbfgs", "clothsim.solvers.newton",
+        "clothsim.solvers.symplectic", "clothsim.factorization"]),
+    "effects": ("Effects", [
+        "clothsim.effects.base", "clothsim.effects.gravity", "clothsim.effects.pins",
+        "clothsim.effects.obstacles", "clothsim.effects.impulse", "clothsim.effects.wind",
+        "clothsim.effects.damping", "clothsim.effects.strain_limit"]),
+    "scenes-and-runs": ("Scenes, runs and files", [
+        "clothsim.scene", "clothsim.scene.schema", "clothsim.scene.build",
+        "clothsim.scene.files", "clothsim.runner", "clothsim.io", "clothsim.io.cells",
+        "clothsim.io.obj", "clothsim.io.meshes", "clothsim.io.frames", "clothsim.io.matrices",
+        "clothsim.io.assignment", "clothsim.io.tables", "clothsim.jacobson"]),
+    "pictures": ("Pictures", ["clothsim.plotting", "clothsim.display"]),
+    "analysis": ("Matrices, energy, accuracy, ports", [
+        "clothsim.matrices", "clothsim.reference", "clothsim.energy", "clothsim.accuracy",
+        "clothsim.accuracy.trace", "clothsim.accuracy.sweep", "clothsim.accuracy.damping",
+        "clothsim.accuracy.plots", "clothsim.export", "clothsim.compare", "clothsim.ports",
+        "clothsim.ports.export", "clothsim.ports.compare", "clothsim.ports.check",
+        "clothsim.ports.diff", "clothsim.ports.conformance", "clothsim.ports.formats"]),
+}
+
+
+def _existing(name: str) -> bool:
+    """True when module ``name`` is a file of this checkout (not of another installation)."""
+    path = ROOT.joinpath(*name.split("."))
+    return path.with_suffix(".py").is_file() or (path / "__init__.py").is_file()
+
+
+def _api_pages() -> None:
+    """Write docs/api/<page>.rst with one ``automodule`` per module that exists."""
+    for page, (title, modules) in API_PAGES.items():
+        lines = [title, "=" * len(title), ""]
+        for name in modules:
+            if _existing(name):
+                lines += [f".. automodule:: {name}", ""]
+        text = "\n".join(lines)
+        out = HERE / "api" / f"{page}.rst"
+        if not out.exists() or out.read_text(encoding="utf-8") != text:
+            out.write_text(text, encoding="utf-8")
+
+
 _scene_reference()
+_api_pages()

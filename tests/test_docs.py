@@ -35,6 +35,9 @@ MODULES += [f"clothsim.solvers.{m}" for m in ("base", "local_global", "chebyshev
                                               "symplectic")]
 MODULES += [f"clothsim.effects.{m}" for m in ("base", "gravity", "pins", "obstacles", "impulse",
                                               "wind", "damping", "strain_limit")]
+# modules of the package's new layout, checked once they exist (skipped before)
+MODULES += ["clothsim.problem", "clothsim.polygon", "clothsim.mesh_checks",
+            "clothsim.solvers.anderson", "clothsim.solvers.lbfgs", "clothsim.ports"]
 # docstrings owned elsewhere and not yet complete (see the list printed by the failure)
 INCOMPLETE = set(MODULES) - {"clothsim.plotting", "clothsim.display", "clothsim.cli",
                               "clothsim.export"}
@@ -113,6 +116,9 @@ def problems_method(cls, meth: str, name: str) -> list[str]:
                                             "are completed by its owner after the merge"))
     if m in INCOMPLETE else m for m in MODULES])
 def test_public_docstrings_have_numpydoc_sections(modname):
+    path = ROOT.joinpath(*modname.split("."))
+    if not (path.with_suffix(".py").is_file() or (path / "__init__.py").is_file()):
+        pytest.skip(f"{modname} is not in this checkout")
     module = importlib.import_module(modname)
     missing = []
     for name, obj in _public(module):
