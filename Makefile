@@ -1,10 +1,12 @@
 # make demo : set up (first time only) and run the default scene into out/drop-on-square
 # make test : set up (first time only) and run the test suite
 # make bench: run the benchmarks (heavy measurements, not part of the tests)
+# make docs : build the documentation site into docs/_build/html (runs every gallery lesson;
+#             warnings are errors; a few minutes)
 VENV := .venv
 PY := $(VENV)/bin/python
 
-.PHONY: setup demo test bench clean
+.PHONY: setup demo test bench docs clean
 setup:
 	@sh scripts/bootstrap.sh
 
@@ -18,5 +20,9 @@ test: setup
 bench: setup
 	$(PY) -m benchmarks
 
+docs: setup
+	MPLBACKEND=Agg $(PY) -m sphinx -W --keep-going -b html docs docs/_build/html
+
 clean:
-	rm -rf out .pytest_cache .hypothesis
+	rm -rf out .pytest_cache .hypothesis docs/_build docs/auto_examples docs/reference/scenes.md \
+		docs/sg_execution_times.rst

@@ -2,6 +2,7 @@
 
 ::
 
+    clothsim [--version] [-v | -vv] COMMAND [-v | -vv] ...
     clothsim run [SCENE] [--out DIR] [--frames N] [--resume] [--no-preview]
     clothsim scenes [--show NAME]
     clothsim validate SCENE
@@ -21,15 +22,24 @@ SCENE is a scene file (``.toml``, or an assignment ``.json``) or a built-in scen
 Exit status: 0 success; 1 any other error (one line on stderr); 2 a bad scene or bad
 arguments (one line: ``clothsim: error: <file>: <key.path>: <message>``, no traceback);
 130 interrupted with Ctrl-C (frames done so far stay readable).
+
+Warnings (ill-conditioning, missed tolerances, …) go through :mod:`logging`: each kind is
+logged once when it first occurs (with ``-v``) and summarised at the end of the command as
+one line with its count. Progress bars are shown only when stderr is a terminal.
 """
 
 from __future__ import annotations
 
 import argparse
 import logging
+import os
+import re
 import sys
+import warnings
+from contextlib import contextmanager
 from pathlib import Path
 
+from . import __version__
 from .errors import InputError
 
 PROG = "clothsim"
@@ -57,13 +67,30 @@ def _fail(message: str, code: int) -> int:
 
 
 def build_parser() -> argparse.ArgumentParser:
-    """The argument parser of the ``clothsim`` command."""
+    """The argument parser of the ``clothsim`` command.
+
+    Returns
+    -------
+    argparse.ArgumentParser
+        Every subcommand wired; ``-v`` is accepted before and after the subcommand.
+    """
     parser = _Parser(prog=PROG, description="Cloth simulation with mass-spring systems by the "
                      "local/global method of Liu et al. (2013).")
     parser.add_argument("-v", "--verbose", action="count", default=0,
                         help="log more (-v info, -vv debug)")
+    parser.add_argument("--version", action="version", version=f"{PROG} {__version__}")
     sub = parser.add_subparsers(dest="command", metavar="COMMAND", parser_class=_Parser)
     sub.required = True
+    # -v is accepted after the command too (counts add up: clothsim -v run -v = -vv)
+    verbose = _Parser(add_help=False)
+    verbose.add_argument("-v", "--verbose", action="count", default=0, dest="verbose_after",
+                         help="log more (-v info, -vv debug)")
+    add_parser = sub.add_parser
+
+    def add_with_verbose(*a, **kw):
+        return add_parser(*a, parents=[verbose], **kw)
+
+    sub.add_parser = add_with_verbose
 
     run = sub.add_parser("run", help="run a scene and write frames, trajectory, previews")
     run.add_argument("scene", nargs="?", default=None, metavar="SCENE",
@@ -112,6 +139,58 @@ def _configure_logging(verbose: int):
         root.setLevel(old_level)
 
     return undo
+
+
+_NUMBER = re.compile(r"[-+]?\d[\d.]*(?:e[-+]?\d+)?")
+
+
+@contextmanager
+def _warnings_to_log():
+    """Route Python warnings to the ``clothsim`` logger and count them by kind.
+
+    A kind is the warning category plus its message with numbers blanked out. The first
+    warning of each kind is logged at INFO (visible with -v); at exit one WARNING line per
+    kind gives its count and the first message.
+    """
+    counts: dict[tuple[str, str], list] = {}
+
+    def show(message, category, filename, lineno, file=None, line=None):
+        text = _one_line(message)
+        key = (category.__name__, _NUMBER.sub("#", text))
+        if key not in counts:
+            counts[key] = [0, text]
+            log.info("%s: %s", category.__name__, text)
+        counts[key][0] += 1
+
+    with warnings.catch_warnings():
+        warnings.simplefilter("always")
+        warnings.showwarning = show
+        try:
+            yield counts
+        finally:
+            for (kind, _), (count, first) in counts.items():
+                times = "once" if count == 1 else f"{count} times"
+                log.warning("%s (%s): %s", kind, times, first)
+
+
+@contextmanager
+def _no_progress_bars_off_terminal():
+    """Disable tqdm progress bars (TQDM_DISABLE) when stderr is not a terminal."""
+    set_here = not _isatty(sys.stderr) and "TQDM_DISABLE" not in os.environ
+    if set_here:
+        os.environ["TQDM_DISABLE"] = "1"
+    try:
+        yield
+    finally:
+        if set_here:
+            os.environ.pop("TQDM_DISABLE", None)
+
+
+def _isatty(stream) -> bool:
+    try:
+        return bool(stream.isatty())
+    except (AttributeError, ValueError):
+        return False
 
 
 def _cmd_scenes(args) -> int:
@@ -369,7 +448,19 @@ COMMANDS = {"run": _cmd_run, "scenes": _cmd_scenes, "validate": _cmd_validate,
 
 
 def main(argv: list[str] | None = None) -> int:
-    """Run the command line; returns the exit status (the entry point exits with it)."""
+    """Run the command line.
+
+    Parameters
+    ----------
+    argv : list of str, optional
+        Arguments without the program name (default: ``sys.argv[1:]``).
+
+    Returns
+    -------
+    int
+        The exit status (the entry point exits with it): 0 success, 1 error, 2 bad input,
+        130 interrupted.
+    """
     parser = build_parser()
     try:
         args = parser.parse_args(argv)
@@ -377,9 +468,10 @@ def main(argv: list[str] | None = None) -> int:
         return _fail(str(exc), 2)
     except SystemExit as exc:  # --help
         return int(exc.code or 0)
-    undo_logging = _configure_logging(args.verbose)
+    undo_logging = _configure_logging(args.verbose + getattr(args, "verbose_after", 0))
     try:
-        return COMMANDS[args.command](args)
+        with _warnings_to_log(), _no_progress_bars_off_terminal():
+            return COMMANDS[args.command](args)
     except InputError as exc:  # SceneError included: bad input, exit status 2
         return _fail(str(exc), 2)
     except KeyboardInterrupt:

@@ -1,19 +1,22 @@
-"""Pictures of a run: an animated preview, the final frame, residual curves (matplotlib).
+"""Pictures of a run: the cloth and the scene it interacts with (matplotlib).
 
 matplotlib is imported inside the functions, never at ``import clothsim``. Figures are
 made with :class:`matplotlib.figure.Figure` and the Agg canvas, so nothing touches pyplot's
 global state or needs a display. The cloth is drawn in 2-D through an orthographic
-:class:`View` (y up) with depth-sorted, shaded triangles: much faster than mplot3d.
+:class:`View` (y up) with depth-sorted, shaded triangles (much faster than mplot3d),
+together with the obstacles (plane, sphere, box; :mod:`clothsim.display`) and the pinned
+vertices (red dots). The picture is framed on the cloth and its obstacles, and its axes are
+the screen axes of the view, in metres.
 
 Functions
 ---------
+draw
+    Draw a cloth (and its obstacles and pins) into a given matplotlib Axes (notebooks).
 write_preview
     ``preview.gif``: at most ``max_frames`` evenly spaced frames (fewer for big meshes, so
-    it stays quick), a small figure, written with :class:`matplotlib.animation.PillowWriter`.
+    it stays quick), 512 × 512 px, written with :class:`matplotlib.animation.PillowWriter`.
 write_final_image
-    ``final.png``: one frame.
-plot_residual_curve
-    Relative residual ‖∇g(x_k)‖ / ‖∇g(x_0)‖ against iteration k, log scale.
+    ``final.png``: one frame, 600 × 600 px.
 """
 
 from __future__ import annotations
@@ -22,6 +25,8 @@ import logging
 from pathlib import Path
 
 import numpy as np
+
+from .display import OBSTACLE_COLORS, PIN_COLOR, obstacle_surfaces, pinned_points
 
 log = logging.getLogger(__name__)
 
@@ -44,6 +49,13 @@ def _matplotlib():
 class View:
     """Orthographic camera, y up: azimuth about y and elevation above the xz plane [deg].
 
+    Parameters
+    ----------
+    azimuth, elevation : float
+        Camera direction [deg].
+
+    Notes
+    -----
     ``project(x)`` maps points (…, 3) to screen coordinates u (right), v (up) and a depth
     that grows toward the camera. Drawing in 2-D with a depth sort (painter's algorithm)
     is much faster than mplot3d and looks the same for a cloth.
@@ -51,6 +63,7 @@ class View:
 
     def __init__(self, azimuth: float = 35.0, elevation: float = 25.0):
         a, e = np.radians(azimuth), np.radians(elevation)
+        self.azimuth, self.elevation = float(azimuth), float(elevation)
         self.toward = np.array([np.cos(e) * np.sin(a), np.sin(e), np.cos(e) * np.cos(a)])
         self.right = np.array([np.cos(a), 0.0, -np.sin(a)])
         self.up = np.cross(self.toward, self.right)
@@ -58,58 +71,187 @@ class View:
         self.light /= np.linalg.norm(self.light)
 
     def project(self, x: np.ndarray) -> np.ndarray:
-        """(…, 3) points → (…, 3) as (u, v, depth)."""
+        """Project points.
+
+        Parameters
+        ----------
+        x : ndarray, shape (..., 3)
+            Points [m].
+
+        Returns
+        -------
+        ndarray, shape (..., 3)
+            Screen coordinates u, v [m] and depth [m] (larger is nearer the camera).
+        """
         return x @ np.stack([self.right, self.up, self.toward], axis=1)
 
 
-class _Artist:
-    """Triangles (shaded, depth-sorted) and strands of one mesh, updatable per frame."""
+def _behind(surface, view: View, c: np.ndarray, eps: float) -> np.ndarray:
+    """Mask of points c (k, 3) hidden by a convex obstacle: the ray toward the camera from
+    c meets the solid (sphere: exactly; box: c is inside every camera-facing face plane)."""
+    if surface.kind == "sphere":
+        center = surface.vertices.mean(axis=0)
+        r = np.linalg.norm(surface.vertices - center, axis=1).max()
+        w = c - center
+        b = w @ view.toward
+        disc = b * b - (np.einsum("ij,ij->i", w, w) - r * r)
+        return (disc > 0) & (-b + np.sqrt(np.maximum(disc, 0)) > eps)
+    tri = surface.vertices[surface.triangles]
+    n = np.cross(tri[:, 1] - tri[:, 0], tri[:, 2] - tri[:, 0])
+    mid = tri.mean(axis=1)
+    n *= np.sign(np.einsum("ij,ij->i", n, mid - surface.vertices.mean(axis=0)))[:, None]
+    front = n @ view.toward > 0
+    n, mid = n[front] / np.linalg.norm(n[front], axis=1, keepdims=True), mid[front]
+    return np.all(c @ n.T - np.einsum("ij,ij->i", n, mid) < -eps, axis=1)
 
-    def __init__(self, ax, mesh, view: View, x: np.ndarray, edges: bool):
+
+def _shade(view: View, tri_xyz: np.ndarray) -> np.ndarray:
+    n = np.cross(tri_xyz[:, 1] - tri_xyz[:, 0], tri_xyz[:, 2] - tri_xyz[:, 0])
+    n /= np.maximum(np.linalg.norm(n, axis=1, keepdims=True), 1e-300)
+    return 0.35 + 0.65 * np.abs(n @ view.light)  # two-sided Lambert
+
+
+class _Artist:
+    """Cloth triangles (shaded, depth-sorted with the obstacles), strands and pins."""
+
+    def __init__(self, ax, mesh, view: View, x: np.ndarray, edges: bool, surfaces=(),
+                 effects=()):
         from matplotlib.collections import LineCollection, PolyCollection
 
         self.view = view
         self.tris = np.asarray(mesh.triangles)
         self.strands = np.asarray(mesh.strands)
-        self.poly = self.lines = self.points = None
-        if len(self.tris):
-            self.poly = PolyCollection([], edgecolors=EDGE_COLOR if edges else "face",
-                                       linewidths=0.15 if edges else 0.3, antialiased=False)
+        self.effects = list(effects)
+        self.edges = edges
+        self.poly = self.lines = self.points = self.pins = None
+        # static obstacles: planes drawn first (the ground is behind everything above it);
+        # of the convex ones only the camera-facing faces, drawn between the cloth they hide
+        # and the rest of the cloth (see update)
+        solid, scol = [], []
+        self.convex = [x for x in surfaces if x.kind != "plane"]
+        for surf in surfaces:
+            tri = surf.vertices[surf.triangles]
+            color = _shade(view, tri)[:, None] * np.asarray(OBSTACLE_COLORS[surf.kind])
+            if surf.kind == "plane":
+                ax.add_collection(PolyCollection(view.project(tri)[..., :2], facecolors=color,
+                                                 edgecolors="face", linewidths=0.3,
+                                                 zorder=0.5))
+                continue
+            n = np.cross(tri[:, 1] - tri[:, 0], tri[:, 2] - tri[:, 0])
+            out = np.einsum("ij,ij->i", n, tri.mean(axis=1) - surf.vertices.mean(axis=0))
+            front = (n @ view.toward) * np.sign(out) > 0  # camera-facing faces only
+            solid.append(view.project(tri[front]))
+            scol.append(color[front])
+        self.solid = np.concatenate(solid) if solid else np.zeros((0, 3, 3))
+        self.solid_color = np.concatenate(scol) if scol else np.zeros((0, 3))
+        size = np.ptp(x.reshape(-1, 3), axis=0).max() if x.size else 1.0
+        self.eps = 1e-3 * max(float(size), 1e-3)
+        if len(self.tris) or len(self.solid):
+            self.poly = PolyCollection([], linewidths=0.15 if edges else 0.3,
+                                       antialiased=False, zorder=1)
             ax.add_collection(self.poly)
         if len(self.strands):
-            self.lines = LineCollection([], colors="k", linewidths=1.0)
+            self.lines = LineCollection([], colors="k", linewidths=1.0, zorder=2)
             ax.add_collection(self.lines)
             if not len(self.tris):  # a spring network: show the masses too
-                self.points = ax.plot([], [], "o", ms=3, color="C3")[0]
+                self.points = ax.plot([], [], "o", ms=3, color="C3", zorder=3)[0]
+        if any(getattr(e, "kind", "") == "pin" for e in self.effects):
+            self.pins = ax.plot([], [], "o", ms=4, color=PIN_COLOR, zorder=4)[0]
         self.update(x)
 
-    def update(self, x: np.ndarray):
+    def update(self, x: np.ndarray, t: float = 0.0):
         p = self.view.project(x)
         if self.poly is not None:
-            t = self.tris
-            n = np.cross(x[t[:, 1]] - x[t[:, 0]], x[t[:, 2]] - x[t[:, 0]])
-            n /= np.maximum(np.linalg.norm(n, axis=1, keepdims=True), 1e-300)
-            shade = 0.35 + 0.65 * np.abs(n @ self.view.light)  # two-sided Lambert
-            order = np.argsort(p[t].mean(axis=1)[:, 2])         # far to near
-            self.poly.set_verts(p[t[order]][..., :2])
-            self.poly.set_facecolor(shade[order, None] * np.asarray(FACE_COLOR))
+            t3 = self.tris
+            # layers: cloth hidden by an obstacle, obstacles' front faces, the rest of the
+            # cloth; each layer depth-sorted far to near (painter's algorithm)
+            hidden = np.zeros(len(t3), bool)
+            centroid = x[t3].mean(axis=1) if len(t3) else np.zeros((0, 3))
+            for surf in self.convex:
+                hidden |= _behind(surf, self.view, centroid, self.eps)
+            layer = np.concatenate([np.ones(len(self.solid)), np.where(hidden, 0.0, 2.0)])
+            depth = np.concatenate([self.solid[..., 2].mean(axis=1),
+                                    p[t3][..., 2].mean(axis=1)])
+            order = np.lexsort((depth, layer))
+            verts = np.concatenate([self.solid[..., :2], p[t3][..., :2]])
+            face = np.concatenate([self.solid_color,
+                                   _shade(self.view, x[t3])[:, None] * np.asarray(FACE_COLOR)])
+            cloth = np.concatenate([np.zeros(len(self.solid), bool), np.ones(len(t3), bool)])
+            fc = face[order]
+            ec = np.where(cloth[order, None], np.asarray(EDGE_COLOR), fc) if self.edges else fc
+            self.poly.set_verts(verts[order])
+            self.poly.set_facecolor(fc)
+            self.poly.set_edgecolor(ec)
         if self.lines is not None:
             self.lines.set_segments(p[self.strands][..., :2])
         if self.points is not None:
             self.points.set_data(p[:, 0], p[:, 1])
+        if self.pins is not None:
+            q = self.view.project(pinned_points(self.effects, x, t))
+            self.pins.set_data(q[:, 0], q[:, 1])
 
 
-def _axes(fig, view: View, X: np.ndarray):
-    """2-D axes framing every point of X (…, 3) seen through ``view``, equal scale."""
-    ax = fig.add_axes((0.02, 0.02, 0.96, 0.88))
-    p = view.project(X.reshape(-1, 3))
+def _frame(ax, view: View, X: np.ndarray, surfaces=()) -> None:
+    """Frame ``ax`` on the points X (…, 3) and the obstacle surfaces, equal scale, in m."""
+    pts = [X.reshape(-1, 3)] + [s.vertices for s in surfaces if s.kind != "plane"]
+    pts += [s.vertices[s.triangles].mean(axis=1) for s in surfaces if s.kind == "plane"]
+    p = view.project(np.vstack(pts))
     lo, hi = p.min(axis=0), p.max(axis=0)
     mid = (lo + hi) / 2
-    half = max(float(np.max((hi - lo)[:2])) / 2, 1e-6) * 1.05
+    half = max(float(np.max((hi - lo)[:2])) / 2, 1e-6) * 1.1
     ax.set_xlim(mid[0] - half, mid[0] + half)
     ax.set_ylim(mid[1] - half, mid[1] + half)
     ax.set_aspect("equal")
-    ax.set_axis_off()
+    ax.set_xlabel(f"screen x [m] (view azimuth {view.azimuth:g}°)", fontsize=7)
+    ax.set_ylabel(f"screen y [m] (elevation {view.elevation:g}°)", fontsize=7)
+    ax.tick_params(labelsize=6)
+
+
+def draw(ax, mesh, positions, *, effects=(), view: View | None = None, t: float = 0.0,
+         frame_on=None, edges: bool | None = None):
+    """Draw a cloth, its obstacles and its pinned vertices into a matplotlib Axes.
+
+    Parameters
+    ----------
+    ax : matplotlib.axes.Axes
+        Target axes (2-D); limits, aspect and labels [m] are set.
+    mesh : Mesh
+        Triangles and strands of the cloth.
+    positions : ndarray, shape (n, 3)
+        Vertex positions [m].
+    effects : iterable of Effect, optional
+        The simulation's effects: planes, spheres and boxes are drawn as surfaces, bound
+        pins as red dots (others are ignored).
+    view : View, optional
+        Camera (default azimuth 35°, elevation 25°).
+    t : float
+        Time [s] (for pins released at some time).
+    frame_on : ndarray, shape (..., 3), optional
+        Points to frame the picture on (default: ``positions`` and the obstacles).
+    edges : bool, optional
+        Draw triangle edges (default: when the mesh has fewer than 3000 triangles).
+
+    Returns
+    -------
+    matplotlib.axes.Axes
+        ``ax``.
+
+    Examples
+    --------
+    >>> import clothsim as cs
+    >>> from matplotlib.figure import Figure
+    >>> mesh = cs.grid(4, 4, size=(1.0, 1.0))
+    >>> ax = Figure().add_subplot()
+    >>> ax is draw(ax, mesh, mesh.vertices, effects=[cs.Box([-.2, -.5, -.2], [.2, -.1, .2])])
+    True
+    """
+    x = np.asarray(positions, dtype=np.float64)
+    view = view or View()
+    X = x if frame_on is None else np.asarray(frame_on, dtype=np.float64)
+    surfaces = obstacle_surfaces(effects, X)
+    _frame(ax, view, X, surfaces)
+    _Artist(ax, mesh, view, x, len(mesh.triangles) < 3000 if edges is None else edges,
+            surfaces, effects).update(x, t)
     return ax
 
 
@@ -117,17 +259,35 @@ def preview_frame_indices(frame_count: int, triangle_count: int, *,
                           max_frames: int = 60) -> np.ndarray:
     """Evenly spaced frame indices for a preview (first and last always included).
 
-    At most ``max_frames``, and at most ``PREVIEW_TRIANGLE_BUDGET / triangle_count``
-    (never fewer than 2 when there are 2 frames or more).
+    Parameters
+    ----------
+    frame_count, triangle_count : int
+        Frames available and triangles per frame.
+    max_frames : int
+        Upper bound.
+
+    Returns
+    -------
+    ndarray of int
+        At most ``max_frames`` and at most ``PREVIEW_TRIANGLE_BUDGET / triangle_count``
+        indices (never fewer than 2 when there are 2 frames or more).
     """
     budget = PREVIEW_TRIANGLE_BUDGET // max(1, triangle_count)
     k = max(min(max_frames, budget, frame_count), min(2, frame_count))
     return np.unique(np.round(np.linspace(0, frame_count - 1, k)).astype(int))
 
 
-def write_preview(path, positions, mesh, *, times=None, max_frames: int = 60,
-                  size: float = 3.2, dpi: int = 72) -> Path:
-    """Write an animated GIF of a trajectory.
+def _figure(size: float, dpi: int):
+    Figure, FigureCanvasAgg = _matplotlib()
+    fig = Figure(figsize=(size, size), dpi=dpi)
+    FigureCanvasAgg(fig)
+    ax = fig.add_axes((0.13, 0.1, 0.84, 0.82))
+    return fig, ax
+
+
+def write_preview(path, positions, mesh, *, times=None, effects=(), max_frames: int = 60,
+                  size: float = 6.4, dpi: int = 80) -> Path:
+    """Write an animated GIF of a trajectory, with its obstacles and pins.
 
     Parameters
     ----------
@@ -139,29 +299,35 @@ def write_preview(path, positions, mesh, *, times=None, max_frames: int = 60,
         Triangles and strands to draw.
     times : ndarray, shape (F,), optional
         Frame times [s], shown in the title.
+    effects : iterable of Effect, optional
+        Obstacles and pins to draw (see :func:`draw`).
     max_frames : int
         Upper bound on the frames drawn.
     size, dpi
-        Figure size [inch] and resolution.
+        Figure size [inch] and resolution (default 512 × 512 px).
+
+    Returns
+    -------
+    Path
+        ``path``.
     """
     from matplotlib.animation import PillowWriter
 
-    Figure, FigureCanvasAgg = _matplotlib()
     path = Path(path)
     X = np.asarray(positions, dtype=np.float64)
     idx = preview_frame_indices(len(X), len(mesh.triangles), max_frames=max_frames)
-    fig = Figure(figsize=(size, size), dpi=dpi)
-    FigureCanvasAgg(fig)
+    fig, ax = _figure(size, dpi)
     view = View()
-    ax = _axes(fig, view, X[idx])
-    art = _Artist(ax, mesh, view, X[idx[0]], edges=len(mesh.triangles) < 3000)
-    title = fig.suptitle("", fontsize=8)
+    surfaces = obstacle_surfaces(effects, X[idx])
+    _frame(ax, view, X[idx], surfaces)
+    art = _Artist(ax, mesh, view, X[idx[0]], len(mesh.triangles) < 3000, surfaces, effects)
+    title = fig.suptitle("", fontsize=9)
 
-    def draw(j):
-        art.update(X[idx[j]])
+    def frame(j):
+        t = float(times[idx[j]]) if times is not None else 0.0
+        art.update(X[idx[j]], t)
         if times is not None:
-            title.set_text(f"t = {float(times[idx[j]]):.2f} s")
-        return ()
+            title.set_text(f"t = {t:.2f} s")
 
     span = float(times[idx[-1]] - times[idx[0]]) if times is not None and len(idx) > 1 else 0
     fps = max(1.0, min(30.0, (len(idx) - 1) / span)) if span > 0 else 10.0
@@ -169,78 +335,48 @@ def write_preview(path, positions, mesh, *, times=None, max_frames: int = 60,
     writer = PillowWriter(fps=fps)
     with writer.saving(fig, tmp, dpi):  # one draw per frame (FuncAnimation draws twice)
         for j in range(len(idx)):
-            draw(j)
+            frame(j)
             writer.grab_frame()
     tmp.replace(path)
     log.info("wrote %s (%d frames)", path, len(idx))
     return path
 
 
-def write_final_image(path, positions, mesh, *, title: str = "", size: float = 4.0,
-                      dpi: int = 100) -> Path:
-    """Write one frame (positions (n, 3) [m]) of ``mesh`` as a PNG image."""
-    Figure, FigureCanvasAgg = _matplotlib()
+def write_final_image(path, positions, mesh, *, title: str = "", effects=(), t: float = 0.0,
+                      size: float = 6.0, dpi: int = 100) -> Path:
+    """Write one frame of ``mesh`` with its obstacles and pins as a PNG image.
+
+    Parameters
+    ----------
+    path : str or Path
+        Output ``.png``.
+    positions : ndarray, shape (n, 3)
+        Vertex positions [m].
+    mesh : Mesh
+        Triangles and strands to draw.
+    title : str
+        Figure title.
+    effects : iterable of Effect, optional
+        Obstacles and pins to draw (see :func:`draw`).
+    t : float
+        Time of the frame [s].
+    size, dpi
+        Figure size [inch] and resolution (default 600 × 600 px).
+
+    Returns
+    -------
+    Path
+        ``path``.
+    """
     path = Path(path)
-    x = np.asarray(positions, dtype=np.float64)
-    fig = Figure(figsize=(size, size), dpi=dpi)
-    FigureCanvasAgg(fig)
-    view = View()
-    ax = _axes(fig, view, x)
-    _Artist(ax, mesh, view, x, edges=len(mesh.triangles) < 3000)
+    fig, ax = _figure(size, dpi)
+    draw(ax, mesh, positions, effects=effects, t=t)
     if title:
-        fig.suptitle(title, fontsize=9)
+        fig.suptitle(title, fontsize=10)
     tmp = path.with_name(f".{path.stem}.tmp.png")
     fig.savefig(tmp, format="png")
     tmp.replace(path)
     return path
 
 
-def plot_residual_curve(histories, path=None, *, labels=None, ax=None,
-                        title: str = "Residual per iteration"):
-    """Plot relative residual ‖∇g(x_k)‖ / ‖∇g(x_0)‖ against iteration k (log scale).
-
-    Parameters
-    ----------
-    histories : sequence of float, or sequence of sequences
-        One residual history (as in ``StepRecord.residual_history`` or run.json's
-        ``frames[i].residual_history``) or several.
-    path : str or Path, optional
-        Save the figure here (PNG).
-    labels : sequence of str, optional
-        Legend entry per history.
-    ax : matplotlib Axes, optional
-        Draw into it instead of a new figure.
-
-    Returns
-    -------
-    matplotlib.figure.Figure
-    """
-    Figure, FigureCanvasAgg = _matplotlib()
-    hs = list(histories)
-    if hs and np.ndim(hs[0]) == 0:
-        hs = [hs]
-    if ax is None:
-        fig = Figure(figsize=(4.5, 3.2), dpi=100)
-        FigureCanvasAgg(fig)
-        ax = fig.add_subplot()
-    else:
-        fig = ax.figure
-    for i, h in enumerate(hs):
-        r = np.asarray(h, dtype=np.float64)
-        r = np.where(r > 0, r, np.nan)  # an exact zero cannot be drawn on a log scale
-        ax.semilogy(np.arange(len(r)), r, marker=".", ms=3,
-                    label=None if labels is None else labels[i])
-    ax.set_xlabel("iteration k")
-    ax.set_ylabel("‖∇g(x_k)‖ / ‖∇g(x_0)‖")
-    ax.set_title(title, fontsize=9)
-    ax.grid(True, which="both", alpha=0.3)
-    if labels is not None:
-        ax.legend(fontsize=7)
-    fig.tight_layout()
-    if path is not None:
-        fig.savefig(path)
-    return fig
-
-
-__all__ = ["write_preview", "write_final_image", "plot_residual_curve",
-           "preview_frame_indices"]
+__all__ = ["draw", "View", "write_preview", "write_final_image", "preview_frame_indices"]

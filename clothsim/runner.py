@@ -12,6 +12,7 @@ file                 content
                      (frames+1,), ``triangles`` (m, 3), ``springs`` (s, 2),
                      ``strands`` (e, 2), ``vertex_mass`` (n,); float64 / int64
 ``preview.gif``      small animation (at most ~60 frames), ``final.png`` last frame
+``obstacles.vtu``    the scene's obstacles as triangles (only when it has some)
 ``run.json``         resolved scene, effects built, solver and backend, package
                      versions, per-frame iterations/residuals/timings, and status
                      ``"completed"`` or ``"interrupted"`` with the last frame
@@ -38,7 +39,9 @@ from pathlib import Path
 import numpy as np
 
 from . import io
+from .display import obstacle_surfaces, surfaces_mesh  # scene display (issue 12)
 from .errors import InputError
+from .mesh import Mesh  # scene display (issue 12)
 from .scene import Scene, load_scene
 from .simulation import State
 
@@ -231,6 +234,8 @@ def run_scene(scene, out_dir, *, frames: int | None = None,
     writer = io.FrameWriter(out, model.mesh)
     if start == 0:
         writer.write(0, 0.0, positions[0], velocities[0])
+    # --- scene display (issue 12): obstacle surfaces for ParaView, beside the frames ---
+    obstacles_file = write_obstacles(out / OBSTACLES_NAME, sim.effects, positions[0])
     info = {
         "clothsim_run": 1,
         "scene": scene.to_dict(),
@@ -287,12 +292,47 @@ def run_scene(scene, out_dir, *, frames: int | None = None,
 
     files = [out / writer.filename(k) for k in range(frames + 1)]
     files += [out / "trajectory.pvd", out / "trajectory.npz", out / "run.json"]
+    files += [obstacles_file] if obstacles_file is not None else []
     if preview:
         from .plotting import write_final_image, write_preview
-        files.append(write_preview(out / "preview.gif", positions, model.mesh, times=times))
+        files.append(write_preview(out / "preview.gif", positions, model.mesh, times=times,
+                                   effects=sim.effects))
         files.append(write_final_image(out / "final.png", positions[-1], model.mesh,
-                                       title=f"{scene.name}, t = {times[-1]:.2f} s"))
+                                       title=f"{scene.name}, t = {times[-1]:.2f} s",
+                                       effects=sim.effects, t=float(times[-1])))
     return RunResult(out, status, done, records, files)
+
+
+# --- scene display (issue 12) ---------------------------------------------------------
+OBSTACLES_NAME = "obstacles.vtu"
+
+
+def write_obstacles(path: Path, effects, positions) -> Path | None:
+    """Write the obstacles' surfaces as one triangle mesh (``obstacles.vtu`` for ParaView).
+
+    Parameters
+    ----------
+    path : Path
+        Output file (any format :func:`clothsim.io.write_mesh` writes).
+    effects : iterable of Effect
+        The simulation's effects; planes (a square framed on ``positions``), spheres and
+        boxes are written, the others skipped.
+    positions : ndarray, shape (n, 3)
+        Cloth positions [m] the plane's square is framed on.
+
+    Returns
+    -------
+    Path or None
+        ``path``, or None (nothing written) when there is no obstacle. Point data
+        ``obstacle`` holds the index of the surface each vertex belongs to.
+    """
+    surfaces = obstacle_surfaces(effects, positions)
+    if not surfaces:
+        return None
+    x, tris, ids = surfaces_mesh(surfaces)
+    io.write_mesh(path, Mesh(x, tris), point_data={"obstacle": ids})
+    return path
+# --- end scene display ------------------------------------------------------------------
 
 
 def _write_run_json(out: Path, info: dict, status: str, done: int, records: list[dict],

@@ -1,0 +1,186 @@
+"""Scene geometry for display: the surfaces of the obstacles and the pinned points.
+
+The simulation never needs these (obstacles act through their ``correct_positions`` hook);
+pictures and ParaView do. Everything is read from the effects' public attributes:
+
+* :class:`~clothsim.effects.Plane` (``point``, ``normal``, ``thickness``): a finite square
+  quad (two triangles) centred under the cloth, sized to frame it;
+* :class:`~clothsim.effects.Sphere` (``center``, ``radius``): a triangulated UV sphere;
+* :class:`~clothsim.effects.Box` (``min``, ``max``): 8 corners, 12 triangles;
+* :class:`~clothsim.effects.Pin` (``vertices`` once bound, ``targets(t)``): points.
+
+Only numpy is imported here.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+#: Colours (RGB in [0, 1]) of obstacle kinds in the pictures.
+OBSTACLE_COLORS = {"plane": (0.80, 0.80, 0.78), "sphere": (0.85, 0.45, 0.25),
+                   "box": (0.90, 0.60, 0.15)}
+PIN_COLOR = (0.80, 0.10, 0.10)
+
+
+@dataclass(frozen=True)
+class Surface:
+    """A triangulated obstacle surface.
+
+    Attributes
+    ----------
+    kind : str
+        ``"plane"``, ``"sphere"`` or ``"box"``.
+    vertices : ndarray, shape (k, 3), float64
+        Corner positions [m].
+    triangles : ndarray, shape (t, 3), int64
+        Vertex indices of each triangle (outward normals counter-clockwise).
+    """
+
+    kind: str
+    vertices: np.ndarray
+    triangles: np.ndarray
+
+
+def _plane_surface(plane, extent: np.ndarray) -> Surface:
+    n = np.asarray(plane.normal, dtype=np.float64)
+    offset = float(np.asarray(plane.point) @ n) + float(getattr(plane, "thickness", 0.0))
+    lo, hi = extent.min(axis=0), extent.max(axis=0)
+    mid = (lo + hi) / 2
+    half = max(0.75 * float(np.max(hi - lo)), 0.1)
+    c = mid - (mid @ n - offset) * n  # the centre of the cloth projected onto the plane
+    a = np.array([1.0, 0.0, 0.0]) if abs(n[0]) < 0.9 else np.array([0.0, 1.0, 0.0])
+    u = np.cross(n, a)
+    u /= np.linalg.norm(u)
+    v = np.cross(n, u)
+    corners = np.array([c + half * (su * u + sv * v)
+                        for su, sv in ((-1, -1), (1, -1), (1, 1), (-1, 1))])
+    return Surface("plane", corners, np.array([[0, 1, 2], [0, 2, 3]], np.int64))
+
+
+def _sphere_surface(sphere, rings: int = 12, segments: int = 24) -> Surface:
+    theta = np.linspace(0.0, np.pi, rings + 1)[1:-1]
+    phi = np.linspace(0.0, 2 * np.pi, segments, endpoint=False)
+    T, P = np.meshgrid(theta, phi, indexing="ij")
+    ring = np.stack([np.sin(T) * np.cos(P), np.cos(T), np.sin(T) * np.sin(P)], axis=-1)
+    unit = np.vstack([[0.0, 1.0, 0.0], ring.reshape(-1, 3), [0.0, -1.0, 0.0]])
+    tris = []
+    top, bottom = 0, len(unit) - 1
+
+    def idx(i, j):
+        return 1 + i * segments + j % segments
+
+    for j in range(segments):
+        tris.append([top, idx(0, j + 1), idx(0, j)])
+        tris.append([bottom, idx(rings - 2, j), idx(rings - 2, j + 1)])
+        for i in range(rings - 2):
+            a, b, c, d = idx(i, j), idx(i, j + 1), idx(i + 1, j), idx(i + 1, j + 1)
+            tris += [[a, b, d], [a, d, c]]
+    x = np.asarray(sphere.center, float) + float(sphere.radius) * unit
+    return Surface("sphere", x, np.asarray(tris, np.int64))
+
+
+def _box_surface(box) -> Surface:
+    lo, hi = np.asarray(box.min, float), np.asarray(box.max, float)
+    corners = np.array([[(lo, hi)[(k >> a) & 1][a] for a in range(3)] for k in range(8)])
+    # corner k has x from bit 0, y from bit 1, z from bit 2; two triangles per face
+    quads = [(0, 2, 6, 4), (1, 5, 7, 3), (0, 4, 5, 1), (2, 3, 7, 6), (0, 1, 3, 2), (4, 6, 7, 5)]
+    tris = [[q[0], q[1], q[2]] for q in quads] + [[q[0], q[2], q[3]] for q in quads]
+    return Surface("box", corners, np.asarray(tris, np.int64)[:, ::-1].copy())
+
+
+def obstacle_surfaces(effects, extent=None) -> list[Surface]:
+    """Triangulated surfaces of the obstacles among ``effects``.
+
+    Parameters
+    ----------
+    effects : iterable of Effect
+        The effects of a simulation or scene; those that are not obstacles are skipped.
+    extent : array_like, shape (..., 3), optional
+        Points [m] the finite quad of a plane is framed on (the cloth's positions); default
+        a 1 m square about the origin.
+
+    Returns
+    -------
+    list of Surface
+        In the order of ``effects``.
+
+    Examples
+    --------
+    >>> import clothsim as cs
+    >>> [s.triangles.shape for s in obstacle_surfaces([cs.Box([0, 0, 0], [1, 1, 1])])]
+    [(12, 3)]
+    """
+    X = (np.array([[-0.5, 0.0, -0.5], [0.5, 0.0, 0.5]]) if extent is None
+         else np.asarray(extent, dtype=np.float64).reshape(-1, 3))
+    out = []
+    for e in effects:
+        kind = getattr(e, "kind", "")
+        if kind == "plane":
+            out.append(_plane_surface(e, X))
+        elif kind == "sphere":
+            out.append(_sphere_surface(e))
+        elif kind == "box":
+            out.append(_box_surface(e))
+    return out
+
+
+def pinned_points(effects, positions=None, t: float = 0.0) -> np.ndarray:
+    """Positions of pinned vertices (the pins' targets at time ``t``).
+
+    Parameters
+    ----------
+    effects : iterable of Effect
+        Effects of a bound simulation (a pin knows its vertices once bound).
+    positions : ndarray, shape (n, 3), optional
+        When given, the pinned vertices are drawn at these positions [m] instead of at their
+        targets.
+    t : float
+        Time [s] for the targets.
+
+    Returns
+    -------
+    ndarray, shape (p, 3)
+        Points [m]; empty when no pin is bound or active.
+    """
+    pts = [np.zeros((0, 3))]
+    for e in effects:
+        if getattr(e, "kind", "") != "pin" or getattr(e, "model", None) is None:
+            continue
+        if hasattr(e, "active") and not e.active(t):
+            continue
+        if positions is not None:
+            pts.append(np.asarray(positions, float)[e.vertices])
+        else:
+            pts.append(np.asarray(e.targets(t), float).reshape(-1, 3))
+    return np.vstack(pts)
+
+
+def surfaces_mesh(surfaces):
+    """Merge surfaces into one vertex array, triangle array and per-vertex obstacle index.
+
+    Parameters
+    ----------
+    surfaces : sequence of Surface
+        As :func:`obstacle_surfaces` returns them.
+
+    Returns
+    -------
+    vertices : ndarray, shape (k, 3)
+    triangles : ndarray, shape (t, 3), int64
+    obstacle : ndarray, shape (k,), int64
+        Index of the surface each vertex belongs to.
+    """
+    vs, ts, ids, base = [np.zeros((0, 3))], [np.zeros((0, 3), np.int64)], [], 0
+    for i, s in enumerate(surfaces):
+        vs.append(s.vertices)
+        ts.append(s.triangles + base)
+        ids.append(np.full(len(s.vertices), i, np.int64))
+        base += len(s.vertices)
+    obstacle = np.concatenate(ids) if ids else np.zeros(0, np.int64)
+    return np.vstack(vs), np.vstack(ts), obstacle
+
+
+__all__ = ["Surface", "obstacle_surfaces", "pinned_points", "surfaces_mesh",
+           "OBSTACLE_COLORS", "PIN_COLOR"]
