@@ -9,12 +9,14 @@ from __future__ import annotations
 
 from pathlib import Path
 
+from ..effects import EFFECTS
 from ..errors import InputError
 from .checks import (
     Invalid,
     check_keys,
+    constructor_keys,
     integer,
-    is_number,
+    locate,
     number,
     show,
     string,
@@ -51,7 +53,7 @@ _PYTHON_ONLY_KEYS = {"pin": ("motion",)}     # callables: Python API only, not i
 def _vec3(v, path: str, *, point=False) -> list[float]:
     if isinstance(v, (list, tuple)) and len(v) != 3:
         raise Invalid(path, f"expected 3 numbers, got {show(v)}")
-    if not isinstance(v, (list, tuple)) or not all(is_number(x) for x in v):
+    if not isinstance(v, (list, tuple)) or all(isinstance(x, bool) for x in v):
         raise Invalid(path, f"must be a list of 3 numbers, got {show(v)}")
     out = [number(x, f"{path}[{i}]") for i, x in enumerate(v)]
     if point:
@@ -107,8 +109,6 @@ def check_parameter(kind: str, key: str, v, path: str, base_dir: Path):
 
 def validate_effect(e, path: str, vertex_count: int | None, base_dir: Path) -> dict:
     """Check one effect table; return ``{"kind": ..., **parameters}`` (paths resolved)."""
-    from ..effects import EFFECTS
-    from .validate import constructor_keys, locate
     e = table(e, path)
     if "kind" not in e:
         raise Invalid(f"{path}.kind", f"missing: every effect needs a kind ({', '.join(EFFECTS)})")

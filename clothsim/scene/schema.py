@@ -21,6 +21,7 @@ NONE = object()       #: marker: absent means "not used" (no default value)
 
 SHAPES = ("grid", "mesh", "polygon", "jacobson", "files")
 TABLES = ("scene", "cloth", "springs", "solver")
+TOP_KEYS = TABLES + ("effects",)
 
 # Upper bounds that keep a run finite (a larger value is almost surely a typo, and would
 # otherwise hang without a word). Documented in docs/scenes.md through the schema.
@@ -28,6 +29,8 @@ MAX_FRAMES = 10_000_000
 MAX_SUBSTEPS = 10_000
 MAX_ITERATIONS = 100_000
 MAX_NAME = 100
+MAX_VERTICES = 10_000_000
+MIN_H, MAX_H = 1e-9, 1e6  # [s]
 
 
 def sci(n: float) -> str:
@@ -81,7 +84,7 @@ KEYS: tuple[Key, ...] = (
         "Frames per second, > 0. Frame k is at t = k / fps."),
     Key("scene", "substeps", "integer", 1, "",
         f"Implicit Euler steps per frame, 1 ≤ substeps ≤ {sci(MAX_SUBSTEPS)}. "
-        f"The time step is h = 1 / (fps · substeps)."),
+        f"The time step is h = 1 / (fps · substeps), between {MIN_H:g} s and {MAX_H:g} s."),
     Key("scene", "h", "number", NONE, "s",
         "The time step itself, used exactly as written (e.g. `h = 0.0333` for a port whose "
         "step is not 1/integer); one step per frame, frame k at t = k h. Give either `h` or "
@@ -101,8 +104,8 @@ KEYS: tuple[Key, ...] = (
     Key("cloth", "size", "[2] numbers", [1.0, 1.0], "m",
         "Extent along the two grid axes, > 0.", ("grid",)),
     Key("cloth", "resolution", "[2] integers", [21, 21], "",
-        "Vertices `[nx, ny]` along the two axes, each ≥ 2. Vertex (row i, column j) has "
-        "index `i * nx + j`.", ("grid",)),
+        f"Vertices `[nx, ny]` along the two axes, each ≥ 2, nx · ny ≤ {sci(MAX_VERTICES)}. "
+        f"Vertex (row i, column j) has index `i * nx + j`.", ("grid",)),
     Key("cloth", "center", "[3] numbers", [0.0, 0.0, 0.0], "m",
         "Centre of the rectangle (grid) or offset of the outline's origin (polygon).",
         ("grid", "polygon")),
@@ -113,7 +116,8 @@ KEYS: tuple[Key, ...] = (
         "Mesh file `clothsim.mesh.load` reads (OBJ, PLY, STL, MSH, VTU, …).", ("mesh",)),
     Key("cloth", "outline", "array of [2] numbers", REQUIRED, "m",
         "At least 3 corners of a closed outline in the cloth's plane.", ("polygon",)),
-    Key("cloth", "spacing", "number", 0.05, "m", "Target edge length, > 0.", ("polygon",)),
+    Key("cloth", "spacing", "number", 0.05, "m",
+        f"Target edge length, > 0 (at most about {sci(MAX_VERTICES)} vertices).", ("polygon",)),
     Key("cloth", "file", "string (file)", REQUIRED, "",
         "An assignment `.json` file; mesh, springs, masses and pins all come from it.",
         ("jacobson",)),
@@ -229,5 +233,6 @@ def schema_markdown() -> str:
     return "\n".join(out).rstrip() + "\n"
 
 
-__all__ = ["KEYS", "Key", "SHAPES", "TABLES", "REQUIRED", "NONE", "keys", "spec", "default",
-           "schema_markdown", "MAX_FRAMES", "MAX_SUBSTEPS", "MAX_ITERATIONS", "MAX_NAME"]
+__all__ = ["KEYS", "Key", "SHAPES", "TABLES", "TOP_KEYS", "REQUIRED", "NONE", "keys", "spec",
+           "default", "schema_markdown", "sci", "MAX_VERTICES", "MIN_H", "MAX_H", "MAX_FRAMES",
+           "MAX_SUBSTEPS", "MAX_ITERATIONS", "MAX_NAME"]
