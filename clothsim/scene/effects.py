@@ -25,27 +25,12 @@ from .checks import (
     type_name,
 )
 from .files import resolve_path
-from .schema import MAX_ITERATIONS
+from .schema import EFFECT_KEYS, MAX_ITERATIONS
 
 MAX_LENGTH = 1e100  # [m]: coordinates and radii whose squares stay finite
 
-# kind -> key -> type: "vec3" (3 numbers), "point" (3 numbers, a position), "number",
-# "nonneg", "positive", "length" (positive, at most MAX_LENGTH), "string", "strings",
-# "count" (an iteration count), "vertices" (indices or a file), "region", "time" (>= 0)
-PARAMETERS = {
-    "gravity": {"acceleration": "vec3"},
-    "pin": {"vertices": "vertices", "region": "region", "method": "string",
-            "stiffness": "positive", "release": "time", "velocity": "vec3",
-            "index_base": "base"},
-    "plane": {"point": "point", "normal": "vec3", "friction": "nonneg", "thickness": "nonneg"},
-    "sphere": {"center": "point", "radius": "length", "friction": "nonneg"},
-    "box": {"min": "point", "max": "point", "friction": "nonneg"},
-    "impulse": {"center": "point", "radius": "length", "force": "vec3", "start": "number",
-                "duration": "positive"},
-    "wind": {"velocity": "vec3", "drag": "nonneg", "density": "nonneg"},
-    "damping": {"model": "string", "coefficient": "number"},
-    "strain-limit": {"max_strain": "positive", "iterations": "count", "families": "strings"},
-}
+PARAMETERS = {kind: {key: t for key, (t, _unit) in keys.items()}
+              for kind, keys in EFFECT_KEYS.items()}  # kind -> key -> type word
 _SCENE_ONLY = {"pin": ("index_base",)}       # read by the scene, not given to the effect
 _PYTHON_ONLY_KEYS = {"pin": ("motion",)}     # callables: Python API only, not in scene files
 

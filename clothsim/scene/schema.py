@@ -169,6 +169,34 @@ KEYS: tuple[Key, ...] = (
 )
 
 
+# [[effects]]: kind -> key -> (type, unit). The type words are checked by
+# clothsim.scene.effects: "vec3"/"point" 3 numbers (a point within ±1e100 m), "number",
+# "nonneg" (>= 0), "positive" (> 0), "time" (>= 0), "length" (> 0, <= 1e100), "string",
+# "strings", "count" (an iteration count), "vertices" (indices or a file), "region", "base".
+EFFECT_KEYS: dict[str, dict[str, tuple[str, str]]] = {
+    "gravity": {"acceleration": ("vec3", "m/s²")},
+    "pin": {"vertices": ("vertices", ""), "region": ("region", "m"), "method": ("string", ""),
+            "stiffness": ("positive", "N/m"), "release": ("time", "s"),
+            "velocity": ("vec3", "m/s"), "index_base": ("base", "")},
+    "plane": {"point": ("point", "m"), "normal": ("vec3", ""), "friction": ("nonneg", ""),
+              "thickness": ("nonneg", "m")},
+    "sphere": {"center": ("point", "m"), "radius": ("length", "m"), "friction": ("nonneg", "")},
+    "box": {"min": ("point", "m"), "max": ("point", "m"), "friction": ("nonneg", "")},
+    "impulse": {"center": ("point", "m"), "radius": ("length", "m"), "force": ("vec3", "N"),
+                "start": ("number", "s"), "duration": ("positive", "s")},
+    "wind": {"velocity": ("vec3", "m/s"), "drag": ("nonneg", ""),
+             "density": ("nonneg", "kg/m³")},
+    "damping": {"model": ("string", ""), "coefficient": ("number", "")},
+    "strain-limit": {"max_strain": ("positive", ""), "iterations": ("count", ""),
+                     "families": ("strings", "")},
+}
+_TYPE_WORDS = {"vec3": "[3] numbers", "point": "[3] numbers", "number": "number",
+               "nonneg": "number ≥ 0", "positive": "number > 0", "time": "number ≥ 0",
+               "length": "number > 0", "string": "string", "strings": "array of strings",
+               "count": "integer ≥ 1", "vertices": "array of integers, or a file",
+               "region": "table `{min, max}`", "base": "0 or 1 (with a file)"}
+
+
 def keys(table: str, shape: str | None = None) -> tuple[str, ...]:
     """Names of the keys of ``table`` (those a cloth ``shape`` uses, when given)."""
     return tuple(k.name for k in KEYS
@@ -230,9 +258,18 @@ def schema_markdown() -> str:
                 row += f" {', '.join(k.shapes) if k.shapes else 'all'} |"
             out.append(f"{row} {k.meaning} |")
         out.append("")
+    out.append("### `[[effects]]`\n")
+    out.append("Each table has `kind` and the keys of that kind (types checked before the "
+               "effect is built; ranges by the effect).\n")
+    out.append("| kind | key | type | unit |")
+    out.append("|---|---|---|---|")
+    for kind, params in EFFECT_KEYS.items():
+        for name, (t, unit) in params.items():
+            out.append(f"| `{kind}` | `{name}` | {_TYPE_WORDS[t]} | {unit or '—'} |")
     return "\n".join(out).rstrip() + "\n"
 
 
-__all__ = ["KEYS", "Key", "SHAPES", "TABLES", "TOP_KEYS", "REQUIRED", "NONE", "keys", "spec",
+__all__ = ["KEYS", "Key", "SHAPES", "TABLES", "TOP_KEYS", "EFFECT_KEYS", "REQUIRED", "NONE",
+           "keys", "spec",
            "default", "schema_markdown", "sci", "MAX_VERTICES", "MIN_H", "MAX_H", "MAX_FRAMES",
            "MAX_SUBSTEPS", "MAX_ITERATIONS", "MAX_NAME"]

@@ -364,6 +364,11 @@ def test_mutated_scenes_exit_2_naming_a_key_never_a_traceback(tmp_path_factory, 
         assert text.count("\n") == 1, text
         assert re.match(rf"^clothsim: error: {re.escape(str(p))}: [^:\s][^:]*: \S", text), text
         assert len(text) < 600 and "np.float64" not in text and "Traceback" not in text
+        err2 = io.StringIO()       # `run` refuses it the same way, before writing anything
+        with redirect_stderr(err2), redirect_stdout(io.StringIO()):
+            assert cli.main(["run", str(p), "--out", str(p.parent / "o"), "--no-preview"]) == 2
+        assert err2.getvalue() == text
+        assert not list(p.parent.glob("o/*"))
 
 
 def test_errors_carry_their_field():
