@@ -171,7 +171,7 @@ def locate(exc: InputError, default_path: str, kind: str | None = None,
     ``"<prefix>.<key>"``; other fields are prefixed with ``default_path``'s table.
     """
     # one line; a word over 200 characters (a value echoed whole) cut to 60 and "…"
-    message = re.sub(r"(\S{%d})\S{141,}" % ECHO, "\\1…", " ".join(str(exc).split()))
+    message = re.sub(rf"(\S{{{ECHO}}})\S{{141,}}", "\\1…", " ".join(str(exc).split()))
     fld = getattr(exc, "field", None)
     if fld is not None:
         rest = message[len(fld) + 2:] if message.startswith(f"{fld}: ") else message

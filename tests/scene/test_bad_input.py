@@ -382,5 +382,7 @@ def test_errors_carry_their_field():
     assert s.field == "effects[1].radius"
     assert str(s) == "a.toml: effects[1].radius: must be positive"
     assert isinstance(s, InputError) and SceneError("a.toml", "", "x").field is None
+    e2 = pickle.loads(pickle.dumps(e))
+    assert str(e2) == str(e) and e2.field == "vertex_mass[2]"
     s2 = pickle.loads(pickle.dumps(s))
     assert str(s2) == str(s) and s2.field == s.field
