@@ -29,6 +29,9 @@ class InputError(ClothsimError, ValueError):
         super().__init__(message)
         self.field = field
 
+    def __reduce__(self):  # keep .field across pickling (e.g. from a worker process)
+        return type(self), (str(self), self.field)
+
 
 class SceneError(InputError):
     """A scene file is wrong; the message is ``"<file>: <key.path>: <what is wrong>"``.

@@ -30,6 +30,7 @@ from __future__ import annotations
 import re
 
 from ..errors import SceneError
+from ..io.assignment import scene_dict
 from .build import Scene
 from .checks import shorten
 from .files import (
@@ -67,7 +68,6 @@ def load_scene(path_or_name) -> Scene:
     p = find_scene(path_or_name)
     source = str(p)
     if p.suffix.lower() == ".json":
-        from ..io.assignment import scene_dict
         d = scene_dict(p)
         # the scene name comes from the file name, which the user may have spelled freely
         name = re.sub(r"[^\w.-]+", "-", d["scene"]["name"], flags=re.ASCII)

@@ -14,12 +14,20 @@ from pathlib import Path
 
 import numpy as np
 
+from ..effects import EFFECTS, Pin
 from ..errors import InputError, SceneError
-from .checks import Invalid, integer
+from ..io.assignment import read_assignment, read_pins
+from ..io.meshes import load_mesh
+from ..mesh import Mesh, grid
+from ..model import Model
+from ..polygon import polygon
+from ..simulation import Simulation
+from ..springs import FAMILIES, Springs, grid_springs, mesh_springs, springs_from_pairs
+from .checks import Invalid, integer, locate
 from .effects import constructor_params
 from .schema import MAX_SUBSTEPS
 from .tables import read_index_list, read_spring_table, read_triangles, read_values, read_vertices
-from .validate import locate, validate, validate_solver
+from .validate import validate, validate_solver
 
 EPS = float(np.finfo(np.float64).eps)
 
@@ -103,7 +111,6 @@ class Scene:
 
     # -- building
     def _files_mesh(self):
-        from ..mesh import Mesh
         c = self.data["cloth"]
         x = read_vertices(c["vertices"], "cloth.vertices")
         tris = (read_triangles(c["triangles"], "cloth.triangles", c["index_base"], len(x))
@@ -132,25 +139,22 @@ class Scene:
             raise
         except InputError as exc:
             raise self._error(*locate(exc, "cloth")) from None
+        except (OverflowError, RecursionError) as exc:  # e.g. an OBJ index beyond int64
+            key = {"mesh": "cloth.mesh", "jacobson": "cloth.file", "files": "cloth.vertices"}
+            raise self._error(key.get(self.data["cloth"]["shape"], "cloth"),
+                              f"a number is out of range: {exc}") from None
 
     def _build_model(self):
-        from .. import mesh as mesh_mod
-        from ..io.meshes import load_mesh
-        from ..model import Model
-        from ..polygon import polygon
-        from ..springs import FAMILIES, Springs, grid_springs, mesh_springs, springs_from_pairs
 
         c, sp = self.data["cloth"], self.data["springs"]
         shape = c["shape"]
         if shape == "jacobson":
-            from ..io.assignment import read_assignment
             a = read_assignment(c["file"])
             springs = springs_from_pairs(a.mesh, a.spring_pairs, a.stiffness)
             return Model(a.mesh, springs, a.vertex_mass)
         if shape == "grid":
             nx, ny = c["resolution"]
-            mesh = mesh_mod.grid(nx, ny, size=tuple(c["size"]), center=c["center"],
-                                 plane=c["plane"])
+            mesh = grid(nx, ny, size=tuple(c["size"]), center=c["center"], plane=c["plane"])
             springs = grid_springs(mesh, structural=sp.get("structural"),
                                    shear=sp.get("shear"), bending=sp.get("bending"),
                                    bending_pattern=sp["bending_pattern"])
@@ -185,10 +189,8 @@ class Scene:
 
     def _implicit_pins(self, vertex_count: int | None = None) -> list:
         """Pins the cloth's files declare: the assignment's ``b``, the table's attachments."""
-        from ..effects import Pin
         out = []
         if self.data["cloth"]["shape"] == "jacobson":
-            from ..io.assignment import read_pins
             out.append(("cloth.file", Pin(read_pins(self.data["cloth"]["file"]))))
         if "table" in self.data["springs"]:
             if vertex_count is None:
@@ -211,7 +213,6 @@ class Scene:
             raise self._error(exc.path, exc.detail) from None
 
     def _effects(self, model=None) -> list[tuple[str, object]]:
-        from ..effects import EFFECTS
         out = self._implicit_pins(None if model is None else model.vertex_count)
         for i, e in enumerate(self.data["effects"]):
             params = constructor_params(e["kind"], e)
@@ -241,7 +242,6 @@ class Scene:
             Override the steps per frame (h = 1 / (fps · substeps), or ``scene.h`` /
             substeps when the scene gives ``h``).
         """
-        from ..simulation import Simulation
 
         so = self.data["solver"]
         try:
@@ -270,25 +270,33 @@ class Scene:
             raise self._locate(exc, model, h) from None
 
     def _check_stiffness(self, model, h: float) -> None:
-        """Reject springs so stiff that M + h²L cannot be factored in float64."""
-        from ..springs import FAMILIES
+        """Reject springs so stiff that M + h²L cannot be factored in float64.
+
+        When a vertex's mass is at or below the rounding of h² L_ii (m_i ≤ ε h² L_ii), M is
+        lost in M + h²L, which is then as singular as L (free translations): the
+        factorization fails or its answer is noise. The key of the stiffest spring at the
+        worst vertex is named.
+        """
         sv, k = model.springs.spring_vertices, model.springs.spring_stiffness
         if not len(k):
             return
-        m = model.vertex_mass
-        ratio = (h * h) * k / np.minimum(m[sv[:, 0]], m[sv[:, 1]])
-        i = int(np.argmax(ratio))
-        if not ratio[i] * EPS > 0.5:
+        n, m = model.vertex_count, model.vertex_mass
+        diag = np.bincount(sv[:, 0], k, n) + np.bincount(sv[:, 1], k, n)
+        ratio = (h * h) * diag / m
+        v = int(np.argmax(ratio))
+        if ratio[v] * EPS < 1.0:
             return
+        at = np.flatnonzero((sv[:, 0] == v) | (sv[:, 1] == v))
+        i = int(at[np.argmax(k[at])])
         shape = self.data["cloth"]["shape"]
-        generated = model.spring_count - (len(self._spring_table(model.vertex_count).pairs)
+        generated = model.spring_count - (len(self._spring_table(n).pairs)
                                           if "table" in self.data["springs"] else 0)
         key = ("cloth.file" if shape == "jacobson" else "springs.table" if i >= generated
                else f"springs.{FAMILIES[model.springs.spring_family[i]]}")
         raise self._error(key, f"stiffness {float(k[i]):.3g} N/m is too large for h = {h:.3g} s "
-                               f"and vertex mass {float(min(m[sv[i]])):.3g} kg: h²k/m = "
-                               f"{float(ratio[i]):.3g} is beyond 1/(2ε) = {0.5 / EPS:.3g}, "
-                               f"so M + h²L cannot be factored in float64")
+                               f"and vertex {v}'s mass {float(m[v]):.3g} kg: h²L_ii/m_i = "
+                               f"{float(ratio[v]):.3g} is beyond 1/ε = {1 / EPS:.3g}, so the "
+                               f"mass is lost in M + h²L, which cannot be factored in float64")
 
     def _locate(self, exc: InputError, model, h: float) -> SceneError:
         """Name the effect whose binding failed (bind each one alone to find it)."""

@@ -8,10 +8,12 @@ finite, and integers too large for a float are named instead of overflowing late
 from __future__ import annotations
 
 import difflib
+import inspect
 import math
 import re
 
-from .schema import MAX_NAME, sci
+from ..errors import InputError
+from .schema import MAX_NAME, TOP_KEYS, sci
 
 ECHO = 60  # characters of a user's value echoed in a message
 
@@ -153,6 +155,46 @@ def check_finite_everywhere(value, path: str) -> None:
         stack.extend((x, q) for q, x in reversed(items))
 
 
+def constructor_keys(cls) -> tuple[list[str], bool]:
+    """Constructor keyword names of an effect class, and whether it takes **kwargs."""
+    params = inspect.signature(cls).parameters.values()
+    names = [p.name for p in params if p.kind not in (p.VAR_POSITIONAL, p.VAR_KEYWORD)]
+    return names, any(p.kind is p.VAR_KEYWORD for p in params)
+
+
+def locate(exc: InputError, default_path: str, kind: str | None = None,
+           prefix: str | None = None) -> tuple[str, str]:
+    """(key path, reason) of a core :class:`InputError`.
+
+    Uses ``exc.field`` when the raiser set it; otherwise the core's convention that a
+    message starts with ``"<field>: "``. A field ``"<kind>.<key>"`` of an effect becomes
+    ``"<prefix>.<key>"``; other fields are prefixed with ``default_path``'s table.
+    """
+    # one line; a word over 200 characters (a value echoed whole) cut to 60 and "…"
+    message = re.sub(rf"(\S{{{ECHO}}})\S{{141,}}", "\\1…", " ".join(str(exc).split()))
+    fld = getattr(exc, "field", None)
+    if fld is not None:
+        rest = message[len(fld) + 2:] if message.startswith(f"{fld}: ") else message
+    else:
+        head, sep, rest = message.partition(": ")
+        if not sep or not head or " " in head.replace(", ", ","):
+            return default_path, message
+        fld = head
+    if kind is not None and prefix is not None:
+        for lead in (f"effects.{kind}", kind):
+            if fld == lead or fld.startswith((lead + ".", lead + "[")):
+                return prefix + fld[len(lead):], rest
+        return prefix, message
+    if fld.split(".")[0].split("[")[0] in TOP_KEYS:
+        return fld, rest
+    if fld.split(".")[0].split("[")[0] in _CLOTH_FIELDS:
+        return f"cloth.{fld}", rest
+    return default_path, message
+
+
+_CLOTH_FIELDS = ("vertex_mass", "mass_lumping", "mass", "resolution", "size", "center", "plane",
+                 "outline", "spacing", "vertices", "triangles", "strands")
+
 __all__ = ["Invalid", "shorten", "show", "type_name", "suggest", "is_number", "number",
            "integer", "string", "vector", "safe_name", "table", "check_keys",
-           "check_finite_everywhere"]
+           "check_finite_everywhere", "locate", "constructor_keys"]

@@ -9,12 +9,14 @@ from __future__ import annotations
 
 from pathlib import Path
 
+from ..effects import EFFECTS
 from ..errors import InputError
 from .checks import (
     Invalid,
     check_keys,
+    constructor_keys,
     integer,
-    is_number,
+    locate,
     number,
     show,
     string,
@@ -23,27 +25,12 @@ from .checks import (
     type_name,
 )
 from .files import resolve_path
-from .schema import MAX_ITERATIONS
+from .schema import EFFECT_KEYS, MAX_ITERATIONS
 
 MAX_LENGTH = 1e100  # [m]: coordinates and radii whose squares stay finite
 
-# kind -> key -> type: "vec3" (3 numbers), "point" (3 numbers, a position), "number",
-# "nonneg", "positive", "length" (positive, at most MAX_LENGTH), "string", "strings",
-# "count" (an iteration count), "vertices" (indices or a file), "region", "time" (>= 0)
-PARAMETERS = {
-    "gravity": {"acceleration": "vec3"},
-    "pin": {"vertices": "vertices", "region": "region", "method": "string",
-            "stiffness": "positive", "release": "time", "velocity": "vec3",
-            "index_base": "base"},
-    "plane": {"point": "point", "normal": "vec3", "friction": "nonneg", "thickness": "nonneg"},
-    "sphere": {"center": "point", "radius": "length", "friction": "nonneg"},
-    "box": {"min": "point", "max": "point", "friction": "nonneg"},
-    "impulse": {"center": "point", "radius": "length", "force": "vec3", "start": "number",
-                "duration": "positive"},
-    "wind": {"velocity": "vec3", "drag": "nonneg", "density": "nonneg"},
-    "damping": {"model": "string", "coefficient": "number"},
-    "strain-limit": {"max_strain": "positive", "iterations": "count", "families": "strings"},
-}
+PARAMETERS = {kind: {key: t for key, (t, _unit) in keys.items()}
+              for kind, keys in EFFECT_KEYS.items()}  # kind -> key -> type word
 _SCENE_ONLY = {"pin": ("index_base",)}       # read by the scene, not given to the effect
 _PYTHON_ONLY_KEYS = {"pin": ("motion",)}     # callables: Python API only, not in scene files
 
@@ -51,7 +38,7 @@ _PYTHON_ONLY_KEYS = {"pin": ("motion",)}     # callables: Python API only, not i
 def _vec3(v, path: str, *, point=False) -> list[float]:
     if isinstance(v, (list, tuple)) and len(v) != 3:
         raise Invalid(path, f"expected 3 numbers, got {show(v)}")
-    if not isinstance(v, (list, tuple)) or not all(is_number(x) for x in v):
+    if not isinstance(v, (list, tuple)) or all(isinstance(x, bool) for x in v):
         raise Invalid(path, f"must be a list of 3 numbers, got {show(v)}")
     out = [number(x, f"{path}[{i}]") for i, x in enumerate(v)]
     if point:
@@ -107,8 +94,6 @@ def check_parameter(kind: str, key: str, v, path: str, base_dir: Path):
 
 def validate_effect(e, path: str, vertex_count: int | None, base_dir: Path) -> dict:
     """Check one effect table; return ``{"kind": ..., **parameters}`` (paths resolved)."""
-    from ..effects import EFFECTS
-    from .validate import constructor_keys, locate
     e = table(e, path)
     if "kind" not in e:
         raise Invalid(f"{path}.kind", f"missing: every effect needs a kind ({', '.join(EFFECTS)})")

@@ -21,6 +21,7 @@ NONE = object()       #: marker: absent means "not used" (no default value)
 
 SHAPES = ("grid", "mesh", "polygon", "jacobson", "files")
 TABLES = ("scene", "cloth", "springs", "solver")
+TOP_KEYS = TABLES + ("effects",)
 
 # Upper bounds that keep a run finite (a larger value is almost surely a typo, and would
 # otherwise hang without a word). Documented in docs/scenes.md through the schema.
@@ -28,6 +29,8 @@ MAX_FRAMES = 10_000_000
 MAX_SUBSTEPS = 10_000
 MAX_ITERATIONS = 100_000
 MAX_NAME = 100
+MAX_VERTICES = 10_000_000
+MIN_H, MAX_H = 1e-9, 1e6  # [s]
 
 
 def sci(n: float) -> str:
@@ -81,7 +84,7 @@ KEYS: tuple[Key, ...] = (
         "Frames per second, > 0. Frame k is at t = k / fps."),
     Key("scene", "substeps", "integer", 1, "",
         f"Implicit Euler steps per frame, 1 ≤ substeps ≤ {sci(MAX_SUBSTEPS)}. "
-        f"The time step is h = 1 / (fps · substeps)."),
+        f"The time step is h = 1 / (fps · substeps), between {MIN_H:g} s and {MAX_H:g} s."),
     Key("scene", "h", "number", NONE, "s",
         "The time step itself, used exactly as written (e.g. `h = 0.0333` for a port whose "
         "step is not 1/integer); one step per frame, frame k at t = k h. Give either `h` or "
@@ -101,8 +104,8 @@ KEYS: tuple[Key, ...] = (
     Key("cloth", "size", "[2] numbers", [1.0, 1.0], "m",
         "Extent along the two grid axes, > 0.", ("grid",)),
     Key("cloth", "resolution", "[2] integers", [21, 21], "",
-        "Vertices `[nx, ny]` along the two axes, each ≥ 2. Vertex (row i, column j) has "
-        "index `i * nx + j`.", ("grid",)),
+        f"Vertices `[nx, ny]` along the two axes, each ≥ 2, nx · ny ≤ {sci(MAX_VERTICES)}. "
+        f"Vertex (row i, column j) has index `i * nx + j`.", ("grid",)),
     Key("cloth", "center", "[3] numbers", [0.0, 0.0, 0.0], "m",
         "Centre of the rectangle (grid) or offset of the outline's origin (polygon).",
         ("grid", "polygon")),
@@ -113,7 +116,8 @@ KEYS: tuple[Key, ...] = (
         "Mesh file `clothsim.mesh.load` reads (OBJ, PLY, STL, MSH, VTU, …).", ("mesh",)),
     Key("cloth", "outline", "array of [2] numbers", REQUIRED, "m",
         "At least 3 corners of a closed outline in the cloth's plane.", ("polygon",)),
-    Key("cloth", "spacing", "number", 0.05, "m", "Target edge length, > 0.", ("polygon",)),
+    Key("cloth", "spacing", "number", 0.05, "m",
+        f"Target edge length, > 0 (at most about {sci(MAX_VERTICES)} vertices).", ("polygon",)),
     Key("cloth", "file", "string (file)", REQUIRED, "",
         "An assignment `.json` file; mesh, springs, masses and pins all come from it.",
         ("jacobson",)),
@@ -163,6 +167,34 @@ KEYS: tuple[Key, ...] = (
         "Sparse factorization: `\"auto\"` (CHOLMOD if installed, else SuperLU), "
         "`\"cholmod\"`, `\"splu\"`."),
 )
+
+
+# [[effects]]: kind -> key -> (type, unit). The type words are checked by
+# clothsim.scene.effects: "vec3"/"point" 3 numbers (a point within ±1e100 m), "number",
+# "nonneg" (>= 0), "positive" (> 0), "time" (>= 0), "length" (> 0, <= 1e100), "string",
+# "strings", "count" (an iteration count), "vertices" (indices or a file), "region", "base".
+EFFECT_KEYS: dict[str, dict[str, tuple[str, str]]] = {
+    "gravity": {"acceleration": ("vec3", "m/s²")},
+    "pin": {"vertices": ("vertices", ""), "region": ("region", "m"), "method": ("string", ""),
+            "stiffness": ("positive", "N/m"), "release": ("time", "s"),
+            "velocity": ("vec3", "m/s"), "index_base": ("base", "")},
+    "plane": {"point": ("point", "m"), "normal": ("vec3", ""), "friction": ("nonneg", ""),
+              "thickness": ("nonneg", "m")},
+    "sphere": {"center": ("point", "m"), "radius": ("length", "m"), "friction": ("nonneg", "")},
+    "box": {"min": ("point", "m"), "max": ("point", "m"), "friction": ("nonneg", "")},
+    "impulse": {"center": ("point", "m"), "radius": ("length", "m"), "force": ("vec3", "N"),
+                "start": ("number", "s"), "duration": ("positive", "s")},
+    "wind": {"velocity": ("vec3", "m/s"), "drag": ("nonneg", ""),
+             "density": ("nonneg", "kg/m³")},
+    "damping": {"model": ("string", ""), "coefficient": ("number", "")},
+    "strain-limit": {"max_strain": ("positive", ""), "iterations": ("count", ""),
+                     "families": ("strings", "")},
+}
+_TYPE_WORDS = {"vec3": "[3] numbers", "point": "[3] numbers", "number": "number",
+               "nonneg": "number ≥ 0", "positive": "number > 0", "time": "number ≥ 0",
+               "length": "number > 0", "string": "string", "strings": "array of strings",
+               "count": "integer ≥ 1", "vertices": "array of integers, or a file",
+               "region": "table `{min, max}`", "base": "0 or 1 (with a file)"}
 
 
 def keys(table: str, shape: str | None = None) -> tuple[str, ...]:
@@ -226,8 +258,18 @@ def schema_markdown() -> str:
                 row += f" {', '.join(k.shapes) if k.shapes else 'all'} |"
             out.append(f"{row} {k.meaning} |")
         out.append("")
+    out.append("### `[[effects]]`\n")
+    out.append("Each table has `kind` and the keys of that kind (types checked before the "
+               "effect is built; ranges by the effect).\n")
+    out.append("| kind | key | type | unit |")
+    out.append("|---|---|---|---|")
+    for kind, params in EFFECT_KEYS.items():
+        for name, (t, unit) in params.items():
+            out.append(f"| `{kind}` | `{name}` | {_TYPE_WORDS[t]} | {unit or '—'} |")
     return "\n".join(out).rstrip() + "\n"
 
 
-__all__ = ["KEYS", "Key", "SHAPES", "TABLES", "REQUIRED", "NONE", "keys", "spec", "default",
-           "schema_markdown", "MAX_FRAMES", "MAX_SUBSTEPS", "MAX_ITERATIONS", "MAX_NAME"]
+__all__ = ["KEYS", "Key", "SHAPES", "TABLES", "TOP_KEYS", "EFFECT_KEYS", "REQUIRED", "NONE",
+           "keys", "spec",
+           "default", "schema_markdown", "sci", "MAX_VERTICES", "MIN_H", "MAX_H", "MAX_FRAMES",
+           "MAX_SUBSTEPS", "MAX_ITERATIONS", "MAX_NAME"]

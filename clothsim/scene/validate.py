@@ -8,32 +8,43 @@ constructor, whose complaints are mapped to the effect's key path.
 
 from __future__ import annotations
 
-import inspect
 import math
 from pathlib import Path
 from typing import Any
 
-from ..errors import InputError
+from ..factorization import BACKENDS
+from ..mesh import PLANES
+from ..model import MASS_LUMPINGS
+from ..solvers import SOLVERS
+from ..springs import BENDING_PATTERNS
 from . import schema
 from .checks import (
     Invalid,
     check_finite_everywhere,
     check_keys,
     integer,
-    is_number,
     number,
     safe_name,
     show,
     string,
-    suggest,
     table,
     type_name,
     vector,
 )
+from .effects import validate_effect
 from .files import resolve_path
-from .schema import MAX_FRAMES, MAX_ITERATIONS, MAX_SUBSTEPS, SHAPES
+from .schema import (
+    MAX_FRAMES,
+    MAX_H,
+    MAX_ITERATIONS,
+    MAX_SUBSTEPS,
+    MAX_VERTICES,
+    MIN_H,
+    SHAPES,
+    TOP_KEYS,
+    sci,
+)
 
-TOP_KEYS = ("scene", "cloth", "springs", "solver", "effects")
 MAX_LENGTH = 1e100  # coordinates and lengths [m]: squares and sums stay finite
 
 
@@ -53,8 +64,8 @@ def _scene_table(raw: dict, default_name: str) -> dict:
             if key in s:
                 raise Invalid(f"scene.{key}", "give either 'h' or 'fps'/'substeps', not both")
         h = number(s["h"], "scene.h", positive=True)
-        if 1.0 / h > 1e300:
-            raise Invalid("scene.h", f"too small to be a time step, got {h!r}")
+        if not MIN_H <= h <= MAX_H:
+            raise Invalid("scene.h", f"must be between {MIN_H:g} s and {MAX_H:g} s, got {h!r}")
         out.update(h=h, fps=1.0 / h, substeps=1)
         return out
     out["fps"] = number(s.get("fps", d("scene", "fps")), "scene.fps", positive=True)
@@ -65,11 +76,13 @@ def _scene_table(raw: dict, default_name: str) -> dict:
         raise Invalid("scene.fps", f"fps · substeps = {out['fps']!r} · {out['substeps']} "
                                    f"overflows: the time step h = 1 / (fps · substeps) would "
                                    f"be 0")
+    if not MIN_H <= 1.0 / rate <= MAX_H:
+        raise Invalid("scene.fps", f"the time step h = 1 / (fps · substeps) = {1.0 / rate:.3g} s"
+                                   f" must be between {MIN_H:g} s and {MAX_H:g} s")
     return out
 
 
 def _grid(c: dict, cloth: dict) -> int:
-    from ..mesh import PLANES
     d = schema.default
     cloth["size"] = vector(c.get("size", d("cloth", "size")), "cloth.size", 2, positive=True)
     for i, v in enumerate(cloth["size"]):
@@ -81,6 +94,10 @@ def _grid(c: dict, cloth: dict) -> int:
                                           f"{type_name(res)}")
     cloth["resolution"] = [integer(r, f"cloth.resolution[{i}]", minimum=2, maximum=100_000)
                            for i, r in enumerate(res)]
+    if cloth["resolution"][0] * cloth["resolution"][1] > MAX_VERTICES:
+        raise Invalid("cloth.resolution", f"{cloth['resolution'][0]} × "
+                                          f"{cloth['resolution'][1]} vertices is more than "
+                                          f"{sci(MAX_VERTICES)}")
     cloth["center"] = _point(c.get("center", d("cloth", "center")), "cloth.center")
     cloth["plane"] = string(c.get("plane", d("cloth", "plane")), "cloth.plane", choices=PLANES)
     # the spacing must be resolvable at the grid's coordinates (else every vertex collapses)
@@ -102,7 +119,6 @@ def _point(v, path) -> list[float]:
 
 
 def _cloth(raw: dict, base_dir: Path) -> tuple[dict, int | None]:
-    from ..model import MASS_LUMPINGS
     c = table(raw.get("cloth", {}), "cloth")
     check_keys(c, "cloth", schema.keys("cloth"))
     shape = string(c.get("shape", "grid"), "cloth.shape", choices=SHAPES)
@@ -122,7 +138,6 @@ def _cloth(raw: dict, base_dir: Path) -> tuple[dict, int | None]:
         cloth["mesh"] = str(resolve_path(string(c["mesh"], "cloth.mesh"), base_dir,
                                          "cloth.mesh"))
     elif shape == "polygon":
-        from ..mesh import PLANES
         if "outline" not in c:
             raise Invalid("cloth.outline", "missing: give at least 3 [x, y] points")
         outline = c["outline"]
@@ -136,6 +151,12 @@ def _cloth(raw: dict, base_dir: Path) -> tuple[dict, int | None]:
                                   "cloth.spacing", positive=True)
         cloth["center"] = _point(c.get("center", schema.default("cloth", "center")),
                                  "cloth.center")
+        xs, ys = zip(*cloth["outline"])
+        cells = ((max(xs) - min(xs)) / cloth["spacing"]) * ((max(ys) - min(ys))
+                                                            / cloth["spacing"])
+        if cells > MAX_VERTICES:
+            raise Invalid("cloth.spacing", f"{cloth['spacing']!r} m gives about {cells:.3g} "
+                                           f"vertices, more than {sci(MAX_VERTICES)}")
         cloth["plane"] = string(c.get("plane", "xz"), "cloth.plane", choices=PLANES)
     elif shape == "files":
         if "vertices" not in c:
@@ -176,7 +197,6 @@ def _cloth(raw: dict, base_dir: Path) -> tuple[dict, int | None]:
 
 
 def _springs(raw: dict, shape: str, base_dir: Path) -> dict:
-    from ..springs import BENDING_PATTERNS
     sp = table(raw.get("springs", {}), "springs")
     check_keys(sp, "springs", schema.keys("springs"))
     allowed = schema.keys("springs", shape)
@@ -221,8 +241,6 @@ def _springs(raw: dict, shape: str, base_dir: Path) -> dict:
 
 def validate_solver(method, iterations, tolerance, backend) -> dict:
     """Check the ``[solver]`` values (also used for overrides)."""
-    from ..factorization import BACKENDS
-    from ..solvers import SOLVERS
     return {
         "method": string(method, "solver.method", choices=tuple(SOLVERS)),
         "iterations": integer(iterations, "solver.iterations", minimum=1,
@@ -241,7 +259,6 @@ def validate(raw: dict, base_dir: Path, default_name: str) -> dict:
     Invalid
         The first problem, with its key path.
     """
-    from .effects import validate_effect
     table(raw, "")
     check_finite_everywhere(raw, "")
     check_keys(raw, "", TOP_KEYS)
@@ -272,44 +289,4 @@ def validate(raw: dict, base_dir: Path, default_name: str) -> dict:
     return out
 
 
-def constructor_keys(cls) -> tuple[list[str], bool]:
-    """Constructor keyword names of an effect class, and whether it takes **kwargs."""
-    params = inspect.signature(cls).parameters.values()
-    names = [p.name for p in params if p.kind not in (p.VAR_POSITIONAL, p.VAR_KEYWORD)]
-    return names, any(p.kind is p.VAR_KEYWORD for p in params)
-
-
-def locate(exc: InputError, default_path: str, kind: str | None = None,
-           prefix: str | None = None) -> tuple[str, str]:
-    """(key path, reason) of a core :class:`InputError`.
-
-    Uses ``exc.field`` when the raiser set it; otherwise the core's convention that a
-    message starts with ``"<field>: "``. A field ``"<kind>.<key>"`` of an effect becomes
-    ``"<prefix>.<key>"``; other fields are prefixed with ``default_path``'s table.
-    """
-    message = " ".join(str(exc).split())
-    fld = getattr(exc, "field", None)
-    if fld is not None:
-        rest = message[len(fld) + 2:] if message.startswith(f"{fld}: ") else message
-    else:
-        head, sep, rest = message.partition(": ")
-        if not sep or not head or " " in head.replace(", ", ","):
-            return default_path, message
-        fld = head
-    if kind is not None and prefix is not None:
-        for lead in (f"effects.{kind}", kind):
-            if fld == lead or fld.startswith((lead + ".", lead + "[")):
-                return prefix + fld[len(lead):], rest
-        return prefix, message
-    if fld.split(".")[0].split("[")[0] in TOP_KEYS:
-        return fld, rest
-    if fld.split(".")[0].split("[")[0] in _CLOTH_FIELDS:
-        return f"cloth.{fld}", rest
-    return default_path, message
-
-
-_CLOTH_FIELDS = ("vertex_mass", "mass_lumping", "mass", "resolution", "size", "center", "plane",
-                 "outline", "spacing", "vertices", "triangles", "strands")
-
-__all__ = ["validate", "validate_solver", "locate", "constructor_keys", "TOP_KEYS",
-           "is_number", "suggest"]
+__all__ = ["validate", "validate_solver"]

@@ -7,6 +7,7 @@ hostile user tried: wrong types, huge numbers, deep nesting, long strings, odd p
 
 from __future__ import annotations
 
+import numpy as np
 import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
@@ -114,3 +115,274 @@ def test_toml_nan_at_random_index_is_named(data, value):
         Scene.from_dict(parse_toml(text, "s.toml"), source="s.toml")
     expected = repr(float(value))
     assert str(info.value) == f"s.toml: {path}: must be a finite number, got {expected}"
+
+
+# ---------------------------------------------------------------------------- hostile input
+# Each input a hostile user tried that did not name its key: now exit 2, one line, the key.
+GRAVITY_TOML = GRID_TOML + '[[effects]]\nkind = "gravity"\n'
+BIG_INT = "1" + "0" * 400
+HOSTILE = [
+    # (label, scene text, key path, message fragment)
+    ("integer beyond float range", GRID_TOML + f"[scene]\nfps = {BIG_INT}\n", "scene.fps",
+     "an integer of 401 digits is beyond the floating-point range"),
+    ("integer beyond float range in an effect",
+     GRAVITY_TOML + f"acceleration = [0, {BIG_INT}, 0]\n",
+     "effects[0].acceleration[1]", "beyond the floating-point range"),
+    ("integer beyond int64 in a count", f"[solver]\niterations = {2 ** 70}\n",
+     "solver.iterations", f"must be an integer <= 1e5 (larger is almost surely a mistake and "
+                          f"would run for ages), got {2 ** 70}"),
+    ("radius 1e200", GRID_TOML + '[[effects]]\nkind = "sphere"\ncenter = [0, 0, 0]\n'
+     'radius = 1e200\n', "effects[0].radius", "must be at most 1e+100, got 1e+200"),
+    ("stiffness 1e17", '[springs]\nstructural = 1e17\n', "springs.structural",
+     "is too large for h = 0.0333 s"),
+    ("huge substeps", "[scene]\nsubsteps = 100000000\n", "scene.substeps",
+     "must be an integer <= 1e4"),
+    ("huge iterations", "[solver]\niterations = 1000000000\n", "solver.iterations",
+     "must be an integer <= 1e5"),
+    ("huge frames", "[scene]\nframes = 100000000000\n", "scene.frames",
+     "must be an integer <= 1e7"),
+    ("huge grid", "[cloth]\nresolution = [100000, 100000]\n", "cloth.resolution",
+     "100000 × 100000 vertices is more than 1e7"),
+    ("tiny polygon spacing", '[cloth]\nshape = "polygon"\noutline = [[0, 0], [1, 0], [0, 1]]\n'
+     'spacing = 1e-200\n', "cloth.spacing", "more than 1e7"),
+    ("h beyond float rounding", "[scene]\nfps = 1e300\n", "scene.fps",
+     "must be between 1e-09 s and 1e+06 s"),
+    ("word for a vector", GRAVITY_TOML + 'acceleration = "down"\n', "effects[0].acceleration",
+     "must be a list of 3 numbers, got 'down'"),
+    ("booleans for a vector", GRAVITY_TOML + "acceleration = [true, false, true]\n",
+     "effects[0].acceleration", "must be a list of 3 numbers, got [True, False, True]"),
+    ("numeric string", GRID_TOML + '[[effects]]\nkind = "plane"\npoint = [0, 0, 0]\n'
+     'normal = [0, 1, 0]\nfriction = "0.5"\n', "effects[0].friction",
+     "expected a number, got string '0.5'"),
+    ("boolean for a number", "[scene]\nfps = true\n", "scene.fps",
+     "expected a number, got boolean True"),
+    ("numeric string for an integer", '[scene]\nframes = "10"\n', "scene.frames",
+     "expected an integer, got string '10'"),
+    ("wrong type in strain-limit", GRID_TOML + '[[effects]]\nkind = "strain-limit"\n'
+     'families = "structural"\n', "effects[0].families", "expected an array of strings"),
+    ("grid centred at 1e17", "[cloth]\ncenter = [1e17, 0, 0]\n", "cloth.center",
+     "below the rounding of coordinates near 1e+17 m"),
+    ("negative pin release", GRID_TOML + PIN_0 + "release = -1.0\n", "effects[0].release",
+     "must be non-negative, got -1.0"),
+    ("name ..", '[scene]\nname = ".."\n', "scene.name", "use letters, digits"),
+    ("name with a slash", '[scene]\nname = "a/b"\n', "scene.name", "use letters, digits"),
+    ("name with a leading dot", '[scene]\nname = ".hidden"\n', "scene.name", "not starting"),
+    ("name too long", f'[scene]\nname = "{"a" * 101}"\n', "scene.name", "at most 100"),
+    ("directory as mesh", '[cloth]\nshape = "mesh"\nmesh = "folder"\n', "cloth.mesh",
+     "is a directory"),
+    ("OBJ index beyond int64", '[cloth]\nshape = "mesh"\nmesh = "big.obj"\n', "cloth.mesh",
+     "out of range"),
+    ("unknown effect key", GRAVITY_TOML + "strength = 1\n", "effects[0].strength",
+     "unknown key 'strength'"),
+    ("nested value", GRAVITY_TOML + "acceleration = [[0, 1, 0]]\n", "effects[0].acceleration",
+     "expected 3 numbers"),
+]
+
+
+@pytest.mark.parametrize("label, text, path, message", HOSTILE, ids=[c[0] for c in HOSTILE])
+def test_hostile_input_names_the_key(tmp_path, capsys, label, text, path, message):
+    from clothsim import cli
+    (tmp_path / "folder").mkdir()
+    (tmp_path / "big.obj").write_text("v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 " + "9" * 30 + "\n")
+    p = tmp_path / "scene.toml"
+    p.write_text(text)
+    for argv in (["validate", str(p)], ["run", str(p), "--out", str(tmp_path / "o"),
+                                        "--no-preview"]):
+        assert cli.main(argv) == 2
+        out, err = capsys.readouterr()
+        assert err.count("\n") == 1, err
+        assert err.startswith(f"clothsim: error: {p}: {path}: "), err
+        assert message in err, err
+        assert "np.float64" not in err and "Traceback" not in err
+    assert not list(tmp_path.glob("o/*"))     # nothing written for a bad scene
+
+
+def test_huge_value_is_echoed_truncated(tmp_path):
+    from clothsim.scene import SceneError, load_scene
+    p = tmp_path / "s.toml"
+    p.write_text(f'[scene]\nname = "{"x" * 100_000}"\n')
+    with pytest.raises(SceneError) as info:
+        load_scene(p)
+    assert len(str(info.value)) < 400 and "…" in str(info.value)
+    p.write_text(f'[[effects]]\nkind = "{"y" * 100_000}"\n')
+    with pytest.raises(SceneError) as info:
+        load_scene(p)
+    assert len(str(info.value)) < 400 and str(info.value).startswith(f"{p}: effects[0].kind: ")
+
+
+def test_deep_nesting_is_one_line(tmp_path, capsys):
+    from clothsim import cli
+    for i, text in enumerate(["a = " + "[" * 900 + "]" * 900,
+                              '[scene]\nname = ' + "{a = " * 900 + "1" + "}" * 900]):
+        p = tmp_path / f"deep{i}.toml"
+        p.write_text(text + "\n")
+        assert cli.main(["validate", str(p)]) == 2
+        err = capsys.readouterr().err
+        assert err.count("\n") == 1 and "nested too deeply" in err, err
+
+
+def test_byte_order_mark_is_accepted(tmp_path):
+    from clothsim.scene import load_scene
+    p = tmp_path / "bom.toml"
+    p.write_bytes(b"\xef\xbb\xbf[scene]\nframes = 3\n")
+    assert load_scene(p).frames == 3
+
+
+def test_plane_normal_of_huge_numbers_is_not_ignored():
+    from clothsim.scene import Scene
+    s = Scene.from_dict({"cloth": {"resolution": [3, 3]}, "effects": [
+        {"kind": "plane", "point": [0, 0, 0], "normal": [1e300, 1e300, 0]}]})
+    plane = s.build_effects()[0]
+    np.testing.assert_allclose(plane.normal, [2 ** -0.5, 2 ** -0.5, 0.0], rtol=1e-15)
+
+
+def test_assignment_file_name_with_a_space_is_not_a_scene_name_error(tmp_path):
+    from clothsim.scene import data_dir, load_scene
+    src = data_dir() / "single-spring-horizontal.json"
+    if not src.is_file():
+        pytest.skip(f"assignment data not found in {data_dir()}")
+    (tmp_path / "single-spring-horizontal.obj").write_bytes(
+        (data_dir() / "single-spring-horizontal.obj").read_bytes())
+    p = tmp_path / "my spring (copy).json"
+    p.write_bytes(src.read_bytes())
+    scene = load_scene(p)
+    assert scene.name == "jacobson-my-spring-copy-"
+    assert scene.build_model().vertex_count == 2
+
+
+def test_core_error_field_is_used_before_the_message():
+    """The scene layer takes the key from InputError.field, not from parsing the message."""
+    from clothsim.errors import InputError
+    from clothsim.scene.checks import locate
+    assert locate(InputError("anything at all", field="vertex_mass[3]"), "cloth") == \
+        ("cloth.vertex_mass[3]", "anything at all")
+    assert locate(InputError("vertex_mass[3]: must be positive"), "cloth") == \
+        ("cloth.vertex_mass[3]", "must be positive")
+    assert locate(InputError("sphere.radius: bad", field="sphere.radius"), "effects[2]",
+                  "sphere", "effects[2]") == ("effects[2].radius", "bad")
+    assert locate(InputError("no field here"), "cloth") == ("cloth", "no field here")
+
+
+# ---------------------------------------------------------------------------- mutations
+VALID = {
+    "scene": {"name": "m", "frames": 2, "fps": 30, "substeps": 1},
+    "cloth": {"shape": "grid", "size": [1.0, 1.0], "resolution": [4, 4],
+              "center": [0.0, 1.0, 0.0], "plane": "xz", "mass": 1.0},
+    "springs": {"structural": 100.0, "shear": 100.0, "bending": 10.0},
+    "solver": {"method": "local-global", "iterations": 3},
+    "effects": [{"kind": "gravity", "acceleration": [0.0, -9.81, 0.0]},
+                {"kind": "pin", "vertices": [0, 3], "method": "penalty", "stiffness": 1e4},
+                {"kind": "sphere", "center": [0.0, 0.0, 0.0], "radius": 0.3, "friction": 0.1},
+                {"kind": "plane", "point": [0.0, -1.0, 0.0], "normal": [0.0, 1.0, 0.0]},
+                {"kind": "wind", "velocity": [1.0, 0.0, 0.0]},
+                {"kind": "damping", "model": "velocity", "coefficient": 0.01}],
+}
+
+
+def _toml_value(v) -> str:
+    if isinstance(v, bool):
+        return "true" if v else "false"
+    if isinstance(v, (int, float)):
+        return repr(v).replace("inf", "inf").replace("nan", "nan")
+    if isinstance(v, str):
+        return '"' + v.replace("\\", "\\\\").replace('"', '\\"') + '"'
+    if isinstance(v, list):
+        return "[" + ", ".join(_toml_value(x) for x in v) + "]"
+    if isinstance(v, dict):
+        return "{" + ", ".join(f'"{k}" = {_toml_value(x)}' for k, x in v.items()) + "}"
+    raise TypeError(v)
+
+
+def to_toml(doc: dict) -> str:
+    lines = []
+    for key, value in doc.items():
+        if key == "effects" and isinstance(value, list) and all(isinstance(e, dict)
+                                                                for e in value):
+            for e in value:
+                lines.append("[[effects]]")
+                lines += [f'"{k}" = {_toml_value(x)}' for k, x in e.items()]
+        elif isinstance(value, dict):
+            lines.append(f'["{key}"]')
+            lines += [f'"{k}" = {_toml_value(x)}' for k, x in value.items()]
+        else:
+            lines.insert(0, f'"{key}" = {_toml_value(value)}')
+    return "\n".join(lines) + "\n"
+
+
+def _leaves(doc, path=()):
+    if isinstance(doc, dict):
+        for k, v in doc.items():
+            yield from _leaves(v, path + (k,))
+    elif isinstance(doc, list):
+        for i, v in enumerate(doc):
+            yield from _leaves(v, path + (i,))
+    if path:
+        yield path
+
+
+BAD_VALUES = st.sampled_from([
+    True, False, "0.5", "down", "", "x" * 5000, 10 ** 400, -(10 ** 400), 2 ** 63, -1, 0,
+    1e300, -1e300, 1e-300, float("nan"), float("inf"), -0.0, [], [1, 2], [[1.0]], {},
+    {"a": 1}, [True] * 3, 3.5, 123456789,
+])
+
+
+@settings(max_examples=150, deadline=None)
+@given(data=st.data())
+def test_mutated_scenes_exit_2_naming_a_key_never_a_traceback(tmp_path_factory, data):
+    """Mutate a valid scene (a value's type or magnitude, a key's name, extra nesting): the
+    command either accepts it or exits 2 with one line naming a key; never exit 1."""
+    import copy
+    import re
+
+    from clothsim import cli
+    doc = copy.deepcopy(VALID)
+    paths = sorted(_leaves(doc), key=str)
+    path = data.draw(st.sampled_from(paths), label="path")
+    parent = doc
+    for k in path[:-1]:
+        parent = parent[k]
+    how = data.draw(st.sampled_from(["value", "nest", "rename", "extra"]), label="how")
+    if how == "value":
+        parent[path[-1]] = data.draw(BAD_VALUES, label="value")
+    elif how == "nest":
+        parent[path[-1]] = {"deeper": [parent[path[-1]]]}
+    elif how == "rename" and isinstance(parent, dict):
+        parent[path[-1] + "_x"] = parent.pop(path[-1])
+    elif isinstance(parent, dict):
+        parent["surprise"] = data.draw(BAD_VALUES, label="extra")
+    p = tmp_path_factory.mktemp("mut") / "scene.toml"
+    p.write_text(to_toml(doc))
+    import io
+    from contextlib import redirect_stderr, redirect_stdout
+    err = io.StringIO()
+    with redirect_stderr(err), redirect_stdout(io.StringIO()):
+        code = cli.main(["validate", str(p)])
+    text = err.getvalue()
+    assert code in (0, 2), text
+    if code == 2:
+        assert text.count("\n") == 1, text
+        assert re.match(rf"^clothsim: error: {re.escape(str(p))}: [^:\s][^:]*: \S", text), text
+        assert len(text) < 600 and "np.float64" not in text and "Traceback" not in text
+        err2 = io.StringIO()       # `run` refuses it the same way, before writing anything
+        with redirect_stderr(err2), redirect_stdout(io.StringIO()):
+            assert cli.main(["run", str(p), "--out", str(p.parent / "o"), "--no-preview"]) == 2
+        assert err2.getvalue() == text
+        assert not list(p.parent.glob("o/*"))
+
+
+def test_errors_carry_their_field():
+    import pickle
+
+    from clothsim.errors import InputError, SceneError
+    e = InputError("vertex_mass[2]: must be positive", field="vertex_mass[2]")
+    assert e.field == "vertex_mass[2]" and str(e) == "vertex_mass[2]: must be positive"
+    assert InputError("plain").field is None
+    s = SceneError("a.toml", "effects[1].radius", "must be\npositive")
+    assert s.field == "effects[1].radius"
+    assert str(s) == "a.toml: effects[1].radius: must be positive"
+    assert isinstance(s, InputError) and SceneError("a.toml", "", "x").field is None
+    e2 = pickle.loads(pickle.dumps(e))
+    assert str(e2) == str(e) and e2.field == "vertex_mass[2]"
+    s2 = pickle.loads(pickle.dumps(s))
+    assert str(s2) == str(s) and s2.field == s.field
