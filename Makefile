@@ -24,5 +24,5 @@ docs: setup
 	MPLBACKEND=Agg $(PY) -m sphinx -W --keep-going -b html docs docs/_build/html
 
 clean:
-	rm -rf out .pytest_cache .hypothesis docs/_build docs/auto_examples docs/reference/scenes.md \
+	rm -rf out .pytest_cache .hypothesis docs/_build docs/auto_examples \
 		docs/sg_execution_times.rst

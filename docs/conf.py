@@ -2,7 +2,7 @@
 
 MyST Markdown pages, numpydoc API reference, and the sphinx-gallery of lessons in
 ``examples/`` (executed at every build; each lesson also downloadable as a notebook).
-The scene reference is generated at build time from the schema in the code.
+The scene reference in scenes.md is generated from the schema in the code (a test keeps it equal).
 """
 
 from __future__ import annotations
@@ -85,25 +85,6 @@ def setup(app):
     app.connect("autodoc-process-docstring", _escape_bars, priority=100)
 
 
-def _scene_reference() -> None:
-    """Write reference/scenes.md: the schema's own Markdown when the code provides it
-    (``clothsim.scene.schema_markdown``), else the hand-written docs/scenes.md included."""
-    out = HERE / "reference" / "scenes.md"
-    out.parent.mkdir(exist_ok=True)
-    try:
-        from clothsim.scene import schema_markdown
-    except ImportError:
-        schema_markdown = None
-    if schema_markdown is not None:
-        text = ("# Scene reference\n\nGenerated from the schema that validates scenes "
-                "(`clothsim.scene.schema_markdown()`), so it cannot drift from the code.\n\n"
-                + schema_markdown())
-    else:
-        text = "# Scene reference\n\n```{include} ../scenes.md\n:start-line: 1\n```\n"
-    if not out.exists() or out.read_text(encoding="utf-8") != text:
-        out.write_text(text, encoding="utf-8")
-
-
 #: API pages: title, intro and candidate modules. A module that does not exist in this
 #: checkout (the package is being reorganised: io/, scene/, accuracy/, ports/) is skipped,
 #: so the reference always lists exactly the modules there are.
@@ -154,5 +135,4 @@ def _api_pages() -> None:
             out.write_text(text, encoding="utf-8")
 
 
-_scene_reference()
 _api_pages()
