@@ -30,7 +30,7 @@ from ..errors import InputError
 from .common import atomic_path
 
 LOCK_NAME = ".clothsim.lock"
-_CHUNK = 1 << 24  # bytes copied at a time when assembling trajectory.npz
+_CHUNK = 1 << 18  # bytes copied at a time when assembling trajectory.npz (256 kB)
 
 
 def _json_default(obj):
