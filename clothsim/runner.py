@@ -52,6 +52,7 @@ from .io.runfiles import (
     write_json,
     write_trajectory,
 )
+from .plotting import write_final_image, write_preview
 from .scene import Scene, load_scene
 from .simulation import State
 
@@ -307,8 +308,6 @@ def _frame_record(k: int, fps: float, steps: list, tolerance) -> dict:
 
 
 def _previews(out: Path, scene, model, store: TrajectoryStore, fps: float, done: int) -> list:
-    from .plotting import write_final_image, write_preview
-
     positions = store.view("positions", done + 1)  # memory-mapped: only drawn frames load
     times = np.arange(done + 1) / fps
     return [write_preview(out / "preview.gif", positions, model.mesh, times=times),

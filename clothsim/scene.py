@@ -34,7 +34,9 @@ from pathlib import Path
 from typing import Any
 
 from .errors import InputError
-from .io.assignment import AssignmentError
+from .io.assignment import AssignmentError, read_assignment, read_pins, scene_dict
+from .io.meshes import load_mesh
+from .polygon import polygon
 
 DEFAULT_SCENE = "drop-on-square"
 SHAPES = ("grid", "mesh", "polygon", "jacobson")
@@ -508,10 +510,7 @@ class Scene:
         Model
         """
         from . import mesh as mesh_mod
-        from .io.assignment import read_assignment
-        from .io.meshes import load_mesh
         from .model import Model
-        from .polygon import polygon
         from .springs import grid_springs, mesh_springs, springs_from_pairs
 
         c, sp = self.data["cloth"], self.data["springs"]
@@ -555,7 +554,6 @@ class Scene:
         out = []
         if self.data["cloth"]["shape"] == "jacobson":
             from .effects import Pin
-            from .io.assignment import read_pins
             out.append(Pin(read_pins(self.data["cloth"]["file"])))
         for i, e in enumerate(self.data["effects"]):
             params = {k: v for k, v in e.items() if k != "kind"}
@@ -680,7 +678,6 @@ def load_scene(path_or_name) -> Scene:
                                                              "built-in scenes:"))
     source = str(p)
     if p.suffix.lower() == ".json":
-        from .io.assignment import scene_dict
         try:
             doc = scene_dict(p)
         except AssignmentError as exc:

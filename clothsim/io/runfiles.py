@@ -15,6 +15,7 @@ lock.
 
 from __future__ import annotations
 
+import fcntl
 import json
 import math
 import os
@@ -257,8 +258,6 @@ class FolderLock:
         self._fd: int | None = None
 
     def acquire(self) -> FolderLock:
-        import fcntl
-
         fd = os.open(self.path, os.O_RDWR | os.O_CREAT, 0o644)
         try:
             fcntl.flock(fd, fcntl.LOCK_EX | fcntl.LOCK_NB)
