@@ -325,9 +325,12 @@ def _resume_point(out: Path, previous: dict | None, shash: str, frames: int) -> 
         raise InputError(f"{out}: frame files but no readable run.json; cannot check they are "
                          "this scene's, so cannot resume (run without --resume into another "
                          "folder)")
-    if previous.get("scene_hash") != shash:
+    if "scene_hash" not in previous:
+        raise InputError(f"{out}: its run.json has no scene hash (an older clothsim wrote it), "
+                         "so it cannot be checked to be this scene; cannot resume")
+    if previous["scene_hash"] != shash:
         raise InputError(f"{out}: holds a run of a different scene (scene hash "
-                         f"{previous.get('scene_hash')} here, {shash} now); cannot resume")
+                         f"{previous['scene_hash']} here, {shash} now); cannot resume")
     k = 0
     while k < min(last, frames):  # the frames must read back; stop before the first bad one
         try:
