@@ -88,7 +88,7 @@ def main(argv: list[str] | None = None) -> None:
           f"({verdict})")
     print(f"  traced peak, frames 0..{FIRST}:       {r['peak_first'] / MB:8.1f} MB")
     print(f"  traced peak, frames {FIRST}..{args.frames}:     "
-          f"{r['peak_after_first'] / MB:8.1f} MB (+{r['peak_growth'] / MB:.1f} MB)")
+          f"{r['peak_after_first'] / MB:8.1f} MB ({r['peak_growth'] / MB:+.1f} MB)")
     print(f"  peak resident set size:     {r['max_rss'] / MB:8.1f} MB")
 
 
