@@ -21,7 +21,9 @@ SCENE is a scene file (``.toml``, or an assignment ``.json``) or a built-in scen
 
 Exit status: 0 success; 1 any other error (one line on stderr); 2 a bad scene or bad
 arguments (one line: ``clothsim: error: <file>: <key.path>: <message>``, no traceback);
-130 interrupted with Ctrl-C (frames done so far stay readable).
+``run`` interrupted: 130 by Ctrl-C (SIGINT), 143 by SIGTERM, 129 by SIGHUP (frames done so
+far stay readable; run.json says ``interrupted``); ``run`` stopped by a blow-up: 1
+(``frame k: the state became non-finite (…)``, the last finite frame kept).
 
 Warnings (ill-conditioning, missed tolerances, …) go through :mod:`logging`: each kind is
 logged once when it first occurs (with ``-v``) and summarised at the end of the command as
@@ -34,6 +36,7 @@ import argparse
 import logging
 import os
 import re
+import signal
 import sys
 import warnings
 from contextlib import contextmanager
@@ -225,13 +228,21 @@ def _cmd_validate(args) -> int:
 
 
 def _cmd_run(args) -> int:
-    from .runner import run_scene
+    from .runner import NonFiniteStateError, handle_signals, run_scene
     from .scene import DEFAULT_SCENE, load_scene
 
     if args.frames is not None and args.frames < 0:
         return _fail(f"--frames: must be >= 0, got {args.frames}", 2)
     scene = load_scene(args.scene or DEFAULT_SCENE)
-    out = Path(args.out) if args.out else Path("out") / scene.name
+    if args.out:
+        out = Path(args.out)
+    else:  # out/<scene name>, and never anywhere else
+        base = Path("out")
+        out = base / scene.name
+        if (out.resolve().parent != base.resolve() or scene.name in ("", ".", "..")
+                or Path(scene.name).name != scene.name):
+            return _fail(f"scene.name: {scene.name!r} cannot name a folder in out/; "
+                         "use --out DIR", 2)
     frames = scene.frames if args.frames is None else args.frames
     try:
         from tqdm import tqdm
@@ -246,10 +257,16 @@ def _cmd_run(args) -> int:
             bar.refresh()
 
     try:
-        result = run_scene(scene, out, frames=frames, progress=progress, resume=args.resume,
-                           preview=not args.no_preview)
-    except KeyboardInterrupt:
-        return _fail(f"interrupted; complete frames and run.json are in {out}", 130)
+        with handle_signals():
+            result = run_scene(scene, out, frames=frames, progress=progress,
+                               resume=args.resume, preview=not args.no_preview)
+    except KeyboardInterrupt as exc:  # Ctrl-C, SIGTERM, SIGHUP: exit 128 + signal number
+        signum = getattr(exc, "signum", signal.SIGINT)
+        name = signal.Signals(signum).name
+        return _fail(f"interrupted ({name}); complete frames and run.json are in {out}",
+                     128 + signum)
+    except NonFiniteStateError as exc:
+        return _fail(f"{exc}; run.json (status failed) is in {out}", 1)
     finally:
         if bar is not None:
             bar.close()

@@ -18,6 +18,9 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from .io.meshes import write_mesh
+from .mesh import Mesh
+
 #: Colours (RGB in [0, 1]) of obstacle kinds in the pictures.
 OBSTACLE_COLORS = {"plane": (0.80, 0.80, 0.78), "sphere": (0.85, 0.45, 0.25),
                    "box": (0.90, 0.60, 0.15)}
@@ -182,5 +185,37 @@ def surfaces_mesh(surfaces):
     return np.vstack(vs), np.vstack(ts), obstacle
 
 
-__all__ = ["Surface", "obstacle_surfaces", "pinned_points", "surfaces_mesh",
+#: File name of the obstacle surfaces in a run folder (beside ``trajectory.pvd``).
+OBSTACLES_NAME = "obstacles.vtu"
+
+
+def write_obstacles(path, effects, positions) -> object | None:
+    """Write the obstacles' surfaces as one triangle mesh (``obstacles.vtu`` for ParaView).
+
+    Parameters
+    ----------
+    path : path-like
+        Output file (any format :func:`clothsim.io.write_mesh` writes).
+    effects : iterable of Effect
+        The simulation's effects; planes (a square framed on ``positions``), spheres and
+        boxes are written, the others skipped.
+    positions : ndarray, shape (n, 3)
+        Cloth positions [m] the plane's square is framed on.
+
+    Returns
+    -------
+    path or None
+        ``path``, or None (nothing written) when there is no obstacle. Point data
+        ``obstacle`` holds the index of the surface each vertex belongs to.
+    """
+    surfaces = obstacle_surfaces(effects, positions)
+    if not surfaces:
+        return None
+    x, tris, ids = surfaces_mesh(surfaces)
+    write_mesh(path, Mesh(x, tris), point_data={"obstacle": ids})
+    return path
+
+
+__all__ = ["Surface", "obstacle_surfaces", "pinned_points", "surfaces_mesh", "write_obstacles",
+           "OBSTACLES_NAME",
            "OBSTACLE_COLORS", "PIN_COLOR"]

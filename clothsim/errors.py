@@ -96,7 +96,8 @@ def check_finite(name: str, value) -> np.ndarray:
     if bad.any():
         index = np.unravel_index(int(np.flatnonzero(bad)[0]), arr.shape)
         where = f"{name}[{', '.join(str(int(i)) for i in index)}]" if arr.ndim else name
-        raise InputError(f"{where}: must be a finite number, got {float(arr[index])!r}")
+        raise InputError(f"{where}: must be a finite number, got {float(arr[index])!r}",
+                         field=where)
     return arr
 
 
@@ -108,5 +109,5 @@ def check_positive(name: str, value, *, allow_zero: bool = False) -> np.ndarray:
         index = np.unravel_index(int(np.flatnonzero(bad)[0]), arr.shape)
         where = f"{name}[{', '.join(str(int(i)) for i in index)}]" if arr.ndim else name
         rel = "non-negative" if allow_zero else "positive"
-        raise InputError(f"{where}: must be {rel}, got {float(arr[index])!r}")
+        raise InputError(f"{where}: must be {rel}, got {float(arr[index])!r}", field=where)
     return arr

@@ -1,6 +1,7 @@
-"""Run a scene and write its results: frames, trajectory, previews and a run record.
+"""Run a scene into a folder: frames, trajectory, previews and a run record that never lies.
 
-:func:`run_scene` writes into one output directory:
+:func:`run_scene` writes into one output folder (what is written when, what an interruption
+leaves and what ``resume`` guarantees: ``docs/reliability.md``):
 
 ===================  ==============================================================
 file                 content
@@ -10,12 +11,15 @@ file                 content
 ``trajectory.pvd``   ParaView collection of the frames with their times
 ``trajectory.npz``   ``positions``, ``velocities`` (frames+1, n, 3), ``time``
                      (frames+1,), ``triangles`` (m, 3), ``springs`` (s, 2),
-                     ``strands`` (e, 2), ``vertex_mass`` (n,); float64 / int64
-``preview.gif``      small animation (at most ~60 frames), ``final.png`` last frame
+                     ``strands`` (e, 2), ``vertex_mass`` (n,); float64 / int64;
+                     assembled from a store streamed to disk, never held in memory
+``preview.gif``      small animation (at most ~60 frames), ``final.png`` last frame,
+                     both drawing the obstacles and pins
 ``obstacles.vtu``    the scene's obstacles as triangles (only when it has some)
-``run.json``         resolved scene, effects built, solver and backend, package
-                     versions, per-frame iterations/residuals/timings, and status
-                     ``"completed"`` or ``"interrupted"`` with the last frame
+``run.json``         resolved scene and its hash, effects built, solver, backend and
+                     solver state, package versions, per-frame records, and status
+                     (``running``, ``completed``, ``interrupted``, ``failed``) with
+                     the last complete frame; rewritten atomically after every frame
 ===================  ==============================================================
 
 Frame k holds the state at t_k = k / fps. The runner sets each frame's start time to
@@ -25,10 +29,10 @@ bit, what an uninterrupted run computes.
 
 from __future__ import annotations
 
+import copy
+import hashlib
 import json
 import logging
-import math
-import platform
 import re
 import time as _time
 from collections.abc import Callable
@@ -38,10 +42,20 @@ from pathlib import Path
 
 import numpy as np
 
-from . import io
-from .display import obstacle_surfaces, surfaces_mesh  # scene display (issue 12)
-from .errors import InputError
-from .mesh import Mesh  # scene display (issue 12)
+from .display import OBSTACLES_NAME, write_obstacles
+from .errors import ClothsimError, InputError
+from .interrupts import SignalInterrupt, handle_signals, signals_deferred
+from .io.frames import PVD_NAME, FrameWriter, read_frame
+from .io.runfiles import (
+    FolderLock,
+    RunRecord,
+    TrajectoryStore,
+    package_versions,
+    read_json,
+    write_json,
+    write_trajectory,
+)
+from .plotting import write_final_image, write_preview
 from .scene import Scene, load_scene
 from .simulation import State
 
@@ -49,6 +63,12 @@ log = logging.getLogger(__name__)
 
 FRAME_PATTERN = re.compile(r"frame_(\d{6})\.vtu")
 RESULT_FILES = ("trajectory.pvd", "trajectory.npz", "preview.gif", "final.png", "run.json")
+#: Files of an earlier run that a fresh run removes (besides its frame files).
+STALE_FILES = RESULT_FILES + (OBSTACLES_NAME,)
+
+
+class NonFiniteStateError(ClothsimError):
+    """The state became non-finite during a frame (a blow-up); nothing of it was written."""
 
 
 @dataclass
@@ -58,12 +78,12 @@ class RunResult:
     Attributes
     ----------
     out_dir : Path
-    status : {"completed", "interrupted"}
+    status : {"completed", "interrupted", "failed"}
     last_frame : int
         Index of the last complete frame written.
     frames : list of dict
         Per computed frame: ``frame``, ``time`` [s], ``iterations``, ``residual``,
-        ``seconds``, ``converged``.
+        ``seconds``, ``converged`` (None when no tolerance was set), ``residual_history``.
     files : list of Path
         Result files written.
     """
@@ -75,87 +95,28 @@ class RunResult:
     files: list[Path] = field(default_factory=list)
 
 
-def package_versions() -> dict[str, str | None]:
-    """Versions of python and of the packages a run depends on (None if not installed)."""
-    from importlib import metadata
-
-    out: dict[str, str | None] = {"python": platform.python_version()}
-    for dist in ("clothsim", "numpy", "scipy", "meshio", "matplotlib", "scikit-sparse", "tqdm"):
-        try:
-            out[dist] = metadata.version(dist)
-        except metadata.PackageNotFoundError:
-            out[dist] = None
-    return out
-
-
-def _json_default(obj):
-    if isinstance(obj, np.ndarray):
-        return obj.tolist()
-    if isinstance(obj, np.generic):
-        return obj.item()
-    if isinstance(obj, Path):
-        return str(obj)
-    raise TypeError(f"not JSON serializable: {type(obj).__name__}")
-
-
-def _clean(value):
-    """Non-finite floats become strings so run.json stays strict JSON."""
-    if isinstance(value, float) and not math.isfinite(value):
-        return repr(value)
-    if isinstance(value, dict):
-        return {k: _clean(v) for k, v in value.items()}
-    if isinstance(value, (list, tuple)):
-        return [_clean(v) for v in value]
-    return value
-
-
-def _atomic_write(path: Path, write: Callable) -> None:
-    """Write through ``write(file)`` to a temporary file, then move it onto ``path``."""
-    with io.atomic_path(path) as tmp, open(tmp, "wb") as f:
-        write(f)
-
-
-def write_json(path: Path, data: dict) -> None:
-    """Atomically write ``data`` as indented JSON."""
-    plain = json.loads(json.dumps(data, default=_json_default))  # numpy → python
-    text = json.dumps(_clean(plain), indent=1, allow_nan=False)
-    _atomic_write(path, lambda f: f.write(text.encode("utf-8") + b"\n"))
-
-
-def write_trajectory(path: Path, model, positions, velocities, time) -> None:
-    """Atomically write trajectory.npz (see the module docstring for its arrays)."""
-    arrays = dict(positions=np.asarray(positions, np.float64),
-                  velocities=np.asarray(velocities, np.float64),
-                  time=np.asarray(time, np.float64),
-                  triangles=np.asarray(model.mesh.triangles, np.int64),
-                  springs=np.asarray(model.springs.spring_vertices, np.int64),
-                  strands=np.asarray(model.mesh.strands, np.int64),
-                  vertex_mass=np.asarray(model.vertex_mass, np.float64))
-    _atomic_write(path, lambda f: np.savez(f, **arrays))
+def scene_hash(scene: Scene, model) -> str:
+    """SHA-256 (hex, 16 digits) of the resolved scene (without ``scene.frames``) and the
+    model's arrays: what ``resume`` checks before continuing a run."""
+    doc = copy.deepcopy(scene.to_dict())
+    doc.get("scene", {}).pop("frames", None)
+    digest = hashlib.sha256(json.dumps(doc, sort_keys=True, default=str).encode())
+    s = model.springs
+    for a in (model.mesh.vertices, model.mesh.triangles, model.mesh.strands, s.spring_vertices,
+              s.spring_stiffness, s.spring_rest_length, model.vertex_mass):
+        digest.update(np.ascontiguousarray(a).tobytes())
+    return digest.hexdigest()[:16]
 
 
 def completed_frames(out_dir) -> int | None:
     """Index of the last frame k such that frames 0..k all exist in ``out_dir`` (None: none).
 
-    The frames listed in ``trajectory.pvd`` are used when it exists (it lists only
-    complete files); otherwise the ``frame_%06d.vtu`` files on disk.
+    The ``frame_%06d.vtu`` files on disk count (each is written atomically, so each one
+    present is complete), whether or not ``trajectory.pvd`` is readable.
     """
     out = Path(out_dir)
-    pvd = out / "trajectory.pvd"
-    indices: set[int] = set()
-    if pvd.is_file():
-        from .io import read_pvd
-        try:
-            entries = read_pvd(pvd)
-        except InputError:
-            entries = []
-        for _, p in entries:
-            m = FRAME_PATTERN.fullmatch(p.name)
-            if m and p.is_file():
-                indices.add(int(m.group(1)))
-    else:
-        indices = {int(m.group(1)) for p in out.glob("frame_*.vtu")
-                   if (m := FRAME_PATTERN.fullmatch(p.name))}
+    indices = {int(m.group(1)) for p in out.glob("frame_*.vtu")
+               if (m := FRAME_PATTERN.fullmatch(p.name))}
     k = -1
     while k + 1 in indices:
         k += 1
@@ -172,14 +133,19 @@ def run_scene(scene, out_dir, *, frames: int | None = None,
     scene : Scene or str or Path
         A scene, or what :func:`clothsim.scene.load_scene` takes.
     out_dir : str or Path
-        Created if missing.
+        Created if missing. Locked for the whole run. A fresh run replaces the files of an
+        earlier run there (recognised by its ``run.json``) and refuses to delete frame files
+        no run record describes.
     frames : int, optional
         Frames after the initial one (default ``scene.frames``).
     progress : callable, optional
         ``progress(frame, frames)`` after each frame is written (the CLI's progress bar).
     resume : bool
         Continue from the last complete frame in ``out_dir`` (positions and velocities read
-        back from its .vtu file, time = index / fps). Starts afresh when there is none.
+        back from its .vtu file, time = index / fps, the solver's saved state restored).
+        Refuses a folder holding another scene's run; starts afresh when there is nothing.
+        With fewer ``frames`` than on disk, the index and trajectory are cut to ``frames``
+        (frame files are kept).
     preview : bool
         Write preview.gif and final.png (matplotlib) after a completed run.
 
@@ -189,8 +155,11 @@ def run_scene(scene, out_dir, *, frames: int | None = None,
 
     Raises
     ------
-    SceneError
-        Bad scene (before anything is written).
+    SceneError, InputError
+        Bad scene, a folder locked by another run, or one that cannot be resumed or
+        replaced (before anything is written).
+    NonFiniteStateError
+        A frame's state became non-finite: frames 0..k−1 stay, run.json says ``failed``.
     KeyboardInterrupt, Exception
         Propagated after frames 0..k−1, trajectory.npz and run.json (status
         ``"interrupted"``, ``last_frame`` k − 1 and the error) are written.
@@ -200,47 +169,30 @@ def run_scene(scene, out_dir, *, frames: int | None = None,
     frames = scene.frames if frames is None else int(frames)
     if frames < 0:
         raise InputError(f"frames: must be >= 0, got {frames}")
-    out = Path(out_dir)
-    out.mkdir(parents=True, exist_ok=True)
     model = scene.build_model()
     sim = scene.build_simulation(model)
-    fps, substeps = scene.fps, scene.substeps
-    n = model.vertex_count
-    positions = np.zeros((frames + 1, n, 3))
-    velocities = np.zeros((frames + 1, n, 3))
-    times = np.arange(frames + 1) / fps
-    records: list[dict] = []
-    start = 0
+    out = Path(out_dir)
+    out.mkdir(parents=True, exist_ok=True)
+    with FolderLock(out):
+        return _run_locked(scene, model, sim, out, frames, progress, resume, preview)
 
-    last = completed_frames(out) if resume else None
-    if last is not None:
-        last = min(last, frames)
-        for j in range(last + 1):
-            x, v = io.read_frame(out / f"frame_{j:06d}.vtu")
-            if x.shape != (n, 3):
-                raise InputError(f"{out / f'frame_{j:06d}.vtu'}: has {len(x)} vertices, the "
-                                 f"scene has {n}; not the same scene, cannot resume")
-            positions[j], velocities[j] = x, v
-        records = _previous_records(out / "run.json", last)
-        start = last
-        log.info("resuming %s from frame %d", scene.name, last)
-    else:
+
+def _run_locked(scene, model, sim, out: Path, frames: int, progress, resume: bool,
+                preview: bool) -> RunResult:
+    fps, substeps, n = scene.fps, scene.substeps, model.vertex_count
+    shash = scene_hash(scene, model)
+    previous = read_json(out / "run.json")
+    ours = previous is not None and "clothsim_run" in previous
+    start = _resume_point(out, previous, shash, frames) if resume else None
+    resuming = start is not None
+    if not resuming:
         if resume:
             log.info("nothing to resume in %s; starting from frame 0", out)
-        _remove_stale_frames(out)
-        positions[0] = sim.state.positions
-        velocities[0] = sim.state.velocities
-
-    writer = io.FrameWriter(out, model.mesh)
-    if start == 0:
-        writer.write(0, 0.0, positions[0], velocities[0])
-    # --- scene display (issue 12): obstacle surfaces for ParaView, beside the frames ---
-    obstacles_file = write_obstacles(out / OBSTACLES_NAME, sim.effects, positions[0])
+        _clear_earlier_run(out, ours)
+        start = 0
     info = {
-        "clothsim_run": 1,
-        "scene": scene.to_dict(),
-        "source": scene.source,
-        "out_dir": str(out.resolve()),
+        "clothsim_run": 1, "scene": scene.to_dict(), "scene_hash": shash,
+        "source": scene.source, "out_dir": str(out.resolve()),
         "h": sim.h, "fps": fps, "substeps": substeps, "frames_requested": frames,
         "vertex_count": n, "spring_count": model.spring_count,
         "triangle_count": model.mesh.triangle_count, "total_mass": model.total_mass,
@@ -252,117 +204,173 @@ def run_scene(scene, out_dir, *, frames: int | None = None,
                    "iterations": sim.solver.iterations, "tolerance": sim.solver.tolerance},
         "versions": package_versions(),
         "started": datetime.now(UTC).isoformat(timespec="seconds"),
-        "resumed_from": start if resume and start > 0 else None,
+        "resumed_from": start if resuming else None,
     }
-    done = start
-    status, error = "running", None
-    wall = _time.perf_counter()
-    _write_run_json(out, info, status, done, records, error, wall)
+    get_state = getattr(sim.solver, "get_state", lambda: {})
+    run = RunRecord(out, info, _time.perf_counter())
+    store = TrajectoryStore(out, n)
     try:
+        writer = FrameWriter(out, model.mesh)
+        if resuming:
+            for j in range(start + 1):
+                x, v = read_frame(out / writer.filename(j))
+                store.append(x, v)
+            writer.adopt({j: j / fps for j in range(start + 1)})
+            run.records = [r for r in previous.get("frames", [])
+                           if isinstance(r, dict) and 1 <= r.get("frame", 0) <= start]
+            saved = previous.get("solver_state")
+            if saved:
+                getattr(sim.solver, "set_state", lambda state: None)(saved)
+            log.info("resuming %s from frame %d", scene.name, start)
+        else:
+            run.write("running", None)  # the folder is a run folder before any frame exists
+            x, v = sim.state.positions, sim.state.velocities
+            writer.write(0, 0.0, x, v)
+            store.append(x, v)
+        obstacles = write_obstacles(out / OBSTACLES_NAME, sim.effects, model.mesh.vertices)
+        run.done = start
+        run.info["solver_state"] = get_state()
+        run.save_npz(store, model, fps, force=True)
+        run.write("running", None)
         for k in range(start + 1, frames + 1):
             # canonical start time of the frame: identical in fresh and resumed runs
-            sim.state = State(positions[k - 1].copy(), velocities[k - 1].copy(),
-                              (k - 1) / fps, (k - 1) * substeps)
-            steps = [sim.step() for _ in range(substeps)]
-            positions[k], velocities[k] = sim.state.positions, sim.state.velocities
-            writer.write(k, times[k], positions[k], velocities[k])
-            records.append({
-                "frame": k, "time": float(times[k]),
-                "iterations": int(sum(r.iterations for r in steps)),
-                "residual": float(steps[-1].residual),
-                "seconds": float(sum(r.seconds for r in steps)),
-                "converged": bool(all(r.converged for r in steps)),
-                "residual_history": [float(r) for r in steps[-1].residual_history],
-            })
-            done = k
+            sim.state = State(x.copy(), v.copy(), (k - 1) / fps, (k - 1) * substeps)
+            steps = _advance(sim, substeps, k)
+            x, v = sim.state.positions, sim.state.velocities
+            record = _frame_record(k, fps, steps, sim.solver.tolerance)
+            backend = getattr(sim.solver, "backend", None)
+            with signals_deferred():
+                run.info["backend"] = run.info["solver"]["backend"] = backend
+                writer.write(k, k / fps, x, v)
+                store.append(x, v)
+                run.records.append(record)
+                run.done = k
+                run.info["solver_state"] = get_state()
+                run.save_npz(store, model, fps)
+                run.write("running", None)
             if progress is not None:
                 progress(k, frames)
         status = "completed"
+        with signals_deferred():
+            run.finish(store, model, fps, status, None)
+        files = [out / writer.filename(j) for j in range(frames + 1)]
+        files += [out / PVD_NAME, out / "trajectory.npz", out / "run.json"]
+        files += [obstacles] if obstacles is not None else []
+        if preview:
+            files += _previews(out, scene, sim, store, fps, run.done)
+        return RunResult(out, status, run.done, run.records, files)
     except BaseException as exc:
-        status = "interrupted"
+        if run.status in ("completed", "interrupted", "failed"):
+            raise  # the record is final already (an error in the previews)
+        status = "failed" if isinstance(exc, NonFiniteStateError) else "interrupted"
         error = f"{type(exc).__name__}: {' '.join(str(exc).split())}".rstrip(": ")
-        log.info("run of %s interrupted at frame %d: %s", scene.name, done + 1, error)
+        log.info("run of %s stopped at frame %d: %s", scene.name, run.done + 1, error)
+        if run.done >= 0 or not resuming:  # else the earlier run.json stays as it was
+            with signals_deferred():
+                run.finish(store, model, fps, status, error)
         raise
     finally:
-        info["backend"] = getattr(sim.solver, "backend", None)
-        info["solver"]["backend"] = info["backend"]
-        write_trajectory(out / "trajectory.npz", model, positions[:done + 1],
-                         velocities[:done + 1], times[:done + 1])
-        _write_run_json(out, info, status, done, records, error, wall)
-
-    files = [out / writer.filename(k) for k in range(frames + 1)]
-    files += [out / "trajectory.pvd", out / "trajectory.npz", out / "run.json"]
-    files += [obstacles_file] if obstacles_file is not None else []
-    if preview:
-        from .plotting import write_final_image, write_preview
-        files.append(write_preview(out / "preview.gif", positions, model.mesh, times=times,
-                                   effects=sim.effects))
-        files.append(write_final_image(out / "final.png", positions[-1], model.mesh,
-                                       title=f"{scene.name}, t = {times[-1]:.2f} s",
-                                       effects=sim.effects, t=float(times[-1])))
-    return RunResult(out, status, done, records, files)
+        store.close()
 
 
-# --- scene display (issue 12) ---------------------------------------------------------
-OBSTACLES_NAME = "obstacles.vtu"
+def _advance(sim, substeps: int, k: int) -> list:
+    """The substeps of frame k; a non-finite state raises :class:`NonFiniteStateError`."""
+    steps = []
+    for _ in range(substeps):
+        try:
+            steps.append(sim.step())
+        except InputError as exc:  # a blow-up surfaces as the check of the step's new state
+            if _finite(sim.state) and not str(exc.field).startswith("state."):
+                raise
+            raise NonFiniteStateError(_blowup_message(sim, k, str(exc))) from None
+        if not _finite(sim.state):
+            raise NonFiniteStateError(_blowup_message(sim, k))
+    return steps
 
 
-def write_obstacles(path: Path, effects, positions) -> Path | None:
-    """Write the obstacles' surfaces as one triangle mesh (``obstacles.vtu`` for ParaView).
+def _finite(state) -> bool:
+    return bool(np.isfinite(state.positions).all() and np.isfinite(state.velocities).all())
 
-    Parameters
-    ----------
-    path : Path
-        Output file (any format :func:`clothsim.io.write_mesh` writes).
-    effects : iterable of Effect
-        The simulation's effects; planes (a square framed on ``positions``), spheres and
-        boxes are written, the others skipped.
-    positions : ndarray, shape (n, 3)
-        Cloth positions [m] the plane's square is framed on.
 
-    Returns
-    -------
-    Path or None
-        ``path``, or None (nothing written) when there is no obstacle. Point data
-        ``obstacle`` holds the index of the surface each vertex belongs to.
-    """
-    surfaces = obstacle_surfaces(effects, positions)
-    if not surfaces:
+def _blowup_message(sim, k: int, detail: str | None = None) -> str:
+    """One line for a blow-up in frame k; ``detail`` names the first non-finite value when
+    the simulation refused the new state (``sim.state`` is then the last finite one)."""
+    if detail is None:
+        bad = ~(np.isfinite(sim.state.positions).all(1)
+                & np.isfinite(sim.state.velocities).all(1))
+        detail = f"{int(bad.sum())} of {len(bad)} vertices at t = {sim.state.time:.6g} s"
+    else:
+        detail = f"{detail}, in the step from t = {sim.state.time:.6g} s"
+    what = (f"{detail}; a smaller time step, more substeps or softer springs may help; frame "
+            f"{k - 1} is the last one kept")
+    return f"frame {k}: the state became non-finite ({what})"
+
+
+def _frame_record(k: int, fps: float, steps: list, tolerance) -> dict:
+    flags = [getattr(r, "converged", None) for r in steps]
+    # converged means "a tolerance was met": None ("not checked") without a tolerance
+    converged = None if tolerance is None or any(f is None for f in flags) else all(flags)
+    return {"frame": k, "time": k / fps,
+            "iterations": int(sum(r.iterations for r in steps)),
+            "residual": float(steps[-1].residual),
+            "seconds": float(sum(r.seconds for r in steps)),
+            "converged": converged,
+            "residual_history": [float(r) for r in steps[-1].residual_history]}
+
+
+def _previews(out: Path, scene, sim, store: TrajectoryStore, fps: float, done: int) -> list:
+    positions = store.view("positions", done + 1)  # memory-mapped: only drawn frames load
+    times = np.arange(done + 1) / fps
+    mesh = sim.model.mesh
+    return [write_preview(out / "preview.gif", positions, mesh, times=times,
+                          effects=sim.effects),
+            write_final_image(out / "final.png", np.array(positions[-1]), mesh,
+                              title=f"{scene.name}, t = {times[-1]:.2f} s",
+                              effects=sim.effects, t=float(times[-1]))]
+
+
+def _resume_point(out: Path, previous: dict | None, shash: str, frames: int) -> int | None:
+    """The frame to resume from (None: no frame on disk); raises when the folder holds
+    another scene's run or frames no run record describes. Never beyond ``frames``."""
+    last = completed_frames(out)
+    if last is None:
         return None
-    x, tris, ids = surfaces_mesh(surfaces)
-    io.write_mesh(path, Mesh(x, tris), point_data={"obstacle": ids})
-    return path
-# --- end scene display ------------------------------------------------------------------
+    if previous is None or "clothsim_run" not in previous:
+        raise InputError(f"{out}: frame files but no readable run.json; cannot check they are "
+                         "this scene's, so cannot resume (run without --resume into another "
+                         "folder)")
+    if "scene_hash" not in previous:
+        raise InputError(f"{out}: its run.json has no scene hash (an older clothsim wrote it), "
+                         "so it cannot be checked to be this scene; cannot resume")
+    if previous["scene_hash"] != shash:
+        raise InputError(f"{out}: holds a run of a different scene (scene hash "
+                         f"{previous['scene_hash']} here, {shash} now); cannot resume")
+    k = 0
+    while k < min(last, frames):  # the frames must read back; stop before the first bad one
+        try:
+            read_frame(out / f"frame_{k + 1:06d}.vtu")
+        except InputError as exc:
+            log.warning("resuming before %s", exc)
+            break
+        k += 1
+    return k
 
 
-def _write_run_json(out: Path, info: dict, status: str, done: int, records: list[dict],
-                    error: str | None, wall: float) -> None:
-    data = dict(info)
-    data.update(status=status, last_frame=done, error=error,
-                wall_seconds=_time.perf_counter() - wall,
-                finished=(datetime.now(UTC).isoformat(timespec="seconds")
-                          if status != "running" else None),
-                frames=records)
-    write_json(out / "run.json", data)
-
-
-def _previous_records(path: Path, last: int) -> list[dict]:
-    """Per-frame records 1..last of an earlier run.json (empty if unreadable)."""
-    try:
-        data = json.loads(path.read_text(encoding="utf-8"))
-        return [r for r in data.get("frames", []) if 1 <= r.get("frame", 0) <= last]
-    except (OSError, ValueError, AttributeError):
-        return []
-
-
-def _remove_stale_frames(out: Path) -> None:
-    """A fresh run replaces an earlier one: drop its frame files (frame_%06d.vtu only)."""
-    stale = [p for p in out.glob("frame_*.vtu") if FRAME_PATTERN.fullmatch(p.name)]
+def _clear_earlier_run(out: Path, ours: bool) -> None:
+    """A fresh run replaces an earlier one: remove its frames and result files. Frame files
+    without a clothsim run.json beside them are not this program's: refuse."""
+    frames = [p for p in out.glob("frame_*.vtu") if FRAME_PATTERN.fullmatch(p.name)]
+    if frames and not ours:
+        raise InputError(f"{out}: holds {len(frames)} frame files and no clothsim run.json; "
+                         "refusing to delete files clothsim did not write (choose another "
+                         "--out or remove them)")
+    stale = frames + [out / name for name in STALE_FILES if (out / name).exists()]
     for p in stale:
         p.unlink()
     if stale:
-        log.info("removed %d frame files of an earlier run in %s", len(stale), out)
+        log.info("removed %d files of an earlier run in %s", len(stale), out)
 
 
-__all__ = ["run_scene", "RunResult", "completed_frames", "package_versions", "write_json",
-           "write_trajectory", "RESULT_FILES"]
+__all__ = ["run_scene", "RunResult", "completed_frames", "package_versions", "scene_hash",
+           "write_json", "write_trajectory", "handle_signals", "NonFiniteStateError",
+           "SignalInterrupt", "RESULT_FILES", "STALE_FILES"]

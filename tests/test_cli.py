@@ -154,3 +154,40 @@ def test_python_dash_m(tmp_path):
                        capture_output=True, text=True, cwd=tmp_path, timeout=60)
     assert r.returncode == 2 and r.stdout == ""
     assert r.stderr == "clothsim: error: nope.toml: file not found\n"
+
+
+def test_without_out_the_run_stays_in_out_and_never_touches_the_current_folder(
+        tmp_path, monkeypatch, capsys):
+    monkeypatch.chdir(tmp_path)
+    (tmp_path / "frame_000000.vtu").write_text("a file of the user")
+    (tmp_path / "run.json").write_text("{}")
+    assert cli.main(["run", "hanging", "--frames", "1", "--no-preview"]) == 0
+    assert (tmp_path / "frame_000000.vtu").read_text() == "a file of the user"
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["frame_000000.vtu", "out",
+                                                          "run.json"]
+    assert (tmp_path / "out" / "hanging" / "frame_000001.vtu").is_file()
+    capsys.readouterr()
+    scene = tmp_path / "dots.toml"
+    scene.write_text('[scene]\nname = ".."\n[[effects]]\nkind = "gravity"\n')
+    assert cli.main(["run", str(scene), "--frames", "1"]) == 2
+    err = capsys.readouterr().err
+    assert err.count("\n") == 1 and "scene.name" in err
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["dots.toml", "frame_000000.vtu",
+                                                          "out", "run.json"]
+    assert sorted(p.name for p in (tmp_path / "out").iterdir()) == ["hanging"]
+
+
+def test_a_blowup_exits_1_with_one_line(tmp_path, capsys):
+    scene = tmp_path / "blow.toml"
+    scene.write_text('[scene]\nname = "blow"\nframes = 60\n[cloth]\nplane = "xy"\n'
+                     'resolution = [5, 5]\n[springs]\nstructural = 1e9\nshear = 1e9\n'
+                     '[solver]\nmethod = "symplectic-euler"\n[[effects]]\nkind = "gravity"\n')
+    code = cli.main(["run", str(scene), "--out", str(tmp_path / "o"), "--no-preview"])
+    assert code == 1
+    err = capsys.readouterr().err   # the error, then one summary line per warning kind
+    errors = [line for line in err.splitlines() if line.startswith("clothsim: error:")]
+    assert len(errors) == 1 and errors[0].startswith("clothsim: error: frame ")
+    assert "Traceback" not in err and all(line.startswith("clothsim: ")
+                                          for line in err.splitlines())
+    assert "the state became non-finite (" in err
+    assert json.loads((tmp_path / "o" / "run.json").read_text())["status"] == "failed"

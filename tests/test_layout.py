@@ -31,7 +31,7 @@ STAGES = [
     {"io"},
     {"scene"},
     {"display", "plotting"},
-    {"runner"},
+    {"runner", "interrupts"},
     {"accuracy", "ports"},
     {"cli", "__main__", "__init__"},
 ]

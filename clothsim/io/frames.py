@@ -111,6 +111,14 @@ class FrameWriter:
         logger.debug("wrote %s (t = %g s)", path, time)
         return path
 
+    def adopt(self, entries: dict[int, float]) -> None:
+        """Make the collection exactly ``entries`` (index → time [s], frame files already on
+        disk) and rewrite ``trajectory.pvd``; later :meth:`write` calls add to it. Used to
+        resume: the index then lists what is kept, even if the old one was unreadable."""
+        self._started = True
+        self._entries = {int(i): float(t) for i, t in entries.items()}
+        self._write_pvd()
+
     def frames(self) -> list[tuple[int, float, Path]]:
         """(index, time [s], path) of every frame in the collection, by index."""
         return [(i, t, self.out_dir / self.filename(i)) for i, t in sorted(self._entries.items())]

@@ -1,0 +1,84 @@
+"""Ctrl-C, SIGTERM and SIGHUP during a run: one path for all three.
+
+:func:`handle_signals` makes the three signals raise :class:`SignalInterrupt` (a
+:class:`KeyboardInterrupt`); :func:`signals_deferred` holds them while a frame's files and
+its record are written, so a signal never separates the two.
+"""
+
+from __future__ import annotations
+
+import os
+import signal
+import threading
+from collections.abc import Iterator
+from contextlib import contextmanager
+
+SIGNALS = tuple(getattr(signal, s) for s in ("SIGINT", "SIGTERM", "SIGHUP") if hasattr(signal, s))
+
+
+class SignalInterrupt(KeyboardInterrupt):
+    """SIGINT, SIGTERM or SIGHUP arrived during a run (see :func:`handle_signals`).
+
+    Attributes
+    ----------
+    signum : int
+    """
+
+    def __init__(self, signum: int):
+        self.signum = int(signum)
+        super().__init__(signal.Signals(signum).name)
+
+
+@contextmanager
+def handle_signals() -> Iterator[None]:
+    """Within the block, SIGINT, SIGTERM and SIGHUP raise :class:`SignalInterrupt` (once:
+    a second signal while the run cleans up is ignored), so all three take Ctrl-C's path.
+    Does nothing outside the main thread."""
+    if threading.current_thread() is not threading.main_thread():
+        yield
+        return
+    fired: list[int] = []
+
+    def handler(signum, frame):
+        if not fired:
+            fired.append(signum)
+            raise SignalInterrupt(signum)
+
+    old = {s: signal.signal(s, handler) for s in SIGNALS}
+    try:
+        yield
+    finally:
+        for s, h in old.items():
+            signal.signal(s, h)
+
+
+@contextmanager
+def signals_deferred() -> Iterator[None]:
+    """Hold SIGINT/SIGTERM/SIGHUP until the block ends, so a frame's files and its record
+    are written together; a signal that arrived meanwhile is then handled as it would have
+    been (a signal thus interrupts the next frame's computation, never a write). Does
+    nothing outside the main thread."""
+    if threading.current_thread() is not threading.main_thread():
+        yield
+        return
+    pending: list[int] = []
+
+    def hold(signum, frame):
+        pending.append(signum)
+
+    old = {s: signal.signal(s, hold) for s in SIGNALS}
+    try:
+        yield
+    finally:
+        for s, h in old.items():
+            signal.signal(s, h)
+        if pending:
+            signum = pending[0]
+            handler = old[signum]
+            if callable(handler):
+                handler(signum, None)
+            elif handler == signal.SIG_DFL:
+                os.kill(os.getpid(), signum)
+
+
+__all__ = ["SignalInterrupt", "handle_signals", "signals_deferred", "SIGNALS"]

@@ -1,0 +1,288 @@
+"""The files of a run besides its frames: ``run.json``, ``trajectory.npz``, and the folder
+lock.
+
+:class:`TrajectoryStore`
+    Positions and velocities appended frame by frame to two raw float64 files in the run
+    folder, so a run never holds its trajectory in memory; :meth:`TrajectoryStore.write_npz`
+    assembles ``trajectory.npz`` from them in fixed-size chunks.
+:class:`FolderLock`
+    An exclusive :func:`fcntl.flock` on ``<folder>/.clothsim.lock`` for the whole run; a
+    second writer gets an :class:`~clothsim.errors.InputError` naming the folder and the
+    holder's process id.
+:func:`write_json`, :func:`read_json`
+    ``run.json``, written atomically (strict JSON: non-finite floats become strings).
+"""
+
+from __future__ import annotations
+
+import fcntl
+import json
+import math
+import os
+import platform
+import time as _time
+import zipfile
+from datetime import UTC, datetime
+from pathlib import Path
+
+import numpy as np
+
+from ..errors import InputError
+from .common import atomic_path
+
+LOCK_NAME = ".clothsim.lock"
+_CHUNK = 1 << 18  # bytes copied at a time when assembling trajectory.npz (256 kB)
+
+
+def _json_default(obj):
+    if isinstance(obj, np.ndarray):
+        return obj.tolist()
+    if isinstance(obj, np.generic):
+        return obj.item()
+    if isinstance(obj, Path):
+        return str(obj)
+    raise TypeError(f"not JSON serializable: {type(obj).__name__}")
+
+
+def _clean(value):
+    """Non-finite floats become strings so run.json stays strict JSON."""
+    if isinstance(value, float) and not math.isfinite(value):
+        return repr(value)
+    if isinstance(value, dict):
+        return {k: _clean(v) for k, v in value.items()}
+    if isinstance(value, (list, tuple)):
+        return [_clean(v) for v in value]
+    return value
+
+
+def write_json(path, data: dict) -> None:
+    """Atomically write ``data`` as indented, strict JSON (numpy values become Python's)."""
+    plain = json.loads(json.dumps(data, default=_json_default))
+    text = json.dumps(_clean(plain), indent=1, allow_nan=False)
+    with atomic_path(Path(path)) as tmp:
+        tmp.write_bytes(text.encode("utf-8") + b"\n")
+
+
+def read_json(path) -> dict | None:
+    """The JSON object in ``path``, or None when it is missing, unreadable or not an object."""
+    try:
+        data = json.loads(Path(path).read_text(encoding="utf-8"))
+    except (OSError, ValueError):
+        return None
+    return data if isinstance(data, dict) else None
+
+
+class TrajectoryStore:
+    """Positions and velocities of a run, streamed to disk frame by frame.
+
+    Two raw files, ``.positions.f64`` and ``.velocities.f64``, in ``folder`` receive one
+    (n, 3) float64 block per frame; memory use does not depend on the number of frames.
+
+    Parameters
+    ----------
+    folder : Path
+        The run folder (exists).
+    vertex_count : int
+        n.
+    """
+
+    NAMES = ("positions", "velocities")
+
+    def __init__(self, folder, vertex_count: int):
+        self.folder = Path(folder)
+        self.n = int(vertex_count)
+        self.paths = {name: self.folder / f".{name}.f64" for name in self.NAMES}
+        self._files = {name: open(p, "wb") for name, p in self.paths.items()}
+        self.count = 0
+
+    @property
+    def frame_bytes(self) -> int:
+        """Bytes of one frame of one array: 24 n."""
+        return self.n * 3 * 8
+
+    def append(self, positions, velocities) -> None:
+        """Append one frame: positions [m] and velocities [m/s], shape (n, 3) each."""
+        for name, a in zip(self.NAMES, (positions, velocities)):
+            a = np.ascontiguousarray(a, dtype="<f8")
+            if a.shape != (self.n, 3):
+                raise InputError(f"{name}: expected shape ({self.n}, 3), got {a.shape}")
+            self._files[name].write(a.tobytes())
+            self._files[name].flush()
+        self.count += 1
+
+    def view(self, name: str, count: int | None = None) -> np.ndarray:
+        """A read-only memory map of the first ``count`` frames of ``name``, (count, n, 3)."""
+        count = self.count if count is None else int(count)
+        if count == 0:
+            return np.zeros((0, self.n, 3))
+        return np.memmap(self.paths[name], dtype="<f8", mode="r", shape=(count, self.n, 3))
+
+    def write_npz(self, path, count: int, extra: dict[str, np.ndarray]) -> None:
+        """Atomically write ``trajectory.npz``: ``positions`` and ``velocities`` of frames
+        0..count−1 (copied from the raw files in chunks), then the small ``extra`` arrays.
+
+        The archive is what :func:`numpy.savez` writes (stored, not compressed).
+        """
+        count = int(count)
+        if not 0 <= count <= self.count:
+            raise InputError(f"count: must be in 0..{self.count}, got {count}")
+        with atomic_path(Path(path)) as tmp, zipfile.ZipFile(tmp, "w", zipfile.ZIP_STORED,
+                                                             allowZip64=True) as zf:
+            for name in self.NAMES:
+                self._files[name].flush()
+                header = {"descr": np.lib.format.dtype_to_descr(np.dtype("<f8")),
+                          "fortran_order": False, "shape": (count, self.n, 3)}
+                with zf.open(f"{name}.npy", "w", force_zip64=True) as f, \
+                        open(self.paths[name], "rb") as raw:
+                    np.lib.format.write_array_header_1_0(f, header)
+                    left = count * self.frame_bytes
+                    while left > 0:
+                        block = raw.read(min(_CHUNK, left))
+                        if not block:
+                            raise OSError(f"{self.paths[name]}: ends before frame {count}")
+                        f.write(block)
+                        left -= len(block)
+            for name, a in extra.items():
+                with zf.open(f"{name}.npy", "w", force_zip64=True) as f:
+                    np.lib.format.write_array(f, np.asarray(a), allow_pickle=False)
+
+    def close(self, *, remove: bool = True) -> None:
+        """Close the raw files and (by default) delete them."""
+        for f in self._files.values():
+            f.close()
+        if remove:
+            for p in self.paths.values():
+                p.unlink(missing_ok=True)
+
+
+def package_versions() -> dict[str, str | None]:
+    """Versions of python and of the packages a run depends on (None if not installed)."""
+    from importlib import metadata
+
+    out: dict[str, str | None] = {"python": platform.python_version()}
+    for dist in ("clothsim", "numpy", "scipy", "meshio", "matplotlib", "scikit-sparse", "tqdm"):
+        try:
+            out[dist] = metadata.version(dist)
+        except metadata.PackageNotFoundError:
+            out[dist] = None
+    return out
+
+
+def write_trajectory(path: Path, model, positions, velocities, time) -> None:
+    """Atomically write trajectory.npz from in-memory arrays (listed in clothsim.runner)."""
+    arrays = dict(positions=np.asarray(positions, np.float64),
+                  velocities=np.asarray(velocities, np.float64),
+                  time=np.asarray(time, np.float64), **model_arrays(model))
+    with atomic_path(Path(path)) as tmp, open(tmp, "wb") as f:
+        np.savez(f, **arrays)
+
+
+def model_arrays(model) -> dict[str, np.ndarray]:
+    """The arrays trajectory.npz holds besides the trajectory: ``triangles``, ``springs``,
+    ``strands`` (int64) and ``vertex_mass`` (float64)."""
+    return dict(triangles=np.asarray(model.mesh.triangles, np.int64),
+                springs=np.asarray(model.springs.spring_vertices, np.int64),
+                strands=np.asarray(model.mesh.strands, np.int64),
+                vertex_mass=np.asarray(model.vertex_mass, np.float64))
+
+
+class RunRecord:
+    """``run.json`` and ``trajectory.npz`` of a run in progress.
+
+    Parameters
+    ----------
+    out : Path
+        The run folder.
+    info : dict
+        What run.json says besides the status, the last frame and the records.
+    wall : float
+        :func:`time.perf_counter` at the start of the run.
+    """
+
+    def __init__(self, out: Path, info: dict, wall: float):
+        self.out, self.info, self.wall = out, info, wall
+        self.records: list[dict] = []
+        self.done = -1
+        self.status = "running"
+        self.npz_frames: int | None = None
+        self._npz_at = -np.inf   # perf_counter when trajectory.npz was last written
+        self._npz_cost = 0.0     # seconds that took
+
+    def save_npz(self, store: TrajectoryStore, model, fps: float, force: bool = False) -> None:
+        """Rebuild trajectory.npz from the store when forced, or when the time since the last
+        rebuild exceeds both 2 s and 20 × its cost (at most ~5 % of the run's time)."""
+        now = _time.perf_counter()
+        if not force and now - self._npz_at < max(2.0, 20 * self._npz_cost):
+            return
+        count = self.done + 1
+        store.write_npz(self.out / "trajectory.npz", count,
+                        dict(time=np.arange(count) / fps, **model_arrays(model)))
+        self.npz_frames = count
+        self._npz_at = _time.perf_counter()
+        self._npz_cost = self._npz_at - now
+
+    def write(self, status: str, error: str | None) -> None:
+        self.status = status
+        data = dict(self.info)
+        data.update(status=status, last_frame=self.done if self.done >= 0 else None,
+                    trajectory_frames=self.npz_frames, error=error,
+                    wall_seconds=_time.perf_counter() - self.wall,
+                    finished=(datetime.now(UTC).isoformat(timespec="seconds")
+                              if status != "running" else None),
+                    frames=self.records)
+        write_json(self.out / "run.json", data)
+
+    def finish(self, store, model, fps: float, status: str, error: str | None) -> None:
+        if self.done >= 0:
+            self.save_npz(store, model, fps, force=True)
+        self.write(status, error)
+
+
+class FolderLock:
+    """Exclusive lock on a run folder, held from :meth:`acquire` to :meth:`release`.
+
+    Parameters
+    ----------
+    folder : Path
+        The run folder (exists).
+
+    Raises
+    ------
+    InputError
+        From :meth:`acquire`, when another process holds the lock: names the folder and
+        that process's id.
+    """
+
+    def __init__(self, folder):
+        self.path = Path(folder) / LOCK_NAME
+        self._fd: int | None = None
+
+    def acquire(self) -> FolderLock:
+        fd = os.open(self.path, os.O_RDWR | os.O_CREAT, 0o644)
+        try:
+            fcntl.flock(fd, fcntl.LOCK_EX | fcntl.LOCK_NB)
+        except OSError:
+            holder = os.pread(fd, 64, 0).decode("ascii", "replace").strip() or "unknown"
+            os.close(fd)
+            raise InputError(f"{self.path.parent}: another clothsim run (pid {holder}) is "
+                             "writing into this folder; wait for it or choose another "
+                             "--out") from None
+        os.ftruncate(fd, 0)
+        os.pwrite(fd, f"{os.getpid()}\n".encode("ascii"), 0)
+        self._fd = fd
+        return self
+
+    def release(self) -> None:
+        if self._fd is not None:
+            os.close(self._fd)  # closing the descriptor releases the flock
+            self._fd = None
+
+    def __enter__(self) -> FolderLock:
+        return self.acquire()
+
+    def __exit__(self, *exc) -> None:
+        self.release()
+
+
+__all__ = ["TrajectoryStore", "FolderLock", "RunRecord", "write_json", "read_json",
+           "write_trajectory", "model_arrays", "package_versions", "LOCK_NAME"]
