@@ -13,6 +13,7 @@ method                class
 ====================  ===================================================================
 """
 
+from .anderson import AndersonSolver
 from .base import (
     Iterate,
     Solver,
@@ -22,7 +23,6 @@ from .base import (
     objective,
     objective_gradient,
 )
-from .anderson import AndersonSolver
 from .chebyshev import ChebyshevSolver, estimate_spectral_radius
 from .lbfgs import LBFGSSolver
 from .local_global import LocalGlobalSolver
