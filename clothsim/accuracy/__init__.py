@@ -27,6 +27,13 @@ from .damping import (
     single_spring_heights,
 )
 from .paper import paper_report
+from .plots import (
+    plot_convergence,
+    plot_damping,
+    plot_fixed_budget,
+    plot_frontier,
+    plot_solver_accuracy,
+)
 from .problems import RecordedStep, classify, record_problems
 from .reference import CertifiedReference, certified_reference
 from .report import COLUMNS, answer_table, fixed_budget_table
@@ -70,7 +77,9 @@ __all__ = [
     "certified_reference", "cheapest", "cheapest_in_step", "classify", "convergence_slope",
     "converged_solution", "damping_curves", "default_configurations", "energy_curves",
     "fixed_budget_table", "implicit_euler_amplitude", "iterates", "measure",
-    "mechanical_energy", "paper_report", "pareto_front", "prepare_steps", "record_problems",
+    "mechanical_energy", "paper_report", "plot_convergence", "plot_damping",
+    "plot_fixed_budget", "plot_frontier", "plot_solver_accuracy", "pareto_front",
+    "prepare_steps", "record_problems",
     "reference_trajectory", "representative_problem", "run_accuracy", "run_sweep",
     "run_trajectory", "scene_factory", "single_spring", "single_spring_heights",
     "solver_accuracy", "steps_per_frame", "time_step_study", "trace_solver",

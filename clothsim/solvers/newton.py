@@ -14,10 +14,11 @@ Indefinite Hessians (compressed springs, buckling) are handled by ``indefinite``
     buckling directions the gradient does not excite (a planar curtain), the exact Hessian
     is indefinite only across the plane and this keeps Newton quadratic (the shift below
     would damp every direction and converge linearly: 70+ iterations to 1e-6). Otherwise,
-    Levenberg–Marquardt: factor H + τ M with the smallest τ ∈ {τ₀, 10 τ₀, …} that succeeds (τ₀ starts at 1e-6 and
-    follows the last successful shift, Nocedal and Wright Alg. 3.3 with M as metric). This
-    stays as close to the exact Hessian as definiteness allows, so the iteration becomes
-    quadratic as soon as it enters the region where g is convex.
+    Levenberg–Marquardt: factor H + τ M with the smallest τ ∈ {τ₀, 10 τ₀, …} that
+    succeeds (τ₀ starts at 1e-6 and follows the last successful shift; Nocedal and
+    Wright Alg. 3.3 with M as metric). This stays as close to the exact Hessian as
+    definiteness allows, so the iteration becomes quadratic as soon as it enters the
+    region where g is convex.
 ``"project"``
     Each spring's Hessian block is projected onto the positive semidefinite cone (its
     transverse factor 1 − r/l clamped at 0, :func:`clothsim.energy.spring_hessian`) —
