@@ -6,7 +6,8 @@ import importlib
 import sys
 import time
 
-BENCHMARKS = ("stiffness", "crossover", "paper_timing", "sweep", "stability_figures")
+BENCHMARKS = ("stiffness", "crossover", "paper_timing", "sweep", "stability_figures",
+              "accuracy_bench")
 
 
 def main(argv: list[str]) -> int:
