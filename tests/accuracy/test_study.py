@@ -149,3 +149,31 @@ def test_bad_options_are_one_line_errors(tmp_path):
         run_accuracy(Scene.from_dict(TINY), tmp_path, methods=("symplectic-euler",))
     with pytest.raises(InputError, match="accuracy.jobs"):
         run_accuracy(Scene.from_dict(TINY), tmp_path, jobs=0)
+
+
+def test_paper_preset_reports_crossover_and_cost_ratio():
+    from clothsim.accuracy import paper_report
+
+    text = paper_report(n=5, frames=2, repeats=1, max_seconds=0.5)
+    assert "| 1e-01 |" in text and "| 1e-08 |" in text
+    assert "of one Newton iteration" in text
+    assert ("crossover: Newton is faster from error" in text
+            or "no crossover within the measured levels" in text)
+
+
+def test_cli_accuracy_command(tmp_path, capsys):
+    from clothsim.cli import main
+
+    scene = tmp_path / "tiny.toml"
+    scene.write_text('[scene]\nname = "tiny"\nframes = 4\n[cloth]\nresolution = [4, 4]\n'
+                     'plane = "xy"\ncenter = [0.0, 1.0, 0.0]\n[[effects]]\nkind = "gravity"\n'
+                     '[[effects]]\nkind = "pin"\nvertices = [12, 15]\n')
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        code = main(["accuracy", str(scene), "--out", str(tmp_path / "out"), "--quick",
+                     "--methods", "local-global,anderson", "--repeats", "1",
+                     "--no-time-steps", "--no-plots", "--problems", "2"])
+    out = capsys.readouterr().out
+    assert code == 0 and "cheapest setting" in out and "Fixed budget" in out
+    assert (tmp_path / "out" / "accuracy.csv").exists()
+    assert main(["accuracy", str(scene), "--methods", "nope"]) == 2
