@@ -19,6 +19,7 @@ from .problems import record_problems
 from .report import (
     answer_table,
     fixed_budget_table,
+    reference_uncertainty,
     rows,
     steps_table,
     write_csv,
@@ -153,13 +154,14 @@ def run_accuracy(scene, out, *, methods: Sequence[str] = ITERATIVE_METHODS,
     if plots:
         from .plots import plot_fixed_budget
 
-        plot_fixed_budget(table, out / "fixed_budget.png", title=scene.name)
+        plot_fixed_budget(table, out / "fixed_budget.png", title=scene.name,
+                          uncertainty=reference_uncertainty(steps))
     levels = (target,) if target is not None else ACCURACY_LEVELS
     measured = kinds.count("measured")
     text = [f"# accuracy of {scene.name}: h = {h:.4g} s, {measured} of {len(steps)} recorded "
             f"steps measured ({kinds.count('at-rest')} at rest, {kinds.count('trivial')} "
             f"trivial, {kinds.count('two-minima')} with two minima)", "",
-            answer_table(table, levels=levels,
+            answer_table(table, levels=levels, uncertainty=reference_uncertainty(steps),
                          trajectory_levels=TRAJECTORY_LEVELS if traj else ()), "",
             "Fixed budget (solver error after k iterations per step):", "",
             fixed_budget_table(table), ""]

@@ -173,23 +173,28 @@ def plot_damping(path, *, h: float = 1 / 30, steps: int = 90,
 
 
 
-def plot_fixed_budget(table, path, *, title: str = "",
-                      budgets: Sequence[int] = (1, 2, 5, 10, 20, 50, 100, 200)) -> Path:
-    """Solver error (median, with the p90 as a band edge) against iterations per step."""
+def plot_fixed_budget(table, path, *, title: str = "", uncertainty: float = 0.0) -> Path:
+    """Solver error (median; dotted: p90) against iterations per step; levels below the
+    reference's ``uncertainty`` are not plotted (a grey band marks them)."""
     plt = _pyplot()
     fig, ax = plt.subplots(figsize=(6.4, 4.4))
     for method in dict.fromkeys(r.method for r in table):
         pts = sorted((r.iterations, r.solver_error_median, r.solver_error_p90) for r in table
                      if r.method == method and r.tolerance is None
-                     and math.isfinite(r.solver_error_median) and r.solver_error_median > 0)
+                     and math.isfinite(r.solver_error_median)
+                     and r.solver_error_median > max(uncertainty, 0.0))
         if not pts:
             continue
         k, med, p90 = np.array(pts).T
+        p90 = np.where(p90 > uncertainty, p90, np.nan)
         c = _COLORS.get(method)
         ax.loglog(k, med, "-o", ms=3, color=c, label=f"{method} (median)")
         ax.loglog(k, p90, ":", color=c, lw=1)
     for b in (5, 10, 20):
         ax.axvline(b, color="0.85", lw=0.6, zorder=0)
+    if uncertainty > 0:
+        ax.axhspan(ax.get_ylim()[0], uncertainty, color="0.9", zorder=0,
+                   label="below the reference's uncertainty")
     ax.set_xlabel("iterations per step")
     ax.set_ylabel("solver error ‖x − x*‖ / ‖x* − x_n‖ (dotted: p90)")
     ax.grid(True, which="both", alpha=0.3)

@@ -111,14 +111,21 @@ def cheapest(table: Sequence[Row], level: float, *, error: str = "solver_error_p
 
 
 def answer_table(table: Sequence[Row], *, levels: Sequence[float] = ACCURACY_LEVELS,
-                 trajectory_levels: Sequence[float] = (),
-                 ) -> str:
-    """The answer: for each target, the cheapest setting with its time and spread."""
+                 trajectory_levels: Sequence[float] = (), uncertainty: float = 0.0) -> str:
+    """The answer: for each target, the cheapest setting with its time and spread.
+
+    Solver-error levels below ``uncertainty`` (the largest reference uncertainty over the
+    measured steps) are not answered: the reference cannot tell them apart.
+    """
     lines = ["| target | error measured | cheapest setting | ms/step (median) | IQR [ms] |",
              "|---|---|---|---|---|"]
     for col, name, levs in (("solver_error_p90", "solver error (p90 over steps)", levels),
                             ("trajectory_error", "trajectory error", trajectory_levels)):
         for level in levs:
+            if col == "solver_error_p90" and level < uncertainty:
+                lines.append(f"| {level:.0e} | {name} | below the reference's uncertainty "
+                             f"{uncertainty:.1e}: not measurable | | |")
+                continue
             r = cheapest(table, level, error=col)
             if r is None:
                 lines.append(f"| {level:.0e} | {name} | no setting reaches this | | |")
@@ -143,6 +150,13 @@ def fixed_budget_table(table: Sequence[Row], budgets: Sequence[int] = FIXED_BUDG
                          f"{r.solver_error_median:.1e} / {r.solver_error_p90:.1e}")
         lines.append(f"| {m} | " + " | ".join(cells) + " |")
     return "\n".join(lines)
+
+
+def reference_uncertainty(steps: Sequence[StudyStep]) -> float:
+    """Largest reference uncertainty over the measured steps (0 when none)."""
+    u = [s.reference.uncertainty for s in steps if s.kind == "measured"
+         and s.reference is not None and math.isfinite(s.reference.uncertainty)]
+    return max(u, default=0.0)
 
 
 def steps_table(steps: Sequence[StudyStep]) -> str:
