@@ -7,7 +7,7 @@ import sys
 import time
 
 BENCHMARKS = ("stiffness", "crossover", "paper_timing", "sweep", "stability_figures",
-              "performance", "memory")
+              "performance", "memory", "accuracy_bench")
 
 
 def main(argv: list[str]) -> int:

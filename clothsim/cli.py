@@ -116,14 +116,32 @@ def build_parser() -> argparse.ArgumentParser:
 
     _add_port_commands(sub)
 
-    acc = sub.add_parser("accuracy", help="accuracy and cost sweep of the solvers on a scene")
-    try:
-        from . import accuracy
-    except ImportError:
-        acc.add_argument("rest", nargs=argparse.REMAINDER)
-        acc.set_defaults(accuracy_missing=True)
-    else:
-        accuracy.add_arguments(acc)
+    acc = sub.add_parser("accuracy", help="what accuracy costs in time: every solver on the "
+                                          "same recorded steps of a scene")
+    acc.add_argument("scene", nargs="?", default="hanging",
+                     help="scene name or TOML path (default: hanging)")
+    acc.add_argument("--out", default="accuracy-out", help="output directory")
+    acc.add_argument("--methods", default=None,
+                     help="comma-separated solvers (default: local-global,chebyshev,anderson,"
+                          "lbfgs,newton)")
+    acc.add_argument("--problems", type=int, default=8,
+                     help="step problems recorded along the run (default 8)")
+    acc.add_argument("--frames", type=int, default=None,
+                     help="frames of the recorded run (default: the scene's)")
+    acc.add_argument("--repeats", type=int, default=5, help="interleaved timing repeats (5)")
+    acc.add_argument("--target", type=float, default=None,
+                     help="report only this solver-error level (e.g. 1e-6)")
+    acc.add_argument("--jobs", type=int, default=1, help="parallel workers (joblib)")
+    acc.add_argument("--scheduler", default=None, metavar="ADDRESS",
+                     help="Dask scheduler address (joblib's dask backend)")
+    acc.add_argument("--no-time-steps", action="store_true",
+                     help="skip the time-step error runs")
+    acc.add_argument("--no-plots", action="store_true", help="write no figures")
+    acc.add_argument("--quick", action="store_true",
+                     help="few problems, budgets and repeats (a first look, not for a referee)")
+    acc.add_argument("--paper", action="store_true",
+                     help="the paper's Fig. 1 setup: local/global against Newton (crossover)")
+    acc.add_argument("--paper-size", type=int, default=41, help="vertices per side (--paper)")
     return parser
 
 
@@ -451,11 +469,25 @@ def _cmd_conformance(args) -> int:
 
 
 def _cmd_accuracy(args) -> int:
-    if getattr(args, "accuracy_missing", False):
-        return _fail("accuracy: this installation has no clothsim.accuracy module", 1)
     from . import accuracy
 
-    return int(accuracy.command(args) or 0)
+    if args.paper:
+        print(accuracy.paper_report(n=args.paper_size, repeats=args.repeats))
+        return 0
+    from .scene import load_scene
+
+    scene = load_scene(args.scene)
+    kw = {}
+    if args.methods:
+        kw["methods"] = tuple(m.strip() for m in args.methods.split(",") if m.strip())
+    if args.quick:
+        kw.update(budgets=(1, 5, 10, 20, 100), tolerances=(1e-3, 1e-6),
+                  problems=min(args.problems, 4))
+    print(accuracy.run_accuracy(
+        scene, args.out, problems=kw.pop("problems", args.problems), frames=args.frames,
+        repeats=args.repeats, jobs=args.jobs, scheduler=args.scheduler, target=args.target,
+        time_steps=not args.no_time_steps, plots=not args.no_plots, **kw))
+    return 0
 
 
 COMMANDS = {"run": _cmd_run, "scenes": _cmd_scenes, "validate": _cmd_validate,

@@ -5,6 +5,8 @@ method                class
 ====================  ===================================================================
 ``local-global``      :class:`LocalGlobalSolver` (Liu et al. 2013, the paper)
 ``chebyshev``         :class:`ChebyshevSolver` (local/global + Chebyshev, Wang 2015)
+``anderson``          :class:`AndersonSolver` (local/global + Anderson, Peng et al. 2018)
+``lbfgs``             :class:`LBFGSSolver` (L-BFGS, H₀ = (M + h²L)⁻¹, Liu et al. 2017)
 ``newton``            :class:`NewtonSolver` (exact reference, line search)
 ``symplectic-euler``  :class:`SymplecticEulerSolver` (explicit baseline: a different
                       integrator, no optimization; stable only for h < 2/ω_max)
@@ -19,8 +21,10 @@ from ..problem import (
     objective,
     objective_gradient,
 )
+from .anderson import AndersonSolver
 from .base import Iterate, Solver, StepResult
 from .chebyshev import ChebyshevSolver, estimate_spectral_radius
+from .lbfgs import LBFGSSolver
 from .local_global import LocalGlobalSolver
 from .newton import NewtonSolver
 from .symplectic import StabilityWarning, SymplecticEulerSolver, stable_time_step
@@ -28,6 +32,8 @@ from .symplectic import StabilityWarning, SymplecticEulerSolver, stable_time_ste
 SOLVERS: dict[str, type[Solver]] = {
     "local-global": LocalGlobalSolver,
     "chebyshev": ChebyshevSolver,
+    "anderson": AndersonSolver,
+    "lbfgs": LBFGSSolver,
     "newton": NewtonSolver,
     "symplectic-euler": SymplecticEulerSolver,
 }
@@ -48,5 +54,5 @@ def make_solver(method: str, model, **options) -> Solver:
 __all__ = ["StepProblem", "StepResult", "Iterate", "Solver", "LocalGlobalSolver", "ChebyshevSolver",
            "NewtonSolver", "SymplecticEulerSolver", "StabilityWarning", "SOLVERS",
            "make_solver", "PinSet", "gradient_noise_floor", "objective", "augmented_objective",
-           "objective_gradient",
-           "estimate_spectral_radius", "stable_time_step"]
+           "objective_gradient", "estimate_spectral_radius", "stable_time_step",
+           "AndersonSolver", "LBFGSSolver"]

@@ -1,56 +1,78 @@
 """Local/global iterations with Chebyshev semi-iterative acceleration (Wang 2015).
 
-Plain local/global (:class:`~clothsim.solvers.LocalGlobalSolver`) converges linearly:
-near the solution the error shrinks by about ρ per iteration, ρ < 1 the spectral radius
-of the iteration. Wang treats the iteration as a fixed-point map x ↦ x̂(x) and applies the
-Chebyshev semi-iterative method, which needs only an estimate of ρ:
+Plain local/global (:class:`~clothsim.solvers.LocalGlobalSolver`) is a fixed-point
+iteration x ↦ G(x) that converges linearly: near the solution x* the error obeys
+e_{k+1} ≈ T e_k with T = I − A⁻¹H, A = M + h² L the global-step matrix and H = ∇²g(x*).
 
-    ω_k     = 1                        for k < S (the delay)
-    ω_S     = 2 / (2 − ρ²)
-    ω_{k+1} = 4 / (4 − ρ² ω_k)         for k > S
-    x_{k+1} = ω_{k+1} (γ (x̂_{k+1} − x_k) + x_k − x_{k−1}) + x_{k−1}
+The shifted form (why γ = 2/(2−ρ))
+----------------------------------
+Each spring's Hessian block k [u uᵀ + (1 − r/l)(I − u uᵀ)] is at most k I, so H ⪯ A and the
+spectrum of T lies in [0, ρ] (ρ the spectral radius, the observed decay rate): it is
+*non-negative* because the global step is an exact solve. Chebyshev semi-iteration is
+optimal for a spectrum in a symmetric interval [−ρ', ρ']. The relaxed map
+x ↦ x + γ (G(x) − x) has the linear part T_γ = γ T + (1 − γ) I, which sends λ ∈ [0, ρ] to
+γ λ + 1 − γ. Asking the ends to land on −ρ' and +ρ' gives 1 − γ = −ρ' and γ ρ + 1 − γ = ρ',
+hence
 
-where x̂_{k+1} is one local/global iteration from x_k and γ ≈ 0.9 under-relaxes it. With
-ρ = 0 and γ = 1 the iteration is plain local/global. The method reuses the parent's cached
-factor and half steps: one iteration costs one local step, one residual and one global
-step, exactly like local/global.
+    γ = 2 / (2 − ρ),    ρ' = γ − 1 = ρ / (2 − ρ).
 
-Estimating ρ for a scene
-------------------------
-:func:`estimate_spectral_radius` runs plain local/global on a representative step and fits
-the ratio of successive update norms ‖x_{k+1} − x_k‖ / ‖x_k − x_{k−1}‖ over the last
-iterations (for a linearly converging iteration this ratio tends to ρ). Estimate once per
-scene and time step and pass it as ``rho``; without ``rho`` the solver estimates it on the
-first step it solves and keeps it. Too large a ρ makes the iteration oscillate; too small
-a ρ only loses speed, so the estimate is slightly shrunk (``safety``).
+γ > 1 *over*-relaxes (Wang's γ ≈ 0.9 under-relaxes, which suits an inexact, Jacobi-type
+global step whose spectrum reaches −ρ, not the exact Cholesky solve used here). The
+iteration, with delay S (plain relaxed steps before acceleration starts), is
+
+    ω_k     = 1                          for k < S
+    ω_S     = 2 / (2 − ρ'²)
+    ω_{k+1} = 4 / (4 − ρ'² ω_k)          for k > S
+    x_{k+1} = ω_{k+1} (γ (G(x_k) − x_k) + x_k − x_{k−1}) + x_{k−1}.
+
+With ρ = 0 (γ = 1, all ω = 1) it is plain local/global, bit for bit.
+
+Ceiling
+-------
+Iterations to a given error shrink by at most ln ρ / ln r, r the asymptotic Chebyshev rate.
+On the symmetric interval [−ρ, ρ] (the unshifted method) r = ρ / (1 + √(1 − ρ²)) and the
+gain is about √(2 / (1 − ρ)) (≈ 5× at ρ = 0.92, ≈ 14× at ρ = 0.99). The shifted form has
+r = (1 − √(1 − ρ))² / ρ and in linear theory gains about 2 / √(1 − ρ) (7× at ρ = 0.92);
+the nonlinear local step and a spectrum that does not fill [0, ρ] keep the measured gain
+near the √(2 / (1 − ρ)) ceiling (see docs/accuracy.md). Either way the gain grows only
+like (1 − ρ)^(−½): Chebyshev cannot turn a slowly converging step into a fast one.
+
+ρ sensitivity
+-------------
+An eigenvalue of T above the assumed ρ maps outside [−ρ', ρ'], where the Chebyshev
+polynomial grows: *underestimating* ρ makes the iteration diverge, overestimating it only
+loses speed. :func:`estimate_spectral_radius` therefore fits the decay over many
+(default 150) plain iterations, where the update ratio has settled on the slowest mode,
+and does not shrink the estimate. docs/accuracy.md shows iterations against ρ.
 
 References
 ----------
 H. Wang. A Chebyshev Semi-Iterative Approach for Accelerating Projective and Position-based
 Dynamics. ACM Transactions on Graphics 34(6), 246, 2015. DOI 10.1145/2816795.2818063.
+G. H. Golub, R. S. Varga. Chebyshev semi-iterative methods, successive overrelaxation
+iterative methods, and second order Richardson iterative methods. Numer. Math. 3, 1961.
 """
 
 from __future__ import annotations
 
 import logging
-import math
 from collections.abc import Iterator
 
 import numpy as np
 
 from ..errors import InputError, check_finite
 from ..model import Model
-from .base import StepProblem, StepResult, gradient_noise_floor, relative
+from .base import Iterate, StepProblem
 from .local_global import LocalGlobalSolver
 
 log = logging.getLogger(__name__)
 
-DEFAULT_DELAY = 10
-DEFAULT_GAMMA = 0.9
+DEFAULT_DELAY = 2
+RHO_CAP = 0.99999
 
 
-def estimate_spectral_radius(model: Model, problem: StepProblem, *, iterations: int = 60,
-                             fit_last: int = 20, safety: float = 0.999,
+def estimate_spectral_radius(model: Model, problem: StepProblem, *, iterations: int = 150,
+                             fit_last: int = 50, safety: float = 1.0,
                              backend: str = "auto",
                              solver: LocalGlobalSolver | None = None) -> float:
     """Estimate the convergence rate ρ of local/global iterations on one step.
@@ -60,16 +82,18 @@ def estimate_spectral_radius(model: Model, problem: StepProblem, *, iterations: 
     model : Model
     problem : StepProblem
         A representative step of the scene (e.g. one taken mid-motion).
-    iterations : int, default 60
-        Plain local/global iterations to run.
-    fit_last : int, default 20
+    iterations : int, default 150
+        Plain local/global iterations to run (the update ratio needs ~100–200 iterations
+        to settle on the slowest mode; fewer underestimate ρ).
+    fit_last : int, default 50
         Fit ρ as the geometric mean of ‖Δx_{k+1}‖ / ‖Δx_k‖ over the last ``fit_last``
         iterations, Δx_k = x_k − x_{k−1}.
-    safety : float, default 0.999
-        The returned value is ``safety * ρ``, capped below 1.
+    safety : float, default 1.0
+        The returned value is ``safety * ρ``, capped at 0.99999.
     backend : {"auto", "cholmod", "splu"}
     solver : LocalGlobalSolver, optional
-        Reuse this solver's cached factor instead of building one.
+        Reuse this solver's cached factor (its ``iterates`` are consumed; the solver's
+        settings are not changed).
 
     Returns
     -------
@@ -80,26 +104,27 @@ def estimate_spectral_radius(model: Model, problem: StepProblem, *, iterations: 
         raise InputError(f"estimate_spectral_radius: need iterations >= 3 and fit_last >= 1, "
                          f"got {iterations} and {fit_last}")
     lg = solver if solver is not None else LocalGlobalSolver(model, backend=backend)
-    lg.system(problem)
-    x = problem.initial_guess()
     steps = []
-    for _ in range(iterations):
-        x_new = lg.global_step(problem, lg.local_step(x))
-        steps.append(float(np.linalg.norm(x_new - x)))
-        x = x_new
+    x_prev = None
+    for it in LocalGlobalSolver.iterates(lg, problem):
+        if x_prev is not None:
+            steps.append(float(np.linalg.norm(it.x - x_prev)))
+        if it.k >= iterations:
+            break
+        x_prev = it.x.copy()
     steps = np.asarray(steps)
     ratios = steps[1:] / np.where(steps[:-1] > 0, steps[:-1], np.inf)
     ratios = ratios[np.isfinite(ratios) & (ratios > 0)][-fit_last:]
     if len(ratios) == 0:  # converged at once: nothing to accelerate
         return 0.0
     rho = float(np.exp(np.mean(np.log(ratios))))
-    rho = min(safety * rho, 0.9999)
-    log.info("estimated local/global spectral radius rho=%.5f from %d ratios", rho, len(ratios))
+    rho = min(safety * rho, RHO_CAP)
+    log.info("estimated local/global spectral radius rho=%.6f from %d ratios", rho, len(ratios))
     return max(rho, 0.0)
 
 
 class ChebyshevSolver(LocalGlobalSolver):
-    """Local/global iterations accelerated by Chebyshev semi-iteration (Wang 2015).
+    """Local/global iterations accelerated by shifted Chebyshev semi-iteration (Wang 2015).
 
     Parameters
     ----------
@@ -110,14 +135,21 @@ class ChebyshevSolver(LocalGlobalSolver):
     tolerance : float, optional
         Stop once ‖∇g(x_k)‖ / ‖∇g(x_0)‖ is at most this.
     rho : float, optional
-        Spectral radius estimate ρ ∈ [0, 1) of plain local/global for this scene and h.
-        Default: estimated by :func:`estimate_spectral_radius` on the first solved step.
-    delay : int, default 10
-        S: plain (under-relaxed) iterations before acceleration starts.
-    gamma : float, default 0.9
-        Under-relaxation γ ∈ (0, 1].
+        Spectral radius ρ ∈ [0, 1) of plain local/global for this scene and h.
+        Default: estimated by :func:`estimate_spectral_radius` on the first solved step and
+        kept (a one-off cost; :meth:`get_state` / :meth:`set_state` carry it over a resume).
+    delay : int, default 2
+        S: relaxed, unaccelerated iterations before acceleration starts (0–3 is right for
+        an exact global step; Wang's S = 10 suits an inexact one).
+    gamma : float, optional
+        Relaxation γ ∈ (0, 2); default 2 / (2 − ρ), the shift that centres the spectrum.
     backend : {"auto", "cholmod", "splu"}
     check_conditioning : bool, default True
+
+    Attributes
+    ----------
+    rho_estimations : int
+        How many times ρ was estimated (one-off cost, reported apart from per-step cost).
     """
 
     name = "chebyshev"
@@ -125,7 +157,7 @@ class ChebyshevSolver(LocalGlobalSolver):
     def __init__(self, model: Model, *, iterations: int = 10, tolerance: float | None = None,
                  backend: str = "auto", check_conditioning: bool = True,
                  rho: float | None = None, delay: int = DEFAULT_DELAY,
-                 gamma: float = DEFAULT_GAMMA):
+                 gamma: float | None = None):
         super().__init__(model, iterations=iterations, tolerance=tolerance, backend=backend,
                          check_conditioning=check_conditioning)
         if rho is not None:
@@ -134,60 +166,67 @@ class ChebyshevSolver(LocalGlobalSolver):
                 raise InputError(f"solver.rho: must be in [0, 1), got {rho!r}")
         if not isinstance(delay, (int, np.integer)) or delay < 0:
             raise InputError(f"solver.delay: must be an integer >= 0, got {delay!r}")
-        gamma = float(check_finite("solver.gamma", gamma))
-        if not 0.0 < gamma <= 1.0:
-            raise InputError(f"solver.gamma: must be in (0, 1], got {gamma!r}")
+        if gamma is not None:
+            gamma = float(check_finite("solver.gamma", gamma))
+            if not 0.0 < gamma < 2.0:
+                raise InputError(f"solver.gamma: must be in (0, 2), got {gamma!r}")
         self.rho = rho
         self.delay = int(delay)
-        self.gamma = gamma
+        self.gamma_option = gamma
+        self.rho_estimations = 0
+
+    @property
+    def gamma(self) -> float:
+        """γ in use: the option, or 2 / (2 − ρ) (1 while ρ is unknown)."""
+        if self.gamma_option is not None:
+            return self.gamma_option
+        return 2.0 / (2.0 - (self.rho or 0.0))
+
+    @property
+    def shifted_rho(self) -> float:
+        """ρ' = |γ − 1| ∨ γ ρ + 1 − γ: the half-width of the relaxed spectrum."""
+        rho, gamma = self.rho or 0.0, self.gamma
+        return max(abs(1.0 - gamma), gamma * rho + 1.0 - gamma)
 
     def omega(self, k: int, omega_prev: float) -> float:
         """ω_{k+1} for iteration k (0-based) given ω_k (Wang 2015, Eq. 11 with delay S)."""
-        rho2 = self.rho ** 2
+        rho2 = self.shifted_rho ** 2
         if k < self.delay:
             return 1.0
         if k == self.delay:
             return 2.0 / (2.0 - rho2)
         return 4.0 / (4.0 - rho2 * omega_prev)
 
-    def iterates(self, problem: StepProblem,
-                 x0: np.ndarray | None = None) -> Iterator[tuple[int, np.ndarray, float]]:
-        """Yield (k, x_k, ‖∇g(x_k)‖) for k = 0, 1, 2, … without end (no stopping test).
+    def get_state(self) -> dict:
+        """{"rho": ρ or None}: what a resumed run needs to continue bit for bit."""
+        return {"rho": self.rho}
 
-        The gradient norm is over the free degrees of freedom; it costs what a residual
-        check costs in :meth:`solve`. Used by :meth:`solve` and by accuracy measurements.
+    def set_state(self, state: dict) -> None:
+        """Restore :meth:`get_state`'s output (a missing key leaves ρ unchanged)."""
+        if "rho" in state:
+            rho = state["rho"]
+            self.rho = None if rho is None else float(rho)
+
+    def iterates(self, problem: StepProblem, x0: np.ndarray | None = None) -> Iterator[Iterate]:
+        """Yield the initial guess, then each accelerated iterate, without end.
+
+        Each iterate costs one local step, one gradient norm and one global step (the cost
+        of a local/global iteration). ρ is estimated first when not known.
         """
         self.system(problem)
         if self.rho is None:
             self.rho = estimate_spectral_radius(self.model, problem, solver=self)
+            self.rho_estimations += 1
+        gamma = self.gamma
         x = problem.initial_guess() if x0 is None else np.array(x0, dtype=np.float64)
         x_prev = x
         omega = 1.0
         k = 0
         while True:
             d = self.local_step(x)
-            yield k, x, float(np.linalg.norm(self.gradient(problem, x, d)))
+            yield Iterate(k, x, float(np.linalg.norm(self.gradient(problem, x, d))))
             x_hat = self.global_step(problem, d)
             omega = self.omega(k, omega)
-            x_next = omega * (self.gamma * (x_hat - x) + x - x_prev) + x_prev
+            x_next = omega * (gamma * (x_hat - x) + x - x_prev) + x_prev
             x_prev, x = x, x_next
             k += 1
-
-    def solve(self, problem: StepProblem, x0: np.ndarray | None = None) -> StepResult:
-        """Minimize g by accelerated local/global iterations from ``x0`` (default: y)."""
-        history: list[float] = []
-        r0 = None
-        x = None
-        it = 0
-        floor = 0.0
-        for it, x, rn in self.iterates(problem, x0):
-            if r0 is None:
-                r0 = rn
-                floor = gradient_noise_floor(self.model, problem, x) if self.tolerance else 0.0
-            history.append(relative(rn, r0))
-            if not math.isfinite(rn):
-                break
-            if it >= self.iterations or (self.tolerance is not None
-                                         and (history[-1] <= self.tolerance or rn <= floor)):
-                break
-        return self._finish(x, it, history, at_floor=rn <= floor)

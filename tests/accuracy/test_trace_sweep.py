@@ -1,6 +1,5 @@
 """The accuracy sweep machinery (clothsim.accuracy) on small scenes."""
 
-import argparse
 import math
 
 import numpy as np
@@ -67,7 +66,7 @@ def test_all_methods_converge_to_the_same_step(step):
     model, problem, x_star = step
     traces = acc.solver_accuracy(model, problem, iterations=1500, newton_iterations=20,
                                  x_star=x_star)
-    assert set(traces) == {"local-global", "chebyshev", "newton"}
+    assert set(traces) == {"local-global", "chebyshev", "anderson", "lbfgs", "newton"}
     for name, tr in traces.items():
         assert tr.error[0] > 0.1, name          # the initial guess y is far from x*
         assert tr.error.min() < 1e-8, (name, tr.error.min())
@@ -158,23 +157,28 @@ def test_time_step_must_divide_frame():
 
 
 def test_cli_arguments_and_scene_factory():
-    parser = argparse.ArgumentParser()
-    acc.add_arguments(parser)
-    args = parser.parse_args(["--quick"])
-    assert args.scene == "hanging" and args.quick and args.out
+    """The command's arguments are in clothsim.cli; the factory derives substeps from the
+    frame time 1 / fps (so a scene with substeps > 1 works)."""
+    from clothsim.cli import build_parser
+
+    args = build_parser().parse_args(["accuracy", "--quick", "--jobs", "2"])
+    assert args.scene == "hanging" and args.quick and args.out and args.jobs == 2
 
     class FakeScene:
-        h = 1 / 30
+        fps = 30.0
+        substeps = 3
+        h = 1 / 90
 
         def build_model(self):
             return curtain().model
 
         def build_simulation(self, model=None, *, method=None, iterations=None,
                              tolerance=None, substeps=None):
-            return cs.Simulation(model, h=self.h / substeps, solver=method,
+            return cs.Simulation(model, h=1 / (self.fps * substeps), solver=method,
                                  iterations=iterations, tolerance=tolerance)
 
-    make, model = acc.scene_factory(FakeScene())
+    make, model, frame_time = acc.scene_factory(FakeScene())
+    assert frame_time == pytest.approx(1 / 30)
     sim = make("local-global", 1 / 90, 3, None)
     assert sim.h == pytest.approx(1 / 90) and sim.model is model
 

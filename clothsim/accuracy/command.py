@@ -1,0 +1,171 @@
+"""``clothsim accuracy``: the whole study of one scene, as a library function.
+
+:func:`run_accuracy` records the scene's step problems along one converged run, certifies a
+reference per step, measures every configuration on the same problems (errors, then
+interleaved timed repeats), optionally the time-step error, and writes ``accuracy.csv``,
+``accuracy.json`` (machine, versions, threads, one-off costs), ``steps.md`` and the plots.
+It returns the text the command prints: the answer table first.
+"""
+
+from __future__ import annotations
+
+import logging
+import math
+from collections.abc import Sequence
+from pathlib import Path
+
+from ..errors import InputError
+from .problems import record_problems
+from .report import (
+    answer_table,
+    fixed_budget_table,
+    reference_uncertainty,
+    rows,
+    steps_table,
+    write_csv,
+    write_sidecar,
+)
+from .study import (
+    BUDGETS,
+    TOLERANCES,
+    chebyshev_rho,
+    default_configurations,
+    measure,
+    prepare_steps,
+)
+from .sweep import TRAJECTORY_LEVELS
+from .timing import machine_info, one_off_costs, time_configurations
+from .trace import ACCURACY_LEVELS, ITERATIVE_METHODS
+from .trajectory import steps_per_frame
+
+log = logging.getLogger(__name__)
+
+
+def scene_factory(scene):
+    """(factory, model, frame_time) for a scene: ``factory(method, h, iterations,
+    tolerance)`` builds a fresh simulation at step h (h must divide 1 / fps)."""
+    model = scene.build_model()
+    frame_time = 1.0 / scene.fps
+
+    def factory(method, h, iterations, tolerance):
+        substeps = steps_per_frame(frame_time, h)
+        return scene.build_simulation(model, method=method, iterations=iterations,
+                                      tolerance=tolerance, substeps=substeps)
+
+    return factory, model, frame_time
+
+
+def run_accuracy(scene, out, *, methods: Sequence[str] = ITERATIVE_METHODS,
+                 problems: int = 8, frames: int | None = None, repeats: int = 5,
+                 jobs: int = 1, scheduler: str | None = None, target: float | None = None,
+                 budgets: Sequence[int] = BUDGETS, tolerances: Sequence[float] = TOLERANCES,
+                 time_steps: bool = True, plots: bool = True, threads: int = 1) -> str:
+    """Run the accuracy study of ``scene`` into folder ``out``; return the printed report.
+
+    Parameters
+    ----------
+    scene : clothsim.scene.Scene
+    out : path
+        Output folder (created).
+    methods : sequence of str
+        Solver names (see :data:`clothsim.solvers.SOLVERS`).
+    problems : int
+        Step problems recorded, spread over the run.
+    frames : int, optional
+        Frames of the recorded run; default the scene's own.
+    repeats : int
+        Interleaved timing repeats (≥ 5 for a referee; fewer only to try things).
+    jobs : int
+        Parallel workers for the error measurement (joblib).
+    scheduler : str, optional
+        Dask scheduler address (joblib's dask backend).
+    target : float, optional
+        Report only this solver-error level in the answer table.
+    budgets, tolerances : sequences
+        Iterations per step, and relative-residual tolerances, of the configurations.
+    time_steps : bool
+        Also measure the time-step error (converged runs at h, h/2, h/4).
+    plots : bool
+        Write the PNG figures (needs matplotlib).
+    threads : int
+        BLAS threads during timing.
+
+    Returns
+    -------
+    str
+        The report: answer table, fixed-budget table, steps and notes.
+    """
+    if jobs < 1:
+        raise InputError(f"accuracy.jobs: must be >= 1, got {jobs}")
+    if repeats < 1:
+        raise InputError(f"accuracy.repeats: must be >= 1, got {repeats}")
+    if target is not None and not (target > 0):
+        raise InputError(f"accuracy.target: must be positive, got {target}")
+    from ..solvers import SOLVERS
+
+    for m in methods:
+        if m not in SOLVERS or m == "symplectic-euler":
+            raise InputError(f"accuracy.methods: {m!r} is not an iterative solver; choose from "
+                             f"{', '.join(s for s in SOLVERS if s != 'symplectic-euler')}")
+    out = Path(out)
+    out.mkdir(parents=True, exist_ok=True)
+    factory, model, frame_time = scene_factory(scene)
+    frames = scene.frames if frames is None else frames
+    h = scene.h
+    sim = factory("newton", h, 100, 1e-10)
+    recorded = record_problems(sim, steps=max(1, frames * scene.substeps), count=problems)
+    steps = prepare_steps(model, recorded)
+    options = {}
+    if "chebyshev" in methods:
+        options["chebyshev"] = {"rho": chebyshev_rho(model, steps)}
+    configs = default_configurations(methods, budgets=budgets, tolerances=tolerances,
+                                     options=options)
+    results = measure(model, steps, configs, jobs=jobs, scheduler=scheduler)
+    time_configurations(model, steps, results, repeats=repeats, threads=threads)
+    notes = []
+    ts_error, ts, traj = math.nan, None, {}
+    if time_steps and frames > 0:
+        from .timestep import time_step_study, trajectory_errors
+
+        ts = time_step_study(factory, frame_time=frame_time, frames=min(frames, 30),
+                             time_steps=(h, h / 2, h / 4))
+        ts_error = ts.errors[ts.time_steps.index(h)]
+        notes.append(ts.note)
+        traj = trajectory_errors(factory, configs, ts.reference, h=h, frame_time=frame_time)
+    table = rows(results, steps, h=h, time_step_error=ts_error, trajectory_errors=traj)
+    write_csv(table, out / "accuracy.csv")
+    info = machine_info(threads) | one_off_costs(model, steps, threads=threads)
+    info |= {"scene": scene.name, "h": h, "frames": frames, "repeats": repeats,
+             "chebyshev_rho": options.get("chebyshev", {}).get("rho")}
+    write_sidecar(info, out / "accuracy.json")
+    (out / "steps.md").write_text(steps_table(steps) + "\n")
+    kinds = [s.kind for s in steps]
+    if "two-minima" in kinds:
+        notes.append(f"{kinds.count('two-minima')} step(s) have two minima (Newton from y and "
+                     f"from converged local/global end at different points): no single "
+                     f"solver error exists there; they are counted in steps_two_minima and "
+                     f"left out")
+    saddles = sum(1 for s in steps if s.reference is not None and s.kind == "measured"
+                  and s.reference.min_eigenvalue < 0)
+    if saddles:
+        notes.append(f"{saddles} measured step(s) converge to a stationary point with "
+                     f"lambda_min(H) < 0 (a saddle across a symmetry plane the gradient never "
+                     f"leaves; every method and both starts agree on it): see steps.md")
+    if plots:
+        from .plots import plot_fixed_budget
+
+        plot_fixed_budget(table, out / "fixed_budget.png", title=scene.name,
+                          uncertainty=reference_uncertainty(steps))
+    levels = (target,) if target is not None else ACCURACY_LEVELS
+    measured = kinds.count("measured")
+    text = [f"# accuracy of {scene.name}: h = {h:.4g} s, {measured} of {len(steps)} recorded "
+            f"steps measured ({kinds.count('at-rest')} at rest, {kinds.count('trivial')} "
+            f"trivial, {kinds.count('two-minima')} with two minima)", "",
+            answer_table(table, levels=levels, uncertainty=reference_uncertainty(steps),
+                         trajectory_levels=TRAJECTORY_LEVELS if traj else ()), "",
+            "Fixed budget (solver error after k iterations per step):", "",
+            fixed_budget_table(table), ""]
+    text += [f"note: {n}" for n in notes]
+    text.append(f"wrote {out / 'accuracy.csv'} ({len(table)} configurations), "
+                f"{out / 'accuracy.json'}, {out / 'steps.md'}")
+    return "\n".join(text)

@@ -1,0 +1,120 @@
+"""Implicit Euler's own damping: closed form for one spring, energy and height curves."""
+
+from __future__ import annotations
+
+import math
+import warnings
+from collections.abc import Sequence
+
+import numpy as np
+
+from ..effects import Pin
+from ..mesh import Mesh
+from ..model import Model
+from ..simulation import Simulation, State
+from ..springs import Springs
+from .trajectory import SimulationFactory, run_trajectory
+
+
+def implicit_euler_amplitude(omega: float, h: float, steps) -> np.ndarray:
+    """Amplitude factor (1 + ω²h²)^(−n/2) of a linear spring after n implicit Euler steps.
+
+    Parameters
+    ----------
+    omega : float
+        Natural angular frequency sqrt(k / m) [rad/s].
+    h : float
+        Time step [s].
+    steps : array_like of int
+        Step counts n.
+    """
+    return (1.0 + (omega * h) ** 2) ** (-0.5 * np.asarray(steps, dtype=np.float64))
+
+
+def single_spring(*, stiffness: float = 100.0, mass: float = 1.0, rest_length: float = 1.0,
+                  amplitude: float = 0.1):
+    """A mass hanging on one spring below a pinned vertex (no gravity), pulled down.
+
+    Returns
+    -------
+    model : Model
+        Two vertices (0 pinned at the origin, 1 the mass), one spring along −y.
+    pin : Pin
+        Exact pin of vertex 0.
+    state : State
+        Vertex 1 displaced by ``amplitude`` [m] below rest, at rest.
+    omega : float
+        sqrt(k / m) [rad/s].
+    """
+    x0 = np.array([[0.0, 0.0, 0.0], [0.0, -rest_length, 0.0]])
+    mesh = Mesh(x0, strands=[[0, 1]])
+    springs = Springs(np.array([[0, 1]]), np.array([stiffness]), np.array([rest_length]), 0)
+    model = Model(mesh, springs, np.array([mass, mass]))
+    state = State(x0 + [[0.0, 0.0, 0.0], [0.0, -amplitude, 0.0]], np.zeros((2, 3)))
+    return model, Pin([0]), state, math.sqrt(stiffness / mass)
+
+
+def damping_curves(factory: SimulationFactory, *, h: float, frames: int, frame_time: float,
+                   settings: Sequence[tuple[str, int | None, float | None]], vertex: int
+                   ) -> dict[str, np.ndarray]:
+    """Height (y) of ``vertex`` at every frame for a few (method, iterations, tolerance)."""
+    out = {}
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        for method, its, tol in settings:
+            sim = factory(method, h, its, tol)
+            traj = run_trajectory(sim, frames=frames, frame_time=frame_time)
+            label = f"{method}, " + (f"tol {tol:g}" if tol else f"{its} it")
+            out[label] = traj.frames[:, vertex, 1]
+    return out
+
+
+def energy_curves(factory: SimulationFactory, *, h: float, frames: int, frame_time: float,
+                  settings: Sequence[tuple[str, int | None, float | None]],
+                  reference: np.ndarray | None = None) -> dict[str, np.ndarray]:
+    """Mechanical energy (:func:`mechanical_energy`) at every frame for a few (method,
+    iterations, tolerance); ``reference`` (shape (frames + 1,)) is added as-is."""
+    out = {}
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        for method, its, tol in settings:
+            sim = factory(method, h, its, tol)
+            traj = run_trajectory(sim, frames=frames, frame_time=frame_time,
+                                  record_energy=True)
+            out[f"{method}, " + (f"tol {tol:g}" if tol else f"{its} it")] = traj.energy
+    if reference is not None:
+        out["reference (small h, converged)"] = np.asarray(reference)
+    return out
+
+
+def single_spring_heights(*, h: float, steps: int, stiffness: float = 100.0,
+                          mass: float = 1.0, amplitude: float = 0.1
+                          ) -> tuple[np.ndarray, dict[str, np.ndarray], np.ndarray]:
+    """Displacement of the single spring's mass over ``steps`` steps.
+
+    Returns
+    -------
+    t : ndarray, shape (steps + 1,) [s]
+    curves : dict
+        Label → displacement from rest [m] for implicit Euler (converged) and symplectic
+        Euler.
+    envelope : ndarray, shape (steps + 1,)
+        amplitude × (1 + ω²h²)^(−n/2), the closed-form implicit Euler amplitude.
+    """
+    curves = {}
+    omega = math.sqrt(stiffness / mass)
+    for label, method, kw in (("implicit Euler (converged)", "newton", {"tolerance": 1e-12}),
+                              ("symplectic Euler", "symplectic-euler", {})):
+        model, pin, state, omega = single_spring(stiffness=stiffness, mass=mass,
+                                                 amplitude=amplitude)
+        with warnings.catch_warnings():
+            warnings.simplefilter("ignore")
+            sim = Simulation(model, h=h, effects=[pin], solver=method, state=state, **kw)
+            ys = [state.positions[1, 1]]
+            for _ in range(steps):
+                sim.step()
+                ys.append(sim.state.positions[1, 1])
+        curves[label] = np.asarray(ys) + 1.0  # displacement from rest (rest at y = −1)
+    n = np.arange(steps + 1)
+    return n * h, curves, -amplitude * implicit_euler_amplitude(omega, h, n)
+

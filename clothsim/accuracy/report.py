@@ -1,0 +1,173 @@
+"""Rows, CSV and the answer tables of the accuracy study.
+
+CSV columns (:data:`COLUMNS`, units in docs/accuracy.md): one row per configuration.
+"""
+
+from __future__ import annotations
+
+import csv
+import json
+import math
+from collections.abc import Sequence
+from dataclasses import asdict, dataclass
+from pathlib import Path
+
+from .study import ConfigResult, StudyStep, quantiles
+from .timing import median_iqr
+from .trace import ACCURACY_LEVELS
+
+COLUMNS = ("method", "h", "iterations", "tolerance", "solver_error_median",
+           "solver_error_p90", "solver_error_max", "iterations_median", "iterations_max",
+           "steps_measured", "steps_skipped", "steps_at_rest", "steps_trivial",
+           "steps_two_minima", "time_step_error", "trajectory_error",
+           "seconds_per_step_median", "seconds_per_step_iqr", "repeats",
+           "solves_per_step", "factorizations_per_step")
+FIXED_BUDGETS = (5, 10, 20)
+
+
+@dataclass
+class Row:
+    """One CSV row (see :data:`COLUMNS`)."""
+
+    method: str
+    h: float
+    iterations: int
+    tolerance: float | None
+    solver_error_median: float
+    solver_error_p90: float
+    solver_error_max: float
+    iterations_median: float
+    iterations_max: float
+    steps_measured: int
+    steps_skipped: int
+    steps_at_rest: int
+    steps_trivial: int
+    steps_two_minima: int
+    time_step_error: float
+    trajectory_error: float
+    seconds_per_step_median: float
+    seconds_per_step_iqr: float
+    repeats: int
+    solves_per_step: float
+    factorizations_per_step: float
+
+    @property
+    def setting(self) -> str:
+        if self.tolerance is not None:
+            return f"{self.method}, tolerance {self.tolerance:g}"
+        return f"{self.method}, {self.iterations} it/step"
+
+
+def rows(results: Sequence[ConfigResult], steps: Sequence[StudyStep], *, h: float,
+         time_step_error: float = math.nan,
+         trajectory_errors: dict | None = None) -> list[Row]:
+    """One :class:`Row` per configuration."""
+    kinds = [s.kind for s in steps]
+    count = {k: kinds.count(k) for k in ("measured", "at-rest", "trivial", "two-minima")}
+    out = []
+    for r in results:
+        c = r.config
+        med, p90, mx = quantiles(r.errors)
+        it_med = float(_median(r.iterations))
+        sec, iqr = median_iqr(r.seconds)
+        solves = it_med if c.method != "newton" else 0.0
+        out.append(Row(c.method, h, c.iterations, c.tolerance, med, p90, mx, it_med,
+                       float(r.iterations.max()) if len(r.iterations) else math.nan,
+                       count["measured"], len(steps) - count["measured"], count["at-rest"],
+                       count["trivial"], count["two-minima"], time_step_error,
+                       (trajectory_errors or {}).get(c, math.nan), sec, iqr, len(r.seconds),
+                       solves, r.factorizations))
+    return out
+
+
+def _median(v):
+    return float("nan") if len(v) == 0 else float(sorted(v)[len(v) // 2])
+
+
+def write_csv(table: Sequence[Row], path) -> Path:
+    """Write rows to ``path`` (columns :data:`COLUMNS`; empty cell for no tolerance)."""
+    path = Path(path)
+    with path.open("w", newline="") as fh:
+        w = csv.DictWriter(fh, fieldnames=COLUMNS)
+        w.writeheader()
+        for row in table:
+            w.writerow({k: ("" if v is None else v) for k, v in asdict(row).items()})
+    return path
+
+
+def write_sidecar(info: dict, path) -> Path:
+    """Machine, versions, threads and one-off costs as JSON next to the CSV."""
+    path = Path(path)
+    path.write_text(json.dumps(info, indent=2, sort_keys=True) + "\n")
+    return path
+
+
+def cheapest(table: Sequence[Row], level: float, *, error: str = "solver_error_p90"
+             ) -> Row | None:
+    """The row with the least median seconds per step whose ``error`` is ≤ ``level``."""
+    ok = [r for r in table if math.isfinite(getattr(r, error)) and getattr(r, error) <= level
+          and math.isfinite(r.seconds_per_step_median)]
+    return min(ok, key=lambda r: r.seconds_per_step_median) if ok else None
+
+
+def answer_table(table: Sequence[Row], *, levels: Sequence[float] = ACCURACY_LEVELS,
+                 trajectory_levels: Sequence[float] = (), uncertainty: float = 0.0) -> str:
+    """The answer: for each target, the cheapest setting with its time and spread.
+
+    Solver-error levels below ``uncertainty`` (the largest reference uncertainty over the
+    measured steps) are not answered: the reference cannot tell them apart.
+    """
+    lines = ["| target | error measured | cheapest setting | ms/step (median) | IQR [ms] |",
+             "|---|---|---|---|---|"]
+    for col, name, levs in (("solver_error_p90", "solver error (p90 over steps)", levels),
+                            ("trajectory_error", "trajectory error", trajectory_levels)):
+        for level in levs:
+            if col == "solver_error_p90" and level < uncertainty:
+                lines.append(f"| {level:.0e} | {name} | below the reference's uncertainty "
+                             f"{uncertainty:.1e}: not measurable | | |")
+                continue
+            r = cheapest(table, level, error=col)
+            if r is None:
+                lines.append(f"| {level:.0e} | {name} | no setting reaches this | | |")
+            else:
+                lines.append(f"| {level:.0e} | {name} | {r.setting} | "
+                             f"{1e3 * r.seconds_per_step_median:.3g} | "
+                             f"{1e3 * r.seconds_per_step_iqr:.2g} |")
+    return "\n".join(lines)
+
+
+def fixed_budget_table(table: Sequence[Row], budgets: Sequence[int] = FIXED_BUDGETS) -> str:
+    """Solver error (median / p90) after 5, 10, 20 iterations per step, per method."""
+    methods = list(dict.fromkeys(r.method for r in table if r.method != "newton"))
+    head = "| method | " + " | ".join(f"{b} it: median / p90" for b in budgets) + " |"
+    lines = [head, "|---" * (len(budgets) + 1) + "|"]
+    for m in methods:
+        cells = []
+        for b in budgets:
+            r = next((r for r in table if r.method == m and r.tolerance is None
+                      and r.iterations == b), None)
+            cells.append("–" if r is None else
+                         f"{r.solver_error_median:.1e} / {r.solver_error_p90:.1e}")
+        lines.append(f"| {m} | " + " | ".join(cells) + " |")
+    return "\n".join(lines)
+
+
+def reference_uncertainty(steps: Sequence[StudyStep]) -> float:
+    """Largest reference uncertainty over the measured steps (0 when none)."""
+    u = [s.reference.uncertainty for s in steps if s.kind == "measured"
+         and s.reference is not None and math.isfinite(s.reference.uncertainty)]
+    return max(u, default=0.0)
+
+
+def steps_table(steps: Sequence[StudyStep]) -> str:
+    """One line per recorded step: kind, rest ratio, one-iteration error, certificate."""
+    lines = ["| step | t [s] | kind | ‖∇g(y)‖/floor | 1-iteration error | Newton residual "
+             "| λ_min(H)/m_min | uncertainty | g(x₂) − g(x*) |", "|---" * 9 + "|"]
+    for s in steps:
+        ref = s.reference
+        cert = ("| | | |" if ref is None else
+                f"| {ref.residual:.1e} | {ref.min_eigenvalue:.3g} | {ref.uncertainty:.1e} "
+                f"| {ref.objective_difference:.2e} |")
+        lines.append(f"| {s.step.index} | {s.step.time:.4g} | {s.kind} | {s.rest_ratio:.2e} "
+                     f"| {s.one_iteration_error:.2e} {cert}")
+    return "\n".join(lines)

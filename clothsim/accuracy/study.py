@@ -1,0 +1,190 @@
+"""The solver-error study: every configuration on the same recorded step problems.
+
+For each recorded step (:mod:`.problems`) that teaches something, a certified reference
+(:mod:`.reference`) is computed once; every configuration (a method with a fixed iteration
+budget, or with a residual tolerance) then solves the same problems. Per configuration:
+the distribution (median, 90th percentile, worst) of the relative solver error
+‖x − x*‖ / ‖x* − x_n‖ and of the iterations it used, over the measured steps. Steps at
+rest, trivially solved or with two minima are counted in their own columns, never measured.
+The error measurement parallelises over (configuration, step) pairs with joblib
+(:func:`measure`, ``jobs``); it is deterministic, so any ``jobs`` gives the same errors.
+"""
+
+from __future__ import annotations
+
+import logging
+import math
+import warnings
+from collections.abc import Sequence
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from ..model import Model
+from ..solvers import estimate_spectral_radius, make_solver
+from .problems import RecordedStep, classify
+from .reference import CertifiedReference, certified_reference
+
+log = logging.getLogger(__name__)
+
+BUDGETS = (1, 2, 5, 10, 20, 50, 100, 200)
+"""Iterations per step of the fixed-budget configurations (Newton: up to 10)."""
+TOLERANCES = (1e-2, 1e-4, 1e-6, 1e-8)
+"""Relative-residual tolerances of the tolerance configurations."""
+TOLERANCE_CAP = {"newton": 100}
+DEFAULT_CAP = 5000
+
+
+@dataclass(frozen=True)
+class Configuration:
+    """One setting a user could run: a method with an iteration budget or a tolerance."""
+
+    method: str
+    iterations: int
+    tolerance: float | None = None
+    options: tuple = ()
+
+    def solver(self, model: Model):
+        return make_solver(self.method, model, iterations=self.iterations,
+                           tolerance=self.tolerance, **dict(self.options))
+
+    @property
+    def label(self) -> str:
+        if self.tolerance is not None:
+            return f"{self.method} tol {self.tolerance:g}"
+        return f"{self.method} {self.iterations} it"
+
+
+@dataclass
+class StudyStep:
+    """A recorded step with its classification and (when measured) its reference."""
+
+    step: RecordedStep
+    kind: str                      # "measured", "at-rest", "trivial", "two-minima"
+    rest_ratio: float              # ‖∇g(y)‖ / rounding floor
+    one_iteration_error: float
+    reference: CertifiedReference | None = None
+
+
+@dataclass
+class ConfigResult:
+    """Errors and iterations of one configuration over the measured steps."""
+
+    config: Configuration
+    errors: np.ndarray                       # (m,) relative solver error per measured step
+    iterations: np.ndarray                   # (m,) iterations used per step
+    seconds: list[float] = field(default_factory=list)   # per-step seconds, one per repeat
+    factorizations: float = 0.0              # per step (Newton), hardware independent
+
+
+def prepare_steps(model: Model, recorded: Sequence[RecordedStep], *,
+                  backend: str = "auto") -> list[StudyStep]:
+    """Classify each recorded step and certify the reference of those worth measuring."""
+    out = []
+    for rec in recorded:
+        ref = certified_reference(model, rec.problem, backend=backend)
+        kind, ratio, err1 = classify(model, rec.problem, ref.x)
+        if kind == "measured" and ref.two_minima:
+            kind = "two-minima"
+        out.append(StudyStep(rec, kind, ratio, err1, ref if kind != "at-rest" else None))
+        log.info("step %d: %s (|grad g(y)|/floor %.2e, one-iteration error %.2e, "
+                 "residual %.1e, min eig %.3g, uncertainty %.1e)", rec.index, kind, ratio,
+                 err1, ref.residual, ref.min_eigenvalue, ref.uncertainty)
+    return out
+
+
+def default_configurations(methods: Sequence[str], *, budgets: Sequence[int] = BUDGETS,
+                           tolerances: Sequence[float] = TOLERANCES,
+                           options: dict | None = None) -> list[Configuration]:
+    """Budget and tolerance configurations for each method (Newton budgets ≤ 10)."""
+    out = []
+    for m in methods:
+        opts = tuple(sorted((options or {}).get(m, {}).items()))
+        its = [b for b in budgets if m != "newton" or b <= 10]
+        out += [Configuration(m, int(b), None, opts) for b in its]
+        cap = TOLERANCE_CAP.get(m, DEFAULT_CAP)
+        out += [Configuration(m, cap, float(t), opts) for t in tolerances]
+    return out
+
+
+def chebyshev_rho(model: Model, steps: Sequence[StudyStep], *, backend: str = "auto") -> float:
+    """ρ for the chebyshev configurations: the largest estimate over the measured steps
+    (an underestimate diverges; see :mod:`clothsim.solvers.chebyshev`)."""
+    rhos = [estimate_spectral_radius(model, s.step.problem, backend=backend)
+            for s in steps if s.kind == "measured"]
+    return max(rhos, default=0.0)
+
+
+def _solve_one(model: Model, config: Configuration, study_step: StudyStep) -> tuple[float, int,
+                                                                                    int]:
+    solver = config.solver(model)
+    problem = study_step.step.problem
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        res = solver.solve(problem)
+    x_star = study_step.reference.x
+    scale = float(np.linalg.norm(x_star - problem.x)) or 1.0
+    err = float(np.linalg.norm(res.x - x_star)) / scale
+    return (err if math.isfinite(err) else math.inf), int(res.iterations), \
+        int(getattr(solver, "factor_count", 0) if config.method == "newton" else 0)
+
+
+def measure(model: Model, steps: Sequence[StudyStep], configs: Sequence[Configuration], *,
+            jobs: int = 1, scheduler: str | None = None) -> list[ConfigResult]:
+    """Solver error and iterations of every configuration on every measured step.
+
+    Parameters
+    ----------
+    model : Model
+    steps : sequence of StudyStep
+        From :func:`prepare_steps`; only ``kind == "measured"`` steps are solved.
+    configs : sequence of Configuration
+    jobs : int
+        Parallel workers (joblib, loky backend); 1 runs serially.
+    scheduler : str, optional
+        Address of a Dask scheduler: run through joblib's dask backend instead.
+
+    Returns
+    -------
+    list of ConfigResult
+        Same order as ``configs``; identical for any ``jobs`` and ``scheduler``.
+    """
+    measured = [s for s in steps if s.kind == "measured"]
+    tasks = [(c, s) for c in configs for s in measured]
+    if jobs == 1 and scheduler is None:
+        results = [_solve_one(model, c, s) for c, s in tasks]
+    else:
+        results = _parallel(model, tasks, jobs, scheduler)
+    out, i = [], 0
+    for c in configs:
+        chunk = results[i:i + len(measured)]
+        i += len(measured)
+        out.append(ConfigResult(c, np.array([r[0] for r in chunk]),
+                                np.array([r[1] for r in chunk]),
+                                factorizations=float(np.mean([r[2] for r in chunk]))
+                                if chunk else 0.0))
+    return out
+
+
+def _parallel(model, tasks, jobs, scheduler):
+    import joblib
+
+    if scheduler is not None:
+        from dask.distributed import Client  # only with --scheduler
+
+        with Client(scheduler), joblib.parallel_backend("dask"):
+            return joblib.Parallel()(joblib.delayed(_solve_one)(model, c, s) for c, s in tasks)
+    return joblib.Parallel(n_jobs=jobs, backend="loky")(
+        joblib.delayed(_solve_one)(model, c, s) for c, s in tasks)
+
+
+def quantiles(values: np.ndarray) -> tuple[float, float, float]:
+    """(median, 90th percentile, max) of ``values`` (NaN when empty; inf propagates)."""
+    v = np.asarray(values, dtype=np.float64)
+    if len(v) == 0:
+        return math.nan, math.nan, math.nan
+    if not np.all(np.isfinite(v)):
+        v = np.where(np.isfinite(v), v, np.inf)
+        return (float(np.quantile(v, 0.5, method="nearest")),
+                float(np.quantile(v, 0.9, method="nearest")), float(v.max()))
+    return float(np.median(v)), float(np.quantile(v, 0.9)), float(v.max())

@@ -1,0 +1,134 @@
+"""Time-step error, separated from solver error.
+
+Converged solves only (Newton to 1e-10) at several h, against a Richardson-extrapolated
+run at a much smaller h (:func:`~.trajectory.reference_trajectory`). The fitted slope of
+error against h is implicit Euler's order (1) only once ω_max h ≲ 1, ω_max the stiffest
+angular frequency (2 / the explicit stability limit). Far above that, implicit Euler damps
+the stiff modes completely and the error hardly changes with h: :func:`time_step_study`
+then says so instead of fitting a slope.
+"""
+
+from __future__ import annotations
+
+import math
+import warnings
+from collections.abc import Sequence
+from dataclasses import dataclass
+
+import numpy as np
+
+from ..solvers import stable_time_step
+from .trajectory import (
+    SimulationFactory,
+    reference_trajectory,
+    run_trajectory,
+    trajectory_error,
+)
+
+CONVERGED = ("newton", 100, 1e-10)
+
+
+@dataclass
+class TimeStepStudy:
+    """Time-step error of converged solves against h.
+
+    Attributes
+    ----------
+    time_steps : list of float
+        h [s], at least three.
+    errors : list of float
+        ‖X(h) − X_ref‖ / ‖X_ref − X_0‖ over all frames.
+    slope : float
+        Log-log slope of error against h (NaN when not fitted).
+    omega_max : float
+        Stiffest angular frequency [rad/s], 2 / stable explicit step.
+    asymptotic_h : float
+        1 / ω_max [s]: below it the error falls like h.
+    reference_error : float
+        Estimated relative error of the unextrapolated reference.
+    note : str
+        One line: the slope, or why there is none.
+    reference : ndarray, shape (frames + 1, n, 3)
+        The reference frames [m].
+    """
+
+    time_steps: list
+    errors: list
+    slope: float
+    omega_max: float
+    asymptotic_h: float
+    reference_error: float
+    note: str
+    reference: np.ndarray
+
+
+def time_step_study(factory: SimulationFactory, *, frame_time: float, frames: int,
+                    time_steps: Sequence[float], reference_h: float | None = None
+                    ) -> TimeStepStudy:
+    """Converged runs at each h against a small-h reference (see the module text).
+
+    Parameters
+    ----------
+    factory : callable
+        ``factory(method, h, iterations, tolerance) -> Simulation`` (fresh each call).
+    frame_time : float
+        Time between compared frames [s]; each h must divide it.
+    frames : int
+        Frames compared.
+    time_steps : sequence of float
+        At least three h [s].
+    reference_h : float, optional
+        Default min(time_steps) / 8.
+    """
+    hs = sorted(float(h) for h in time_steps)
+    h_ref = hs[0] / 8.0 if reference_h is None else reference_h
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        ref, ref_err = reference_trajectory(factory, h=h_ref, frames=frames,
+                                            frame_time=frame_time, tolerance=1e-10,
+                                            iterations=100)
+        errs = [trajectory_error(run_trajectory(factory(*CONVERGED[:1], h, *CONVERGED[1:]),
+                                                frames=frames, frame_time=frame_time).frames,
+                                 ref) for h in hs]
+        sim = factory(*CONVERGED[:1], hs[0], *CONVERGED[1:])
+        problem = sim.problem()
+    omega = 2.0 / stable_time_step(sim.model, anchor_vertices=problem.anchor_vertices,
+                                   anchor_stiffness=problem.anchor_stiffness)
+    h_asym = 1.0 / omega
+    ok = [(h, e) for h, e in zip(hs, errs) if math.isfinite(e) and e > 0]
+    slope = math.nan
+    if len(ok) >= 3:
+        slope = float(np.polyfit(*np.log(np.array(ok)).T, 1)[0])
+    if math.isfinite(slope) and slope >= 0.7:
+        note = f"time-step error falls like h^{slope:.2f} (implicit Euler: first order)"
+    else:
+        note = (f"time-step error does not fall like h here (slope {slope:.2f}): h ≥ "
+                f"{hs[0]:.3g} s is far above 1/ω_max = {h_asym:.3g} s (ω_max = "
+                f"{omega:.3g} rad/s); the asymptotic regime starts near h ≈ {h_asym:.2g} s")
+    return TimeStepStudy(hs, errs, slope, omega, h_asym, ref_err, note, ref)
+
+
+TRAJECTORY_BUDGETS = (1, 5, 10, 20)
+
+
+def trajectory_errors(factory: SimulationFactory, configs, reference: np.ndarray, *,
+                      h: float, frame_time: float) -> dict:
+    """Trajectory error (against ``reference``) of the configurations a user would run
+    for a whole trajectory: budgets 1, 5, 10, 20 and every tolerance, at step h.
+
+    Returns
+    -------
+    dict
+        Configuration → ‖X − X_ref‖ / ‖X_ref − X_0‖ (time-step and solver error together).
+    """
+    frames = len(reference) - 1
+    out = {}
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        for c in configs:
+            if c.tolerance is None and c.iterations not in TRAJECTORY_BUDGETS:
+                continue
+            sim = factory(c.method, h, c.iterations, c.tolerance)
+            out[c] = trajectory_error(run_trajectory(sim, frames=frames,
+                                                     frame_time=frame_time).frames, reference)
+    return out

@@ -1,0 +1,187 @@
+"""Trajectory accuracy: runs recorded frame by frame, compared with a converged small-h run.
+
+Vertex positions at every frame of a run, against a reference run with a much smaller time
+step solved to convergence and Richardson-extrapolated (:func:`reference_trajectory`):
+‖X − X_ref‖ / ‖X_ref − X_0‖ over all frames (Frobenius norms over frames × vertices);
+:func:`convergence_slope` fits its log-log slope against h (implicit Euler: 1 once h is well
+below the stiffest oscillation period 2π/ω_max).
+"""
+
+from __future__ import annotations
+
+import math
+import warnings
+from collections.abc import Callable, Sequence
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from .. import energy
+from ..effects import Gravity
+from ..errors import InputError
+from ..model import Model
+from ..simulation import Simulation
+from ..solvers import Solver, StepProblem, objective, stable_time_step
+from .trace import EXPLICIT_METHODS, converged_solution
+
+SimulationFactory = Callable[[str, float, "int | None", "float | None"], Simulation]
+"""``factory(method, h, iterations, tolerance) -> Simulation`` for one configuration."""
+
+
+@dataclass
+class SweepRow:
+    """One configuration of the sweep (a row of accuracy.csv, see :data:`CSV_FIELDS`)."""
+
+    method: str
+    h: float
+    iterations: int | None
+    tolerance: float | None
+    steps_per_frame: int
+    seconds_per_step: float
+    seconds_per_frame: float
+    solver_error: float
+    objective_gap: float
+    trajectory_error: float
+
+
+@dataclass
+class Trajectory:
+    """Positions at every frame of a run, and the per-step wall times."""
+
+    frames: np.ndarray                       # (f + 1, n, 3) [m], frame 0 the initial state
+    step_seconds: list[float] = field(default_factory=list)
+    energy: np.ndarray | None = None         # (f + 1,) [J] mechanical energy, with gravity
+    solver_error: float = math.nan
+    objective_gap: float = math.nan
+
+
+def steps_per_frame(frame_time: float, h: float) -> int:
+    """frame_time / h as an integer; raise InputError when h does not divide the frame."""
+    ratio = frame_time / h
+    steps = int(round(ratio))
+    if steps < 1 or abs(ratio - steps) > 1e-6 * ratio:
+        raise InputError(f"accuracy.time_steps: h={h:.6g} s must divide the frame time "
+                         f"{frame_time:.6g} s")
+    return steps
+
+
+def mechanical_energy(sim: Simulation) -> float:
+    """Kinetic + spring + gravitational potential energy of ``sim``'s state [J].
+
+    Gravity is taken from the simulation's :class:`~clothsim.effects.Gravity` effects
+    (none: no potential term). Pins and other effects store no energy.
+    """
+    x, v = sim.state.positions, sim.state.velocities
+    e = energy.kinetic_energy(sim.model, v) + energy.spring_energy(sim.model, x)
+    for effect in sim.effects:
+        if isinstance(effect, Gravity):
+            e += energy.gravity_energy(sim.model, x, effect.acceleration)
+    return e
+
+
+def run_trajectory(sim: Simulation, *, frames: int, frame_time: float,
+                   probe_frame: int | None = None, backend: str = "auto",
+                   record_energy: bool = False) -> Trajectory:
+    """Run ``sim`` for ``frames`` frames, recording positions at each frame.
+
+    With ``probe_frame``, the first step of that frame is also solved to convergence by
+    Newton and the simulation's solver error on it is recorded (relative error against
+    x*, and objective gap). With ``record_energy``, :func:`mechanical_energy` at each
+    frame is recorded in ``Trajectory.energy``.
+    """
+    per_frame = steps_per_frame(frame_time, sim.h)
+    out = [sim.state.positions.copy()]
+    energies = [mechanical_energy(sim)] if record_energy else []
+    seconds: list[float] = []
+    traj = Trajectory(np.empty(0))
+    with np.errstate(all="ignore"):
+        for f in range(frames):
+            if probe_frame is not None and f == probe_frame and _is_implicit(sim.solver):
+                problem = sim.problem()
+                x_star = converged_solution(sim.model, problem, backend=backend)
+                with warnings.catch_warnings():
+                    warnings.simplefilter("ignore")
+                    x = sim.solver.solve(problem).x
+                scale = float(np.linalg.norm(x_star - problem.x)) or 1.0
+                traj.solver_error = float(np.linalg.norm(x - x_star)) / scale
+                traj.objective_gap = (objective(sim.model, problem, x)
+                                      - objective(sim.model, problem, x_star))
+            for _ in range(per_frame):
+                seconds.append(sim.step().seconds)
+            x = sim.state.positions
+            out.append(x.copy())
+            if record_energy:
+                energies.append(mechanical_energy(sim))
+            if not np.all(np.isfinite(x)):
+                out.extend([np.full_like(x, np.nan)] * (frames - f - 1))
+                break
+    traj.frames = np.stack(out)
+    traj.step_seconds = seconds
+    if record_energy:
+        e = np.full(len(out), np.nan)
+        e[:len(energies)] = energies
+        traj.energy = e
+    return traj
+
+
+def _is_implicit(solver: Solver) -> bool:
+    return solver.name not in EXPLICIT_METHODS
+
+
+def trajectory_error(frames: np.ndarray, reference: np.ndarray) -> float:
+    """‖X − X_ref‖ / ‖X_ref − X_0‖ over all frames and vertices (inf if X is not finite)."""
+    if not np.all(np.isfinite(frames)):
+        return math.inf
+    den = float(np.linalg.norm(reference - reference[0]))
+    return float(np.linalg.norm(frames - reference)) / (den or 1.0)
+
+
+def reference_trajectory(factory: SimulationFactory, *, h: float, frames: int,
+                         frame_time: float, method: str = "newton",
+                         tolerance: float = 1e-10, iterations: int = 50,
+                         extrapolate: bool = True) -> tuple[np.ndarray, float]:
+    """A converged, small-h reference trajectory for :func:`trajectory_error`.
+
+    Implicit Euler solved to ``tolerance`` at h and at 2h. Its global error is
+    X(h) − X_exact = C h + O(h²) (first order), so with ``extrapolate`` the returned
+    frames are Richardson's 2 X(h) − X(2h), whose error is O(h²).
+
+    Returns
+    -------
+    frames : ndarray, shape (frames + 1, n, 3) [m]
+    error_estimate : float
+        ‖X(h) − X(2h)‖ / ‖X(h) − X_0‖, about the relative error of the *unextrapolated*
+        X(h) (an upper bound for the extrapolated one when the error is first order).
+    """
+    fine = run_trajectory(factory(method, h, iterations, tolerance), frames=frames,
+                          frame_time=frame_time).frames
+    coarse = run_trajectory(factory(method, 2.0 * h, iterations, tolerance), frames=frames,
+                            frame_time=frame_time).frames
+    estimate = trajectory_error(coarse, fine)
+    return (2.0 * fine - coarse if extrapolate else fine), estimate
+
+
+def convergence_slope(rows: Sequence[SweepRow], *, method: str,
+                      iterations: int | None) -> float:
+    """Log-log slope of trajectory error against h for one (method, iterations) series.
+
+    Implicit Euler solved to convergence is first order: the slope should be about 1.
+    NaN when fewer than two finite points exist.
+    """
+    pts = [(r.h, r.trajectory_error) for r in rows
+           if r.method == method and r.iterations == iterations
+           and math.isfinite(r.trajectory_error) and r.trajectory_error > 0]
+    if len(pts) < 2:
+        return math.nan
+    h, e = np.log(np.array(pts)).T
+    return float(np.polyfit(h, e, 1)[0])
+
+
+def _stable_explicit_step(model: Model, frame_time: float, problem: StepProblem) -> float:
+    """The largest h = frame_time / 2^j below 0.9 × the explicit stability limit."""
+    limit = stable_time_step(model, anchor_vertices=problem.anchor_vertices,
+                             anchor_stiffness=problem.anchor_stiffness)
+    h = frame_time
+    while h >= 0.9 * limit:
+        h /= 2.0
+    return h

@@ -1,0 +1,179 @@
+"""The study measures only steps with real work, on the same problems for every method."""
+
+import math
+import warnings
+
+import numpy as np
+import pytest
+
+import clothsim as cs
+from clothsim import gallery
+from clothsim.accuracy import (
+    Configuration,
+    default_configurations,
+    measure,
+    prepare_steps,
+    record_problems,
+)
+from clothsim.accuracy.report import COLUMNS, answer_table, rows, write_csv
+from clothsim.scene import Scene
+from clothsim.simulation import State
+
+
+def two_minima_simulation(n: int = 7, seed: int = 1, amplitude: float = 1e-2):
+    """A vertical 7 × 7 flag pinned along its left edge with a small random out-of-plane
+    velocity: its second step has two minima (Newton from y and converged local/global end
+    5.6e-7 J·s² apart in g, both with H ≻ 0)."""
+    model = gallery.grid_cloth(n, k=800.0, bending=20.0, plane="xy", center=(0.0, 1.5, 0.0))
+    left = [i for i in range(n * n) if i % n == 0]
+    v = np.zeros((n * n, 3))
+    v[:, 2] = amplitude * np.random.default_rng(seed).standard_normal(n * n)
+    return cs.Simulation(model, h=1 / 30, solver="newton", tolerance=1e-10, iterations=100,
+                         effects=[cs.Gravity(gallery.GRAVITY), cs.Pin(left)],
+                         state=State(model.mesh.vertices.copy(), v))
+
+
+def stiff_settling():
+    """A stiff 5 × 5 sheet (k = 2000) pinned along one edge, no gravity, kicked in its plane:
+    implicit Euler damps the stiff in-plane motion to rest within a few dozen steps."""
+    model = gallery.grid_cloth(5, k=2000.0, plane="xz")
+    v = np.zeros((25, 3))
+    v[:, 0] = 0.3 * np.random.default_rng(7).standard_normal(25)
+    v[:, 2] = 0.3 * np.random.default_rng(8).standard_normal(25)
+    v[:5] = 0.0
+    return cs.Simulation(model, h=1 / 30, solver="newton", tolerance=1e-12, iterations=100,
+                         effects=[cs.Pin(list(range(5)))],
+                         state=State(model.mesh.vertices.copy(), v))
+
+
+def free_fall_onto_box():
+    """A 5 × 5 sheet in free fall from 0.1 m above a small box: free-fall steps first, then
+    contact."""
+    model = gallery.grid_cloth(5, k=800.0, plane="xz", center=(0.0, 0.6, 0.0))
+    return cs.Simulation(model, h=1 / 30, solver="newton", tolerance=1e-12, iterations=100,
+                         effects=[cs.Gravity(gallery.GRAVITY),
+                                  cs.Box((-0.2, 0.0, -0.2), (0.2, 0.5, 0.2))])
+
+
+def check_real_work(steps):
+    measured = [s for s in steps if s.kind == "measured"]
+    assert measured
+    for s in measured:
+        assert s.reference.residual <= 1e-8 or s.reference.floor_ratio < 1e3
+        assert s.one_iteration_error >= 1e-3
+    return measured
+
+
+def test_stiff_cloth_at_rest_is_skipped_not_measured():
+    sim = stiff_settling()
+    recorded = record_problems(sim, steps=60, count=6)
+    steps = prepare_steps(sim.model, recorded)
+    kinds = [s.kind for s in steps]
+    assert kinds[0] == "measured" and kinds.count("at-rest") >= 2, kinds
+    check_real_work(steps)
+    table = rows(measure(sim.model, steps, [Configuration("local-global", 5)]), steps,
+                 h=sim.h)
+    assert table[0].steps_measured == kinds.count("measured")
+    assert table[0].steps_skipped == len(kinds) - kinds.count("measured")
+    assert table[0].steps_at_rest == kinds.count("at-rest")
+    assert table[0].solver_error_max > 1e-6  # real work left after 5 iterations
+
+
+def test_free_fall_steps_are_trivial_and_contact_steps_measured():
+    sim = free_fall_onto_box()
+    recorded = record_problems(sim, steps=16, count=8)
+    steps = prepare_steps(sim.model, recorded)
+    kinds = [s.kind for s in steps]
+    assert kinds[0] == "trivial" and "measured" in kinds, kinds
+    check_real_work(steps)
+
+
+def test_two_minima_are_reported_not_measured(tmp_path):
+    sim = two_minima_simulation()
+    recorded = record_problems(sim, steps=2, count=2)
+    steps = prepare_steps(sim.model, recorded)
+    assert [s.kind for s in steps] == ["measured", "two-minima"]
+    ref = steps[1].reference
+    assert ref.two_minima and math.isnan(ref.uncertainty) and ref.objective_difference < 0
+    table = rows(measure(sim.model, steps, [Configuration("local-global", 3)]), steps,
+                 h=sim.h)
+    assert table[0].steps_two_minima == 1 and table[0].steps_measured == 1
+    header = write_csv(table, tmp_path / "a.csv").read_text().splitlines()[0].split(",")
+    assert "steps_two_minima" in header
+
+
+def test_jobs_two_gives_the_same_errors_as_serial():
+    sim = stiff_settling()
+    steps = prepare_steps(sim.model, record_problems(sim, steps=4, count=2))
+    configs = default_configurations(("local-global", "anderson", "newton"), budgets=(1, 5),
+                                     tolerances=(1e-6,))
+    serial = measure(sim.model, steps, configs, jobs=1)
+    parallel = measure(sim.model, steps, configs, jobs=2)
+    for a, b in zip(serial, parallel):
+        np.testing.assert_array_equal(a.errors, b.errors)
+        np.testing.assert_array_equal(a.iterations, b.iterations)
+
+
+TINY = {"scene": {"name": "tiny", "frames": 6, "fps": 30},
+        "cloth": {"resolution": [4, 4], "plane": "xy", "center": [0.0, 1.0, 0.0]},
+        "springs": {"structural": 800.0, "shear": 800.0, "bending": 80.0},
+        "effects": [{"kind": "gravity", "acceleration": [0.0, -9.81, 0.0]},
+                    {"kind": "pin", "vertices": [12, 15]}]}
+
+
+def test_run_accuracy_writes_csv_sidecar_and_answer(tmp_path):
+    from clothsim.accuracy import run_accuracy
+
+    scene = Scene.from_dict(TINY)
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        text = run_accuracy(scene, tmp_path, methods=("local-global", "newton"), problems=3,
+                            repeats=2, budgets=(1, 5), tolerances=(1e-6,),
+                            time_steps=False, plots=False, target=1e-6)
+    lines = (tmp_path / "accuracy.csv").read_text().splitlines()
+    assert lines[0].split(",")[:len(COLUMNS)] == list(COLUMNS)
+    assert len(lines) == 1 + 3 + 3  # per method: 2 budgets + 1 tolerance
+    assert (tmp_path / "accuracy.json").exists() and "| 1e-06 |" in text
+    assert "no setting reaches this" not in text  # converged Newton reaches 1e-6
+
+
+def test_answer_table_says_when_nothing_reaches_a_level():
+    assert "no setting reaches this" in answer_table([], levels=(1e-3,))
+
+
+def test_bad_options_are_one_line_errors(tmp_path):
+    from clothsim.accuracy import run_accuracy
+    from clothsim.errors import InputError
+
+    with pytest.raises(InputError, match="accuracy.methods"):
+        run_accuracy(Scene.from_dict(TINY), tmp_path, methods=("symplectic-euler",))
+    with pytest.raises(InputError, match="accuracy.jobs"):
+        run_accuracy(Scene.from_dict(TINY), tmp_path, jobs=0)
+
+
+def test_paper_preset_reports_crossover_and_cost_ratio():
+    from clothsim.accuracy import paper_report
+
+    text = paper_report(n=5, frames=2, repeats=1, max_seconds=0.5)
+    assert "| 1e-01 |" in text and "| 1e-08 |" in text
+    assert "of one Newton iteration" in text
+    assert ("crossover: Newton is faster from error" in text
+            or "no crossover within the measured levels" in text)
+
+
+def test_cli_accuracy_command(tmp_path, capsys):
+    from clothsim.cli import main
+
+    scene = tmp_path / "tiny.toml"
+    scene.write_text('[scene]\nname = "tiny"\nframes = 4\n[cloth]\nresolution = [4, 4]\n'
+                     'plane = "xy"\ncenter = [0.0, 1.0, 0.0]\n[[effects]]\nkind = "gravity"\n'
+                     '[[effects]]\nkind = "pin"\nvertices = [12, 15]\n')
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        code = main(["accuracy", str(scene), "--out", str(tmp_path / "out"), "--quick",
+                     "--methods", "local-global,anderson", "--repeats", "1",
+                     "--no-time-steps", "--no-plots", "--problems", "2"])
+    out = capsys.readouterr().out
+    assert code == 0 and "cheapest setting" in out and "Fixed budget" in out
+    assert (tmp_path / "out" / "accuracy.csv").exists()
+    assert main(["accuracy", str(scene), "--methods", "nope"]) == 2
