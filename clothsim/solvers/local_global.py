@@ -120,6 +120,12 @@ class SystemFactor:
     free_runs : list of (start, stop, offset) or None
         The free vertices as runs of consecutive indices (vertex start..stop−1 is unknown
         offset..), when there are few runs; None otherwise.
+    pinned_springs : ndarray, shape (q,), int
+        Springs with an end at an exactly pinned vertex (the only ones whose vector differs
+        between y and the initial guess).
+    work : ndarray, shape (4, 3, f)
+        The iteration's right-hand-side buffers (two consecutive right-hand sides, ∇g and
+        the per-step constant c_F), coordinate-major.
     """
 
     A: sp.csc_matrix
@@ -129,6 +135,8 @@ class SystemFactor:
     A_FP: sp.csr_matrix
     h2J_F: sp.csr_matrix
     free_runs: list | None = None
+    pinned_springs: np.ndarray | None = None
+    work: np.ndarray | None = None
 
 
 class LocalGlobalSolver(Solver):
@@ -168,20 +176,16 @@ class LocalGlobalSolver(Solver):
         self._Ms = model.vertex_mass
         self._Js = matrices.spring_matrix(model, expand=False)
         self._rest = model.springs.spring_rest_length
-        self._a, self._b = model.springs.spring_vertices.T
-        s, n = model.spring_count, model.vertex_count
-        rows = np.repeat(np.arange(s), 2)
-        # incidence D, shape (s, n): p = D x, row i = +1 at a_i, −1 at b_i
-        self._D = sp.csr_matrix((np.tile([1.0, -1.0], s), (rows, model.springs.spring_vertices
-                                                           .reshape(-1))), shape=(s, n))
-        # work buffers, coordinate-major (one contiguous row per coordinate)
-        self._pT = np.empty((3, s))
-        self._length = np.empty(s)
-        self._square = np.empty(s)
-        # directions d, shape (3, s): the current one and a spare; where a spring's ends
-        # coincide the previous direction is kept (any |d| = r is optimal)
+        # spring ends as contiguous index arrays: p_i = x_{a_i} − x_{b_i} by two np.take
+        self._a, self._b = (np.ascontiguousarray(v, dtype=np.intp)
+                            for v in model.springs.spring_vertices.T)
+        s = model.spring_count
+        # work buffers, coordinate-major (one contiguous row per coordinate): spring vectors
+        # p, turned into directions d in place (the current one and the previous one, kept
+        # where a spring's ends coincide: any |d| = r is optimal)
         self._dT = np.zeros((3, s))
         self._dT_spare = np.empty((3, s))
+        self._length = np.empty(s)
         self._directions_into(np.ascontiguousarray(model.mesh.vertices.T))
 
     # -- precomputation -------------------------------------------------------------------
@@ -222,32 +226,43 @@ class LocalGlobalSolver(Solver):
             stops = np.concatenate([breaks, [len(free)]]).astype(int)
             runs = [(int(free[i]), int(free[j - 1]) + 1, int(i)) for i, j in zip(starts, stops)
                     if j > i]
-        return SystemFactor(A, free, fixed, factor, A_FP.tocsr(), h2J_F, runs)
+        pinned_springs = np.flatnonzero(np.isin(self._a, fixed) | np.isin(self._b, fixed))
+        return SystemFactor(A, free, fixed, factor, A_FP.tocsr(), h2J_F, runs, pinned_springs,
+                            np.empty((4, 3, len(free))))
 
     # -- the two half steps ---------------------------------------------------------------
-    def _directions_into(self, xT: np.ndarray) -> np.ndarray:
-        """The local step on coordinate-major positions xT (3, n); returns d as (3, s)."""
-        pT, length, square = self._pT, self._length, self._square
-        pT.fill(0.0)
-        for c in range(3):                                   # p = D x = x_a − x_b
-            _spmv_add(self._D, xT[c], pT[c])
-        np.multiply(pT[0], pT[0], out=length)                # |p|
-        np.multiply(pT[1], pT[1], out=square)
-        length += square
-        np.multiply(pT[2], pT[2], out=square)
-        length += square
+    def _spring_vectors_into(self, xT: np.ndarray, pT: np.ndarray) -> None:
+        """p_i = x_{a_i} − x_{b_i} from coordinate-major positions xT (3, n) into pT (3, s)."""
+        a, b, tmp = self._a, self._b, self._length
+        for xc, pc in zip(xT, pT):  # mode="clip": no bounds check (indices valid by construction)
+            xc.take(a, out=pc, mode="clip")
+            xc.take(b, out=tmp, mode="clip")
+            np.subtract(pc, tmp, out=pc)
+
+    def _directions_from(self, pT: np.ndarray) -> np.ndarray:
+        """The local step on spring vectors pT (3, s), in place: pT becomes d = (r / |p|) p.
+
+        pT must be the spare direction buffer; it becomes the current one. Where a
+        spring's ends coincide (|p| = 0) the previous direction is kept.
+        """
+        length = self._length
+        np.einsum("ij,ij->j", pT, pT, out=length)            # |p|
         np.sqrt(length, out=length)
-        d_prev, d = self._dT, self._dT_spare
         coincident = None
         if len(length) and not length.min() > 0:             # rare: some ends coincide
             coincident = length == 0
             length[coincident] = np.inf                      # r / inf = 0, no division by 0
         np.divide(self._rest, length, out=length)            # d = (r / |p|) p
-        np.multiply(pT, length, out=d)
+        np.multiply(pT, length, out=pT)
         if coincident is not None:
-            d[:, coincident] = d_prev[:, coincident]
-        self._dT, self._dT_spare = d, d_prev
-        return d
+            pT[:, coincident] = self._dT[:, coincident]
+        self._dT, self._dT_spare = pT, self._dT
+        return pT
+
+    def _directions_into(self, xT: np.ndarray) -> np.ndarray:
+        """The local step on coordinate-major positions xT (3, n); returns d as (3, s)."""
+        self._spring_vectors_into(xT, self._dT_spare)
+        return self._directions_from(self._dT_spare)
 
     def local_step(self, x: np.ndarray) -> np.ndarray:
         """d_i = r_i (x_a − x_b) / |x_a − x_b| for all springs at once, shape (s, 3).
@@ -333,15 +348,20 @@ class LocalGlobalSolver(Solver):
         free, fixed, h2 = sysf.free, sysf.fixed, problem.h ** 2
         x = problem.initial_guess() if x0 is None else np.array(x0, dtype=np.float64)
         xT = np.ascontiguousarray(x.T)
-        # per-step constants: y, p(y) = D y, c_F = (h² f + h² K_anchor (q − y))_F − A_FP δ_P
+        # per-step constants: y, p(y) and
+        # c_F = (h² f + h² K_anchor (q − y) − h² J p(y))_F − A_FP δ_P
         y = problem.y
         yT = np.ascontiguousarray(y.T)
-        pyT = np.zeros((3, self.model.spring_count))
+        h2J_F, solve_columns = sysf.h2J_F, sysf.A_FF_factor.solve_columns
+        rhsT, rhs_nextT, gradT, cT = sysf.work
+        pT = self._dT_spare                          # p(y) first, then p(x_0), then d_0
+        self._spring_vectors_into(yT, pT)
+        rhsT.fill(0.0)
         for c in range(3):
-            _spmv_add(self._D, yT[c], pyT[c])
+            _spmv_add(h2J_F, pT[c], rhsT[c])
         c = np.zeros_like(y) if problem.f_ext is None else h2 * problem.f_ext
         problem.anchors.add_rhs(c, h2, origin=y)
-        cT = np.ascontiguousarray(c[free].T)
+        np.subtract(c[free].T, rhsT, out=cT)
         x_fixed_T = None
         if len(fixed):
             x_pinned = np.array(y)
@@ -352,21 +372,25 @@ class LocalGlobalSolver(Solver):
         runs = sysf.free_runs
         yFT = np.ascontiguousarray(yT[:, free]) if runs is None else None
         xFT = np.empty_like(yFT) if runs is None else None
-        eT = np.empty_like(pyT)
-        rhsT, rhs_nextT, gradT = np.empty_like(cT), np.empty_like(cT), np.empty_like(cT)
 
-        def right_hand_side(dT, out):   # (b(d) − A y)_F − A_FP δ_P = h² (J (d − p(y)))_F + c_F
-            np.subtract(dT, pyT, out=eT)  # differences only: no cancellation of large terms
+        def right_hand_side(dT, out):   # (b(d) − A y)_F − A_FP δ_P = h² (J d)_F + c_F
             np.copyto(out, cT)
             for c in range(3):
-                _spmv_add(sysf.h2J_F, eT[c], out[c])
+                _spmv_add(h2J_F, dT[c], out[c])
             return out
 
         def norm(aT):
             flat = aT.reshape(-1)
             return math.sqrt(float(np.dot(flat, flat)))
 
-        dT = self._directions_into(xT)                 # local step at x_0
+        # local step at x_0; x_0 = y (pins applied) has p(y)'s vectors but at the exact pins
+        if x0 is None:
+            pinned = sysf.pinned_springs
+            if len(pinned):
+                pT[:, pinned] = xT[:, self._a[pinned]] - xT[:, self._b[pinned]]
+        else:
+            self._spring_vectors_into(xT, pT)
+        dT = self._directions_from(pT)
         right_hand_side(dT, rhsT)
         if x0 is None:    # δ_F = 0 at x_0, so ∇g(x_0)_F = (A δ)_F − (b − A y)_F = −rhs_F
             yield Iterate(0, x, norm(rhsT))
@@ -377,7 +401,7 @@ class LocalGlobalSolver(Solver):
         k = 0
         while True:
             # global step: A_FF δ_F = h² (J (d − p(y)))_F + c_F, x = y + δ
-            deltaT = sysf.A_FF_factor.solve_columns(rhsT)
+            deltaT = solve_columns(rhsT)
             if runs is None:
                 np.add(yFT, deltaT, out=xFT)
                 xT[:, free] = xFT
