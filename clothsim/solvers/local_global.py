@@ -22,15 +22,17 @@ coordinate-major buffers (x as three contiguous rows), so that an iteration cost
 more than its sparse solve (docs/performance.md):
 
 - everything that does not change within a step is computed once per step: the
-  right-hand side is h² (J (d − p(y)))_F plus c_F = (h² f + h² K_anchor (q − y))_F
-  − A_FP δ_P, with p(y) and c_F fixed during the step (d − p(y) rather than J d − J p(y):
-  no cancellation of large terms, so momentum is conserved to rounding of the motion);
+  right-hand side is h² (J d)_F plus c_F = (h² f + h² K_anchor (q − y) − h² J p(y))_F
+  − A_FP δ_P, with p(y) (the spring vectors of y) and c_F fixed during the step; only
+  differences of positions enter, so the result does not depend on where the cloth is;
 - the residual comes for free: after a global step A_FF δ_F + A_FP δ_P = rhs(d_k)_F, so
   ∇g(x_{k+1}) = (A x_{k+1} − b(d_{k+1}))_F = rhs(d_k)_F − rhs(d_{k+1})_F, the difference of
   two consecutive right-hand sides the iteration forms anyway;
-- spring vectors p = D x come from one sparse product with the incidence matrix D
-  (rows +1 at a_i, −1 at b_i), their lengths from three products and a square root, and
-  coincident ends (|p| = 0) are detected from one minimum, not a boolean mask.
+- spring vectors p_i = x_{a_i} − x_{b_i} come from two ``np.take`` per coordinate into the
+  spare direction buffer, which the local step then scales in place into d (no
+  temporaries); coincident ends (|p| = 0) are detected from one minimum, not a boolean
+  mask; at x_0 = y (pins applied) p(y) is reused and only the springs at exact pins are
+  recomputed.
 
 The result equals the plain half steps to rounding (tested against them and against the
 paper-literal dense iteration in :mod:`clothsim.reference`). The reported ‖∇g‖ is exact up
@@ -47,7 +49,6 @@ ACM Transactions on Graphics 32(6), 214, 2013. DOI 10.1145/2508363.2508406.
 
 from __future__ import annotations
 
-import contextlib
 import logging
 import math
 from dataclasses import dataclass
@@ -56,47 +57,11 @@ import numpy as np
 import scipy.sparse as sp
 
 from .. import matrices
-from ..factorization import Factor
+from ..factorization import Factor, single_threaded_blas, spmv_add
 from ..model import Model
 from .base import Iterate, Solver, StepProblem, StepResult
 
-try:  # y += A x for CSR A without temporaries; the public A @ x is the fallback
-    from scipy.sparse._sparsetools import csr_matvec as _csr_matvec
-except ImportError:  # pragma: no cover
-    _csr_matvec = None
-
 log = logging.getLogger(__name__)
-
-
-def _spmv_add(A: sp.csr_matrix, v: np.ndarray, out: np.ndarray) -> None:
-    """out += A v in place, for a CSR matrix A and contiguous float64 vectors."""
-    if _csr_matvec is None:  # pragma: no cover
-        out += A @ v
-    else:
-        _csr_matvec(A.shape[0], A.shape[1], A.indptr, A.indices, A.data, v, out)
-
-
-_blas_controller = None
-
-
-def single_threaded_blas():
-    """A context limiting BLAS to one thread (threadpoolctl), or a no-op without it.
-
-    An iteration's vector operations are small (microseconds to a millisecond); on a shared
-    machine, BLAS worker threads that spin or wait for a busy core can stall them for far
-    longer than they take. The solver therefore runs each step with one BLAS thread.
-    """
-    global _blas_controller
-    if _blas_controller is None:
-        try:
-            from threadpoolctl import ThreadpoolController
-        except ImportError:  # pragma: no cover
-            _blas_controller = False
-        else:
-            _blas_controller = ThreadpoolController()
-    if _blas_controller is False:  # pragma: no cover
-        return contextlib.nullcontext()
-    return _blas_controller.limit(limits=1, user_api="blas")
 
 
 @dataclass(eq=False)
@@ -358,7 +323,7 @@ class LocalGlobalSolver(Solver):
         self._spring_vectors_into(yT, pT)
         rhsT.fill(0.0)
         for c in range(3):
-            _spmv_add(h2J_F, pT[c], rhsT[c])
+            spmv_add(h2J_F, pT[c], rhsT[c])
         c = np.zeros_like(y) if problem.f_ext is None else h2 * problem.f_ext
         problem.anchors.add_rhs(c, h2, origin=y)
         np.subtract(c[free].T, rhsT, out=cT)
@@ -376,7 +341,7 @@ class LocalGlobalSolver(Solver):
         def right_hand_side(dT, out):   # (b(d) − A y)_F − A_FP δ_P = h² (J d)_F + c_F
             np.copyto(out, cT)
             for c in range(3):
-                _spmv_add(h2J_F, dT[c], out[c])
+                spmv_add(h2J_F, dT[c], out[c])
             return out
 
         def norm(aT):
