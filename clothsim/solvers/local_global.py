@@ -22,9 +22,10 @@ coordinate-major buffers (x as three contiguous rows), so that an iteration cost
 more than its sparse solve (docs/performance.md):
 
 - everything that does not change within a step is computed once per step: the
-  right-hand side is h² (J d)_F plus c_F = (h² f + h² K_anchor (q − y) − h² J p(y))_F
-  − A_FP δ_P, with p(y) (the spring vectors of y) and c_F fixed during the step; only
-  differences of positions enter, so the result does not depend on where the cloth is;
+  right-hand side is h² (J (d − p(y)))_F plus c_F = (h² f + h² K_anchor (q − y))_F
+  − A_FP δ_P, with p(y) (the spring vectors of y) and c_F fixed during the step
+  (d − p(y) rather than J d − J p(y): no cancellation of large terms, so momentum is
+  conserved to rounding of the motion);
 - the residual comes for free: after a global step A_FF δ_F + A_FP δ_P = rhs(d_k)_F, so
   ∇g(x_{k+1}) = (A x_{k+1} − b(d_{k+1}))_F = rhs(d_k)_F − rhs(d_{k+1})_F, the difference of
   two consecutive right-hand sides the iteration forms anyway;
@@ -147,9 +148,11 @@ class LocalGlobalSolver(Solver):
         s = model.spring_count
         # work buffers, coordinate-major (one contiguous row per coordinate): spring vectors
         # p, turned into directions d in place (the current one and the previous one, kept
-        # where a spring's ends coincide: any |d| = r is optimal)
+        # where a spring's ends coincide: any |d| = r is optimal), p(y) and d − p(y)
         self._dT = np.zeros((3, s))
         self._dT_spare = np.empty((3, s))
+        self._pyT = np.empty((3, s))
+        self._eT = np.empty((3, s))
         self._length = np.empty(s)
         self._directions_into(np.ascontiguousarray(model.mesh.vertices.T))
 
@@ -313,20 +316,16 @@ class LocalGlobalSolver(Solver):
         free, fixed, h2 = sysf.free, sysf.fixed, problem.h ** 2
         x = problem.initial_guess() if x0 is None else np.array(x0, dtype=np.float64)
         xT = np.ascontiguousarray(x.T)
-        # per-step constants: y, p(y) and
-        # c_F = (h² f + h² K_anchor (q − y) − h² J p(y))_F − A_FP δ_P
+        # per-step constants: y, p(y), c_F = (h² f + h² K_anchor (q − y))_F − A_FP δ_P
         y = problem.y
         yT = np.ascontiguousarray(y.T)
         h2J_F, solve_columns = sysf.h2J_F, sysf.A_FF_factor.solve_columns
         rhsT, rhs_nextT, gradT, cT = sysf.work
-        pT = self._dT_spare                          # p(y) first, then p(x_0), then d_0
-        self._spring_vectors_into(yT, pT)
-        rhsT.fill(0.0)
-        for c in range(3):
-            spmv_add(h2J_F, pT[c], rhsT[c])
+        pyT, eT = self._pyT, self._eT
+        self._spring_vectors_into(yT, pyT)
         c = np.zeros_like(y) if problem.f_ext is None else h2 * problem.f_ext
         problem.anchors.add_rhs(c, h2, origin=y)
-        np.subtract(c[free].T, rhsT, out=cT)
+        cT[...] = c[free].T
         x_fixed_T = None
         if len(fixed):
             x_pinned = np.array(y)
@@ -338,10 +337,11 @@ class LocalGlobalSolver(Solver):
         yFT = np.ascontiguousarray(yT[:, free]) if runs is None else None
         xFT = np.empty_like(yFT) if runs is None else None
 
-        def right_hand_side(dT, out):   # (b(d) − A y)_F − A_FP δ_P = h² (J d)_F + c_F
+        def right_hand_side(dT, out):   # (b(d) − A y)_F − A_FP δ_P = h² (J (d − p(y)))_F + c_F
+            np.subtract(dT, pyT, out=eT)  # differences only: momentum kept to their rounding
             np.copyto(out, cT)
             for c in range(3):
-                spmv_add(h2J_F, dT[c], out[c])
+                spmv_add(h2J_F, eT[c], out[c])
             return out
 
         def norm(aT):
@@ -349,7 +349,9 @@ class LocalGlobalSolver(Solver):
             return math.sqrt(float(np.dot(flat, flat)))
 
         # local step at x_0; x_0 = y (pins applied) has p(y)'s vectors but at the exact pins
+        pT = self._dT_spare
         if x0 is None:
+            np.copyto(pT, pyT)
             pinned = sysf.pinned_springs
             if len(pinned):
                 pT[:, pinned] = xT[:, self._a[pinned]] - xT[:, self._b[pinned]]
