@@ -5,10 +5,12 @@ Run from the repository root::
     .venv/bin/python -m benchmarks.stability_figures            # everything, ~3–4 min
     .venv/bin/python -m benchmarks.stability_figures --quick    # without the full flag
 
-The figures come from the same ``measure_*`` helpers the tests assert on
-(tests/test_stability_{solver,exact,contact,long}.py), so the table and the tests cannot
-drift apart. Cases 7 and 8 also re-measure the set-ups of tests/effects/test_effects.py (imported
-from there: same cloth, same obstacles, same step counts).
+The figures come from the same ``measure_*`` functions the tests assert on
+(:mod:`benchmarks.measure_stability` and :mod:`benchmarks.measure_long_run`, imported by
+tests/test_stability_{solver,exact,contact,long}.py), so the table and the tests cannot
+drift apart. Cases 7 and 8 re-measure the set-ups of the obstacle tests
+(tests/effects/test_effects.py: same cloth, same obstacles, same step counts), written here
+from the public API.
 """
 
 from __future__ import annotations
@@ -20,19 +22,27 @@ import warnings
 import numpy as np
 
 import clothsim as cs
-from tests import test_stability_contact as co
-from tests import test_stability_exact as ex
-from tests import test_stability_long as lo
-from tests import test_stability_solver as so
-from tests.effects import test_effects as ef
+
+from . import measure_long_run as lo
+from . import measure_stability as ms
+
+H = 1 / 30
+
+
+def grid_model(n: int = 8, *, size: float = 0.5, center=(0.0, 0.3, 0.0), k: float = 200.0):
+    """The obstacle tests' cloth: n × n, horizontal, 0.1 kg, uniform masses."""
+    mesh = cs.grid(n, n, size=(size, size), center=center, plane="xz")
+    springs = cs.grid_springs(mesh, structural=k, shear=k, bending=k / 10)
+    return cs.Model.build(mesh, springs, total_mass=0.1, mass_lumping="uniform")
 
 
 def measure_slab_in_simulation() -> dict:
     """tests/effects/test_effects.py::test_thin_box_no_tunnelling_in_simulation, measured."""
-    model = ef.grid_model(6, size=0.3, center=(0.0, 0.08, 0.0))
+    model = grid_model(6, size=0.3, center=(0.0, 0.08, 0.0))
     box = cs.Box((-1, 0, -1), (1, 0.01, 1))
-    sim = cs.Simulation(model, h=ef.H, effects=[box],
-                        state=ef.state_of(model, (0.0, -5 * 0.01 / ef.H, 0.0)))
+    x = model.mesh.vertices.copy()
+    velocity = np.broadcast_to([0.0, -5 * 0.01 / H, 0.0], x.shape).copy()
+    sim = cs.Simulation(model, h=H, effects=[box], state=cs.State(x, velocity))
     below, contacts = -np.inf, []
     for _ in range(6):
         sim.step()
@@ -50,6 +60,29 @@ def measure_small_sphere_direct() -> float:
     out = cs.Sphere(c, R).correct_positions(0.0, cs.State(x0, np.zeros_like(x0)),
                                             x0 + (0.0, -0.05, 0.0))
     return float((np.linalg.norm(out - c, axis=1) - R).min())
+
+
+def measure_resting_contact(name: str, friction: float, settle: int) -> dict:
+    """tests/effects/test_effects.py::test_resting_contact, measured: an 8×8 cloth settled on
+    a plane (y = 0) or a sphere (centre 0, radius 0.2 m) for ``settle`` steps, then over one
+    more second the max speed [m/s] and the max depth inside [m]."""
+    if name == "plane":
+        obstacle = cs.Plane((0, 0, 0), (0, 1, 0), friction=friction)
+        def depth(x):
+            return -x[:, 1]
+    else:
+        obstacle = cs.Sphere((0, 0, 0), 0.2, friction=friction)
+        def depth(x):
+            return 0.2 - np.linalg.norm(x, axis=1)
+    sim = cs.Simulation(grid_model(center=(0.0, 0.25, 0.0)), h=H,
+                        effects=[cs.Gravity(), obstacle], iterations=20)
+    sim.run(settle)
+    speed, inside = 0.0, -np.inf
+    for _ in range(30):
+        sim.step()
+        speed = max(speed, np.linalg.norm(sim.state.velocities, axis=1).max())
+        inside = max(inside, depth(sim.state.positions).max())
+    return {"max_speed": speed, "max_inside": inside}
 
 
 def print_long_run(label: str, r: dict) -> None:
@@ -78,27 +111,27 @@ def main(argv=None) -> None:
     args = parser.parse_args([] if argv is None else argv)
     warnings.simplefilter("ignore")
     print("case 1  stiffness sweep (4x4, h=1/30, cap 1000 iterations, tolerance 1e-6)")
-    for r in so.measure_stiffness_sweep():
+    for r in ms.measure_stiffness_sweep():
         print(f"    k={r['k']:.0e}  iterations={r['iterations']:5d}  residual={r['residual']:.2e}"
               f"  warned={bool(r['warnings'])}  finite={r['finite']}")
     print("case 2  max per-step relative energy increase (Newton 1e-12, 20 steps)")
     for h in (1 / 24, 0.1, 1.0):
-        r = so.measure_energy_increase(h)
+        r = ms.measure_energy_increase(h)
         print(f"    h={h:.4g}  {r['max_relative_increase']:.2e}  (energy lost"
               f" {r['energy_lost']:.3f} J)")
     print(f"case 3  max relative increase of g-hat over half steps: "
-          f"{so.measure_degenerate_monotone()['max_relative_increase']:.2e}")
+          f"{ms.measure_degenerate_monotone()['max_relative_increase']:.2e}")
     print(f"        zero-rest spring length after 12 steps:"
-          f" {so.measure_zero_rest_collapse():.2e} m")
+          f" {ms.measure_zero_rest_collapse():.2e} m")
     for scale in (10.0, 0.01):
-        r = so.measure_release(scale)
+        r = ms.measure_release(scale)
         print(f"case 4  scale {scale:g}: start max|l/r-1|={r['start_strain']:.3g} "
               f"-> {r['strain']:.2e} after 200 steps")
-    for r in so.measure_mass_extremes():
+    for r in ms.measure_mass_extremes():
         print(f"case 5  m={r['vertex_mass']:.0e} k={r['k']:.0e}: cond1={r['cond']:.3g}")
-    print(f"case 6  free fall max error: local-global {ex.measure_free_fall():.2e} m, "
-          f"newton {ex.measure_free_fall('newton'):.2e} m")
-    print(f"        release vs refactor: {ex.measure_release_vs_refactor():.2e} m")
+    print(f"case 6  free fall max error: local-global {ms.measure_free_fall():.2e} m, "
+          f"newton {ms.measure_free_fall('newton'):.2e} m")
+    print(f"        release vs refactor: {ms.measure_release_vs_refactor():.2e} m")
     r = measure_slab_in_simulation()
     print(f"case 7  slab 0.01 m, 0.05 m per step: max depth below the top"
           f" {r['max_below_top']:.1e} m,"
@@ -106,26 +139,26 @@ def main(argv=None) -> None:
     print(f"        sphere R=0.005 m, 0.05 m segments: min |x-c| - R = "
           f"{measure_small_sphere_direct():.1e} m")
     for mu in (0.0, 1.0):
-        r = co.measure_sphere_tunnelling(mu)
+        r = ms.measure_sphere_tunnelling(mu)
         print(f"        sphere R=0.01 m in a simulation, 0.1 m per step, mu={mu:g}: max depth "
               f"{r['max_depth']:.1e} m, caught {len(r['caught'])} on step 1 at y >= "
               f"{r['caught_height']:.4f} m (free: {r['would_end']:.4f} m), gap "
               f"{r['caught_gap'].max():.1e} m")
     for name, mu, settle in (("plane", 0.0, 60), ("sphere", 1.0, 150)):
-        r = ef.measure_resting_contact(name, mu, settle)
+        r = measure_resting_contact(name, mu, settle)
         print(f"case 8  resting on {name} (mu={mu:g}, settle {settle} steps): max |v| over 1 s "
               f"{r['max_speed']:.1e} m/s, max depth inside {r['max_inside']:.1e} m")
     print("case 9  long run of the flag scene (h = 1/30 s)")
     print_long_run("coarse 7x5 (the test)", lo.measure_long_run())
     if not args.quick:
         print_long_run("full 31x21", lo.measure_long_run(resolution=None))
-    r = ex.measure_invariance()
+    r = ms.measure_invariance()
     print(f"case 10 rotation {r['rotation']:.2e} m; translation"
           f" {r['translation_per_metre']:.2e} m/m")
-    print(f"case 11 oscillator max deviation: {ex.measure_oscillator():.2e} m")
-    r = ex.measure_convergence_order()
+    print(f"case 11 oscillator max deviation: {ms.measure_oscillator():.2e} m")
+    r = ms.measure_convergence_order()
     print(f"case 12 slope {r['slope']:.4f}; errors {[f'{e:.3e}' for e in r['errors']]}")
-    print(f"case 13 max |A - A^T| / max |A|: {so.measure_symmetry():.1e}")
+    print(f"case 13 max |A - A^T| / max |A|: {ms.measure_symmetry():.1e}")
 
 
 if __name__ == "__main__":

@@ -20,10 +20,15 @@ Which CHOLMOD mode is faster depends on the number of right-hand sides: for the 
 step's n × n matrix with three right-hand sides (x, y, z), simplicial solves 1.6–2×
 faster than supernodal on the cloth grids measured in docs/performance.md, so
 :class:`~clothsim.solvers.LocalGlobalSolver` asks for it explicitly.
+
+Two helpers of the iterations that run around a factor: :func:`spmv_add` (a sparse product
+accumulated in place, no temporary) and :func:`single_threaded_blas` (BLAS limited to one
+thread with threadpoolctl; see docs/performance.md).
 """
 
 from __future__ import annotations
 
+import contextlib
 import logging
 import warnings
 from functools import cached_property
@@ -33,6 +38,11 @@ import scipy.sparse as sp
 import scipy.sparse.linalg as spla
 
 from .errors import ConditioningWarning, FactorizationError, InputError
+
+try:  # y += A x for CSR A without temporaries; the public A @ x is the fallback
+    from scipy.sparse._sparsetools import csr_matvec as _csr_matvec
+except ImportError:  # pragma: no cover
+    _csr_matvec = None
 
 log = logging.getLogger(__name__)
 
@@ -172,3 +182,44 @@ class Factor:
         inv = spla.LinearOperator(self.shape, matvec=self.solve, rmatvec=self.solve,
                                   matmat=self.solve, dtype=np.float64)
         return float(spla.onenormest(self.A) * spla.onenormest(inv))
+
+
+# -- helpers of the iterations around a factor --------------------------------------------
+def spmv_add(A: sp.csr_matrix, v: np.ndarray, out: np.ndarray) -> None:
+    """out += A v in place, for a CSR matrix A and contiguous float64 vectors.
+
+    Parameters
+    ----------
+    A : csr_matrix, shape (m, n)
+    v : ndarray, shape (n,), float64, contiguous
+    out : ndarray, shape (m,), float64, contiguous
+        Accumulated into (no temporary is allocated).
+    """
+    if _csr_matvec is None:  # pragma: no cover
+        out += A @ v
+    else:
+        _csr_matvec(A.shape[0], A.shape[1], A.indptr, A.indices, A.data, v, out)
+
+
+_blas_controller = None
+
+
+def single_threaded_blas():
+    """A context limiting BLAS to one thread (threadpoolctl), or a no-op without it.
+
+    An iteration's vector operations are small (microseconds to a millisecond); on a shared
+    machine, BLAS worker threads that spin or wait for a busy core can stall them for far
+    longer than they take. :class:`~clothsim.solvers.LocalGlobalSolver` therefore runs each
+    step with one BLAS thread.
+    """
+    global _blas_controller
+    if _blas_controller is None:
+        try:
+            from threadpoolctl import ThreadpoolController
+        except ImportError:  # pragma: no cover
+            _blas_controller = False
+        else:
+            _blas_controller = ThreadpoolController()
+    if _blas_controller is False:  # pragma: no cover
+        return contextlib.nullcontext()
+    return _blas_controller.limit(limits=1, user_api="blas")

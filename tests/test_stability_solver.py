@@ -17,39 +17,26 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 
 import clothsim as cs
-from clothsim import energy, matrices
+from benchmarks.measure_stability import (
+    degenerate_model,
+    exact_condition,
+    measure_degenerate_monotone,
+    measure_energy_increase,
+    measure_release,
+    measure_stiffness_sweep,
+    measure_symmetry,
+    measure_zero_rest_collapse,
+    one_step,
+)
+from clothsim import matrices
 from clothsim.errors import ConditioningWarning, ConvergenceWarning, FactorizationError
 from clothsim.factorization import CONDITION_WARNING_THRESHOLD, Factor, cholmod_available
 from clothsim.gallery import GRAVITY
 from clothsim.gallery import grid_cloth as make_grid_model
-from clothsim.solvers import LocalGlobalSolver, NewtonSolver, augmented_objective
+from clothsim.solvers import LocalGlobalSolver
 
 BACKENDS = ["splu", pytest.param("cholmod", marks=pytest.mark.skipif(
     not cholmod_available(), reason="scikit-sparse (CHOLMOD) not installed"))]
-STIFFNESSES = [1e2, 1e3, 1e4, 1e5, 1e6, 1e7, 1e8]
-
-
-# -- case 1: stiffness sweep -------------------------------------------------------------------
-def one_step(k: float, *, iterations: int, tolerance: float = 1e-6):
-    """One step of a 4 × 4 horizontal cloth pinned at two corners, h = 1/30 s."""
-    model = make_grid_model(4, k=k)
-    sim = cs.Simulation(model, h=1 / 30, effects=[cs.Gravity(GRAVITY), cs.Pin([0, 3])],
-                        iterations=iterations, tolerance=tolerance)
-    with warnings.catch_warnings(record=True) as caught:
-        warnings.simplefilter("always", ConvergenceWarning)
-        record = sim.step()
-    return sim, record, [w for w in caught if issubclass(w.category, ConvergenceWarning)]
-
-
-def measure_stiffness_sweep(iterations: int = 1000) -> list[dict]:
-    """Iterations to reach a relative residual of 1e-6 for k = 1e2 … 1e8 [N/m]."""
-    rows = []
-    for k in STIFFNESSES:
-        sim, rec, caught = one_step(k, iterations=iterations)
-        rows.append({"k": k, "iterations": rec.iterations, "residual": rec.residual,
-                     "converged": rec.converged, "warnings": [str(w.message) for w in caught],
-                     "finite": bool(np.isfinite(sim.state.positions).all())})
-    return rows
 
 
 def test_stiffness_sweep_iterations_grow_and_limit_warns():
@@ -84,27 +71,6 @@ def test_stiffness_any_k_finite_and_warns_iff_not_converged(log_k):
                          str(caught[0].message))
 
 
-# -- case 2: large time steps, energy --------------------------------------------------------
-def total_energy(model, x, v) -> float:
-    """Kinetic + spring + gravity energy [J]."""
-    return (energy.kinetic_energy(model, v) + energy.spring_energy(model, x)
-            + energy.gravity_energy(model, x, GRAVITY))
-
-
-def measure_energy_increase(h: float, steps: int = 20) -> dict:
-    """Largest per-step energy change / max |E| of a converged (Newton, 1e-12) run."""
-    model = make_grid_model(5)
-    sim = cs.Simulation(model, h=h, effects=[cs.Gravity(GRAVITY), cs.Pin([0, 4])],
-                        solver="newton", iterations=50, tolerance=1e-12)
-    E = [total_energy(model, sim.state.positions, sim.state.velocities)]
-    for _ in range(steps):
-        sim.step()
-        E.append(total_energy(model, sim.state.positions, sim.state.velocities))
-    E = np.array(E)
-    return {"h": h, "max_relative_increase": float(np.max(np.diff(E)) / np.max(np.abs(E))),
-            "energy_lost": float(E[0] - E[-1]), "finite": bool(np.isfinite(E).all())}
-
-
 @pytest.mark.parametrize("h", [1 / 24, 0.1, 1.0])
 def test_large_steps_finite_and_never_gain_energy(h):
     out = measure_energy_increase(h)
@@ -112,48 +78,6 @@ def test_large_steps_finite_and_never_gain_energy(h):
     # pins fixed, gravity conservative: no external work, implicit Euler only dissipates
     assert out["max_relative_increase"] <= 1e-12, out
     assert out["energy_lost"] > 0
-
-
-# -- case 3: coincident vertices and zero rest lengths ---------------------------------------
-def degenerate_model():
-    """A 4 × 4 grid whose vertex 5 sits on vertex 6 (zero-rest springs 5–6) and whose
-    start shape also puts vertex 9 on vertex 10 (a spring with r > 0 and coincident ends)."""
-    mesh = cs.grid(4, 4, size=(1.0, 1.0), plane="xz")
-    v = mesh.vertices.copy()
-    v[5] = v[6]
-    mesh = cs.Mesh(v, mesh.triangles, grid_shape=mesh.grid_shape)
-    springs = cs.grid_springs(mesh, structural=500.0, shear=500.0, bending=50.0)
-    model = cs.Model.build(mesh, springs, total_mass=1.0)
-    x0 = v.copy()
-    x0[9] = x0[10]
-    return model, x0
-
-
-def measure_degenerate_monotone(steps: int = 5, iterations: int = 20) -> dict:
-    """Largest increase of ĝ over any half step (local or global), relative to |ĝ|."""
-    model, x0 = degenerate_model()
-    assert np.sum(model.springs.spring_rest_length == 0) >= 1
-    sim = cs.Simulation(model, h=1 / 30, effects=[cs.Gravity(GRAVITY), cs.Pin([0, 3])],
-                        state=cs.State(x0, np.zeros_like(x0)))
-    solver = LocalGlobalSolver(model)
-    worst = -np.inf
-    for _ in range(steps):
-        problem = sim.problem()
-        x = problem.initial_guess()
-        d = solver.local_step(x)
-        g_prev = augmented_objective(model, problem, x, d)
-        for _ in range(iterations):
-            x = solver.global_step(problem, d)
-            g_glob = augmented_objective(model, problem, x, d)
-            d = solver.local_step(x)
-            g_loc = augmented_objective(model, problem, x, d)
-            for a, b in ((g_prev, g_glob), (g_glob, g_loc)):
-                worst = max(worst, (b - a) / max(abs(a), 1e-300))
-            g_prev = g_loc
-            assert np.isfinite(x).all() and np.isfinite(d).all()
-        sim.state = cs.State(x, (x - sim.state.positions) / sim.h, sim.state.time + sim.h,
-                             sim.state.step + 1)
-    return {"max_relative_increase": float(worst)}
 
 
 def test_coincident_vertices_objective_monotone_and_finite():
@@ -170,41 +94,9 @@ def test_local_step_keeps_a_length_r_direction_where_ends_coincide():
     np.testing.assert_allclose(np.linalg.norm(d, axis=1), r, rtol=1e-14, atol=0)
 
 
-def measure_zero_rest_collapse(steps: int = 12) -> float:
-    """Length [m] of an unloaded zero-rest spring (two 1 kg vertices 1 m apart, k = 1e3 N/m,
-    h = 1 s) after ``steps`` steps."""
-    mesh = cs.Mesh(np.array([[0.0, 0.0, 0.0], [1.0, 0.3, -0.2]]), strands=[[0, 1]])
-    springs = cs.Springs([[0, 1]], [1e3], [0.0], [0])
-    model = cs.Model.build(mesh, springs, vertex_mass=[1.0, 1.0])
-    sim = cs.Simulation(model, h=1.0)
-    sim.run(steps)
-    assert np.isfinite(sim.state.positions).all()
-    return float(energy.spring_lengths(model, sim.state.positions)[0])
-
-
 def test_unloaded_zero_rest_spring_collapses():
     # implicit Euler shrinks the amplitude by (1 + ω²h²)^(-1/2) = 1/44.7 per step here
     assert measure_zero_rest_collapse() < 1e-9
-
-
-# -- case 4: extreme deformation -------------------------------------------------------------
-def measure_release(scale: float, *, seed: int = 1, steps: int = 200) -> dict:
-    """Max |l/r − 1| after releasing a 5 × 5 cloth scaled by ``scale`` about its centre and
-    jittered (3 % of its size, in 3-D), with velocity damping c = 0.1, h = 1/30 s."""
-    from clothsim.effects.damping import Damping
-
-    model = make_grid_model(5)
-    rng = np.random.default_rng(seed)
-    v = model.mesh.vertices
-    c = v.mean(axis=0)
-    x0 = c + scale * (v - c + 0.03 * 0.25 * rng.standard_normal(v.shape))
-    sim = cs.Simulation(model, h=1 / 30, effects=[Damping("velocity", 0.1)],
-                        state=cs.State(x0, np.zeros_like(x0)))
-    start = float(np.max(np.abs(energy.spring_strain(model, x0))))
-    sim.run(steps)
-    x = sim.state.positions
-    return {"scale": scale, "start_strain": start, "finite": bool(np.isfinite(x).all()),
-            "strain": float(np.max(np.abs(energy.spring_strain(model, x))))}
 
 
 @pytest.mark.parametrize("scale", [10.0, 0.01])
@@ -213,21 +105,6 @@ def test_extreme_stretch_or_crush_returns_to_rest(scale):
     assert out["finite"]
     assert out["start_strain"] > 0.9
     assert out["strain"] < 1e-3, out
-
-
-# -- case 5: mass extremes and conditioning --------------------------------------------------
-def exact_condition(model, h):
-    A = matrices.system_matrix(model, h).toarray()
-    return float(np.linalg.cond(A, 1))
-
-
-def measure_mass_extremes() -> list[dict]:
-    """Exact cond₁(M + h²L), h = 1/30 s, for extreme vertex masses on a 4 × 4 cloth."""
-    rows = []
-    for mass, k in ((1e-9, 800.0), (1e-9, 1e5), (1e3, 800.0)):
-        rows.append({"vertex_mass": mass, "k": k,
-                     "cond": exact_condition(make_grid_model(4, k=k, vertex_mass=mass), 1 / 30)})
-    return rows
 
 
 @pytest.mark.parametrize("backend", BACKENDS)
@@ -268,24 +145,6 @@ def test_conditioning_warning_fires_iff_condition_passes_threshold(log_mass):
         assert fired
     if cond <= CONDITION_WARNING_THRESHOLD:
         assert not fired
-
-
-# -- case 13: system matrix and factorization ------------------------------------------------
-def measure_symmetry() -> float:
-    """max |A − Aᵀ| / max |A| over the scalar and 3n system matrices (with anchors) and a
-    Newton Hessian of a deformed cloth."""
-    model = make_grid_model(5)
-    worst = 0.0
-    mats = [matrices.system_matrix(model, 1 / 30),
-            matrices.system_matrix(model, 0.1, expand=True, anchor_vertices=[0, 4],
-                                   anchor_stiffness=1e5)]
-    x = model.mesh.vertices + 0.05 * np.random.default_rng(0).standard_normal((25, 3))
-    problem = cs.StepProblem(1 / 30, x, np.zeros_like(x))
-    mats.append(NewtonSolver(model).hessian(problem, x))
-    for A in mats:
-        A = sp.csr_matrix(A)
-        worst = max(worst, abs(A - A.T).max() / abs(A).max())
-    return float(worst)
 
 
 def test_system_matrix_symmetric_and_positive_definite():

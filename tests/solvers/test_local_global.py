@@ -343,3 +343,50 @@ def test_fast_iteration_equals_the_plain_half_steps(pins):
     # the solve() path returns the same x and a C-ordered copy
     res = LocalGlobalSolver(sim.model, iterations=11).solve(problem)
     assert res.x.flags.c_contiguous and np.abs(res.x - xs[-1]).max() <= 1e-12 * scale
+
+
+def plain_iterates(model, problem, x, count):
+    """x_0 .. x_count from the plain half steps (local_step, global_step), from x."""
+    plain = LocalGlobalSolver(model)
+    xs = [x]
+    for _ in range(count):
+        x = plain.global_step(problem, plain.local_step(x))
+        xs.append(x)
+    return xs
+
+
+@pytest.mark.parametrize("case", ["x0 given", "coincident ends", "pinned spring ends"])
+def test_fast_iteration_paths_equal_the_plain_half_steps(case):
+    """The iteration's other paths: a given x_0 (spring vectors gathered, not taken from
+    p(y)), springs whose ends coincide in y (previous direction kept), and springs between
+    two exactly pinned vertices; with gravity, exact and penalty pins."""
+    model = hanging(n=6, k=400.0)
+    rng = np.random.default_rng(5)
+    x = model.mesh.vertices + rng.normal(scale=0.02, size=model.mesh.vertices.shape)
+    v = rng.normal(scale=0.3, size=x.shape)
+    fixed = [30, 35] if case != "pinned spring ends" else [30, 31, 35]
+    if case == "coincident ends":     # vertex 1 lands exactly on vertex 0 in y = x + h v
+        a, b = model.springs.spring_vertices[0]
+        v[b] = v[a]
+        x[b] = x[a]
+    problem = StepProblem(1 / 30, x, v, f_ext=model.vertex_mass[:, None] * G,
+                          fixed_vertices=fixed, fixed_positions=model.mesh.vertices[fixed],
+                          anchor_vertices=[0], anchor_positions=x[[0]] + 0.01,
+                          anchor_stiffness=[50.0])
+    x0 = problem.initial_guess()
+    if case == "x0 given":
+        x0 = x0 + rng.normal(scale=0.01, size=x0.shape)
+    xs = plain_iterates(model, problem, x0, 6)
+    fast = LocalGlobalSolver(model)
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")  # no divide-by-zero RuntimeWarning
+        its = fast.iterates(problem, x0 if case == "x0 given" else None)
+        got = [next(its).x.copy() for _ in range(7)]
+    scale = np.abs(xs[0]).max()
+    for k, (x_fast, x_ref) in enumerate(zip(got, xs)):
+        if k == 0 and case == "x0 given":
+            np.testing.assert_array_equal(x_fast, x0)
+            continue
+        assert np.all(np.isfinite(x_fast))
+        assert np.abs(x_fast - x_ref).max() <= 1e-12 * scale
+        np.testing.assert_array_equal(x_fast[fixed], model.mesh.vertices[fixed])
