@@ -98,7 +98,7 @@ def write_csv(table: Sequence[Row], path) -> Path:
 def write_sidecar(info: dict, path) -> Path:
     """Machine, versions, threads and one-off costs as JSON next to the CSV."""
     path = Path(path)
-    path.write_text(json.dumps(info, indent=2, sort_keys=True) + "\n")
+    path.write_text(json.dumps(info, indent=2, sort_keys=True, default=str) + "\n")
     return path
 
 

@@ -1,0 +1,277 @@
+"""The ``clothsim`` command (also ``python -m clothsim``).
+
+::
+
+    clothsim [--version] [-v | -vv] COMMAND [-v | -vv] ...
+    clothsim run [SCENE] [--out DIR] [--frames N] [--resume] [--no-preview]
+    clothsim scenes [--show NAME]
+    clothsim validate SCENE
+    clothsim accuracy [SCENE] [...]
+    clothsim export SCENE [--out DIR] [--frames N] [--iterate-steps K]
+    clothsim compare TRAJECTORY REFERENCE [--key K] [--precision P] [--rtol R] [--atol A] ...
+    clothsim check SCENE PORT [--precision float32|float64] [--tolerance T]
+    clothsim diff-model A B
+    clothsim conformance [--out DIR]
+
+SCENE is a scene file (``.toml``, or an assignment ``.json``) or a built-in scene name;
+``run`` without one runs ``drop-on-square`` into ``out/<scene-name>``.
+
+``export``, ``compare``, ``check``, ``diff-model`` and ``conformance`` check another port
+(docs/ports.md); ``compare``, ``check`` and ``diff-model`` exit 0 when they pass, 1 when not.
+
+Exit status: 0 success; 1 any other error (one line on stderr); 2 a bad scene or bad
+arguments (one line: ``clothsim: error: <file>: <key.path>: <message>``, no traceback);
+``run`` interrupted: 130 by Ctrl-C (SIGINT), 143 by SIGTERM, 129 by SIGHUP (frames done so
+far stay readable; run.json says ``interrupted``); ``run`` stopped by a blow-up: 1
+(``frame k: the state became non-finite (…)``, the last finite frame kept).
+
+Warnings (ill-conditioning, missed tolerances, …) go through :mod:`logging`: each kind is
+logged once when it first occurs (with ``-v``) and summarised at the end of the command as
+one line with its count. Progress bars are shown only when stderr is a terminal.
+"""
+
+
+from __future__ import annotations
+
+import argparse
+import os
+import signal
+import sys
+from pathlib import Path
+
+from .. import __version__
+from ..errors import InputError
+from .common import PROG, _fail, _Parser, _UsageError, log
+from .logs import _configure_logging, _no_progress_bars_off_terminal, _warnings_to_log
+from .ports import (
+    _add_port_commands,
+    _cmd_check,
+    _cmd_compare,
+    _cmd_conformance,
+    _cmd_diff_model,
+    _cmd_export,
+)
+
+
+def build_parser() -> argparse.ArgumentParser:
+    """The argument parser of the ``clothsim`` command.
+
+    Returns
+    -------
+    argparse.ArgumentParser
+        Every subcommand wired; ``-v`` is accepted before and after the subcommand.
+    """
+    parser = _Parser(prog=PROG, description="Cloth simulation with mass-spring systems by the "
+                     "local/global method of Liu et al. (2013).")
+    parser.add_argument("-v", "--verbose", action="count", default=0,
+                        help="log more (-v info, -vv debug)")
+    parser.add_argument("--version", action="version", version=f"{PROG} {__version__}")
+    sub = parser.add_subparsers(dest="command", metavar="COMMAND", parser_class=_Parser)
+    sub.required = True
+    # -v is accepted after the command too (counts add up: clothsim -v run -v = -vv)
+    verbose = _Parser(add_help=False)
+    verbose.add_argument("-v", "--verbose", action="count", default=0, dest="verbose_after",
+                         help="log more (-v info, -vv debug)")
+    add_parser = sub.add_parser
+
+    def add_with_verbose(*a, **kw):
+        return add_parser(*a, parents=[verbose], **kw)
+
+    sub.add_parser = add_with_verbose
+
+    run = sub.add_parser("run", help="run a scene and write frames, trajectory, previews")
+    run.add_argument("scene", nargs="?", default=None, metavar="SCENE",
+                     help="scene file or built-in name (default: drop-on-square)")
+    run.add_argument("--out", metavar="DIR", default=None,
+                     help="output directory (default: out/<scene-name>)")
+    run.add_argument("--frames", type=int, metavar="N", default=None,
+                     help="frames after the initial one (default: the scene's)")
+    run.add_argument("--resume", action="store_true",
+                     help="continue from the last complete frame in the output directory")
+    run.add_argument("--no-preview", action="store_true",
+                     help="skip preview.gif and final.png")
+
+    scn = sub.add_parser("scenes", help="list the built-in scenes (or print one: --show NAME)")
+    scn.add_argument("--show", metavar="NAME", default=None,
+                     help="print the TOML of the built-in scene NAME (a template to start from)")
+
+    val = sub.add_parser("validate", help="check a scene file without running it")
+    val.add_argument("scene", metavar="SCENE", help="scene file or built-in name")
+
+    _add_port_commands(sub)
+
+    acc = sub.add_parser("accuracy", help="what accuracy costs in time: every solver on the "
+                                          "same recorded steps of a scene")
+    acc.add_argument("scene", nargs="?", default="hanging",
+                     help="scene name or TOML path (default: hanging)")
+    acc.add_argument("--out", default="accuracy-out", help="output directory")
+    acc.add_argument("--methods", default=None,
+                     help="comma-separated solvers (default: local-global,chebyshev,anderson,"
+                          "lbfgs,newton)")
+    acc.add_argument("--problems", type=int, default=8,
+                     help="step problems recorded along the run (default 8)")
+    acc.add_argument("--frames", type=int, default=None,
+                     help="frames of the recorded run (default: the scene's)")
+    acc.add_argument("--repeats", type=int, default=5, help="interleaved timing repeats (5)")
+    acc.add_argument("--target", type=float, default=None,
+                     help="report only this solver-error level (e.g. 1e-6)")
+    acc.add_argument("--jobs", type=int, default=1, help="parallel workers (joblib)")
+    acc.add_argument("--scheduler", default=None, metavar="ADDRESS",
+                     help="Dask scheduler address (joblib's dask backend)")
+    acc.add_argument("--no-time-steps", action="store_true",
+                     help="skip the time-step error runs")
+    acc.add_argument("--no-plots", action="store_true", help="write no figures")
+    acc.add_argument("--quick", action="store_true",
+                     help="few problems, budgets and repeats (a first look, not for a referee)")
+    acc.add_argument("--paper", action="store_true",
+                     help="the paper's Fig. 1 setup: local/global against Newton (crossover)")
+    acc.add_argument("--paper-size", type=int, default=41, help="vertices per side (--paper)")
+    return parser
+
+
+def _cmd_scenes(args) -> int:
+    from ..scene import DEFAULT_SCENE, builtin_scene_text, list_builtin_scenes
+
+    if args.show is not None:
+        sys.stdout.write(builtin_scene_text(args.show))
+        return 0
+    scenes = list_builtin_scenes()
+    width = max(map(len, scenes), default=0)
+    for name, desc in scenes.items():
+        mark = " (default)" if name == DEFAULT_SCENE and "default" not in desc else ""
+        print(f"{name:<{width}}  {desc}{mark}")
+    return 0
+
+
+def _build(scene_arg: str):
+    """Load, validate and build a scene: (scene, model, simulation)."""
+    from ..scene import load_scene
+
+    scene = load_scene(scene_arg)
+    model = scene.build_model()
+    return scene, model, scene.build_simulation(model)
+
+
+def _cmd_validate(args) -> int:
+    scene, model, sim = _build(args.scene)
+    print(f"ok: {scene.source}: scene '{scene.name}', {model.vertex_count} vertices, "
+          f"{model.spring_count} springs, {scene.frames} frames at h = {scene.h:.6g} s, "
+          f"effects: {', '.join(sim.effects_built) or 'none'}")
+    return 0
+
+
+def _cmd_run(args) -> int:
+    from ..runner import NonFiniteStateError, handle_signals, run_scene
+    from ..scene import DEFAULT_SCENE, load_scene
+
+    if args.frames is not None and args.frames < 0:
+        return _fail(f"--frames: must be >= 0, got {args.frames}", 2)
+    scene = load_scene(args.scene or DEFAULT_SCENE)
+    if args.out:
+        out = Path(args.out)
+    else:  # out/<scene name>, and never anywhere else
+        base = Path("out")
+        out = base / scene.name
+        if (out.resolve().parent != base.resolve() or scene.name in ("", ".", "..")
+                or Path(scene.name).name != scene.name):
+            return _fail(f"scene.name: {scene.name!r} cannot name a folder in out/; "
+                         "use --out DIR", 2)
+    frames = scene.frames if args.frames is None else args.frames
+    try:
+        from tqdm import tqdm
+    except ImportError:  # pragma: no cover - tqdm is a declared dependency
+        tqdm = None
+    bar = None if tqdm is None else tqdm(total=frames, unit="frame", desc=scene.name,
+                                         disable=None, leave=False)
+
+    def progress(k, total):
+        if bar is not None:
+            bar.n = k
+            bar.refresh()
+
+    try:
+        with handle_signals():
+            result = run_scene(scene, out, frames=frames, progress=progress,
+                               resume=args.resume, preview=not args.no_preview)
+    except KeyboardInterrupt as exc:  # Ctrl-C, SIGTERM, SIGHUP: exit 128 + signal number
+        signum = getattr(exc, "signum", signal.SIGINT)
+        name = signal.Signals(signum).name
+        return _fail(f"interrupted ({name}); complete frames and run.json are in {out}",
+                     128 + signum)
+    except NonFiniteStateError as exc:
+        return _fail(f"{exc}; run.json (status failed) is in {out}", 1)
+    finally:
+        if bar is not None:
+            bar.close()
+    print(f"{scene.name}: {result.last_frame} frames written to {out}")
+    return 0
+
+
+def _cmd_accuracy(args) -> int:
+    from .. import accuracy
+
+    if args.paper:
+        print(accuracy.paper_report(n=args.paper_size, repeats=args.repeats))
+        return 0
+    from ..scene import load_scene
+
+    scene = load_scene(args.scene)
+    kw = {}
+    if args.methods:
+        kw["methods"] = tuple(m.strip() for m in args.methods.split(",") if m.strip())
+    if args.quick:
+        kw.update(budgets=(1, 5, 10, 20, 100), tolerances=(1e-3, 1e-6),
+                  problems=min(args.problems, 4))
+    print(accuracy.run_accuracy(
+        scene, args.out, problems=kw.pop("problems", args.problems), frames=args.frames,
+        repeats=args.repeats, jobs=args.jobs, scheduler=args.scheduler, target=args.target,
+        time_steps=not args.no_time_steps, plots=not args.no_plots, **kw))
+    return 0
+
+
+COMMANDS = {"run": _cmd_run, "scenes": _cmd_scenes, "validate": _cmd_validate,
+            "accuracy": _cmd_accuracy, "export": _cmd_export, "compare": _cmd_compare,
+            "check": _cmd_check, "diff-model": _cmd_diff_model,
+            "conformance": _cmd_conformance}
+
+
+def main(argv: list[str] | None = None) -> int:
+    """Run the command line.
+
+    Parameters
+    ----------
+    argv : list of str, optional
+        Arguments without the program name (default: ``sys.argv[1:]``).
+
+    Returns
+    -------
+    int
+        The exit status (the entry point exits with it): 0 success, 1 error, 2 bad input,
+        130 interrupted.
+    """
+    parser = build_parser()
+    try:
+        args = parser.parse_args(argv)
+    except _UsageError as exc:
+        return _fail(str(exc), 2)
+    except SystemExit as exc:  # --help
+        return int(exc.code or 0)
+    undo_logging = _configure_logging(args.verbose + getattr(args, "verbose_after", 0))
+    try:
+        with _warnings_to_log(), _no_progress_bars_off_terminal():
+            return COMMANDS[args.command](args)
+    except InputError as exc:  # SceneError included: bad input, exit status 2
+        return _fail(str(exc), 2)
+    except KeyboardInterrupt:
+        return _fail("interrupted", 130)
+    except BrokenPipeError:  # the reader went away (`clothsim scenes | head`): stop quietly
+        sys.stdout = open(os.devnull, "w")  # noqa: SIM115 - no flush error at exit
+        return 141
+    except Exception as exc:  # one line, no traceback; -vv logs it in full
+        log.debug("unhandled error", exc_info=True)
+        return _fail(f"{type(exc).__name__}: {exc}", 1)
+    finally:
+        undo_logging()
+
+
+__all__ = ["main", "build_parser"]

@@ -1,0 +1,81 @@
+"""Logging for the command line: warnings counted by kind, progress bars only on a terminal."""
+
+from __future__ import annotations
+
+import logging
+import os
+import re
+import sys
+import warnings
+from contextlib import contextmanager
+
+from .common import PROG, _one_line, log
+
+
+def _configure_logging(verbose: int):
+    """Send clothsim's log records to stderr (warnings only, unless -v); returns an undo."""
+    level = logging.WARNING if verbose <= 0 else logging.INFO if verbose == 1 else logging.DEBUG
+    root = logging.getLogger("clothsim")
+    handler = logging.StreamHandler(sys.stderr)
+    handler.setFormatter(logging.Formatter(f"{PROG}: %(levelname)s: %(message)s"))
+    old_level = root.level
+    root.addHandler(handler)
+    root.setLevel(level)
+
+    def undo():
+        root.removeHandler(handler)
+        root.setLevel(old_level)
+
+    return undo
+
+
+_NUMBER = re.compile(r"[-+]?\d[\d.]*(?:e[-+]?\d+)?")
+
+
+@contextmanager
+def _warnings_to_log():
+    """Route Python warnings to the ``clothsim`` logger and count them by kind.
+
+    A kind is the warning category plus its message with numbers blanked out. The first
+    warning of each kind is logged at INFO (visible with -v); at exit one WARNING line per
+    kind gives its count and the first message.
+    """
+    counts: dict[tuple[str, str], list] = {}
+
+    def show(message, category, filename, lineno, file=None, line=None):
+        text = _one_line(message)
+        key = (category.__name__, _NUMBER.sub("#", text))
+        if key not in counts:
+            counts[key] = [0, text]
+            log.info("%s: %s", category.__name__, text)
+        counts[key][0] += 1
+
+    with warnings.catch_warnings():
+        warnings.simplefilter("always")
+        warnings.showwarning = show
+        try:
+            yield counts
+        finally:
+            for (kind, _), (count, first) in counts.items():
+                times = "once" if count == 1 else f"{count} times"
+                log.warning("%s (%s): %s", kind, times, first)
+
+
+@contextmanager
+def _no_progress_bars_off_terminal():
+    """Disable tqdm progress bars (TQDM_DISABLE) when stderr is not a terminal."""
+    set_here = not _isatty(sys.stderr) and "TQDM_DISABLE" not in os.environ
+    if set_here:
+        os.environ["TQDM_DISABLE"] = "1"
+    try:
+        yield
+    finally:
+        if set_here:
+            os.environ.pop("TQDM_DISABLE", None)
+
+
+def _isatty(stream) -> bool:
+    try:
+        return bool(stream.isatty())
+    except (AttributeError, ValueError):
+        return False

@@ -1,0 +1,184 @@
+"""The commands that check another port: export, compare, check, diff-model, conformance
+(docs/ports.md)."""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+from .common import _fail
+
+
+def _add_port_commands(sub) -> None:
+    """export, compare, check, diff-model, conformance: checking another port (docs/ports.md)."""
+    exp = sub.add_parser("export", help="write everything a port needs: M, L, J, M + h²L "
+                         "(penalty pins in), model files, settings, reference trajectory, "
+                         "local/global iterates")
+    exp.add_argument("scene", metavar="SCENE", help="scene file or built-in name")
+    exp.add_argument("--out", metavar="DIR", default=None,
+                     help="output directory (default: out/<scene-name>/export)")
+    exp.add_argument("--frames", type=int, metavar="N", default=None,
+                     help="steps of the reference trajectory (default: the scene's)")
+    exp.add_argument("--iterate-steps", type=int, metavar="K", default=3,
+                     help="steps whose local/global iterates are written (3)")
+
+    cmp_ = sub.add_parser("compare", help="compare a trajectory with a reference: per-vertex "
+                          "distance per frame, relative to the cloth size")
+    cmp_.add_argument("trajectory", help="npz, npy, text/CSV, raw, .pvd, a folder, or a .mtx "
+                      "matrix (then REFERENCE is one too)")
+    cmp_.add_argument("reference", help="the reference, in any of the same forms")
+    cmp_.add_argument("--key", default=None, help="array name in .npz files (positions)")
+    cmp_.add_argument("--field", default=None, choices=("positions", "velocities"),
+                      help="positions or velocities (same as --key)")
+    cmp_.add_argument("--format", dest="fmt", default=None,
+                      choices=("npz", "npy", "text", "frames", "raw", "pvd"),
+                      help="format of TRAJECTORY when its name does not say")
+    cmp_.add_argument("--dtype", default=None, choices=("float32", "float64"),
+                      help="raw files: element type")
+    cmp_.add_argument("--vertices", type=int, default=None, metavar="N",
+                      help="raw files: vertex count n")
+    cmp_.add_argument("--precision", default="float64", choices=("float64", "float32"),
+                      help="float32: tolerance from κ(M + h²L) ε32 |x| (needs --scene, "
+                      "--kappa or an export folder as REFERENCE)")
+    cmp_.add_argument("--scene", default=None, help="scene to estimate κ from")
+    cmp_.add_argument("--kappa", type=float, default=None, help="κ(M + h²L) if known")
+    cmp_.add_argument("--rtol", type=float, default=None,
+                      help="tolerance relative to the cloth size (1e-9)")
+    cmp_.add_argument("--atol", type=float, default=None, help="absolute tolerance [m]")
+    cmp_.add_argument("--frames", type=int, default=None, metavar="N",
+                      help="compare only the first N frames")
+    cmp_.add_argument("--match-vertices", action="store_true",
+                      help="pair vertices by their initial positions (other vertex order)")
+    cmp_.add_argument("--no-table", action="store_true",
+                      help="print only the verdict line, not the per-frame table")
+    cmp_.add_argument("--plot", metavar="PNG", default=None,
+                      help="write the deviation-over-time plot")
+    cmp_.add_argument("--drop-attachments", action="store_true",
+                      help="two .mtx files: leave out TRAJECTORY's leading single-vertex "
+                      "columns (a J storing attachments as extra constraint columns)")
+
+    chk = sub.add_parser("check", help="check a port step by step: clothsim's step from the "
+                         "port's (x_k, v_k) against the port's x_{k+1}")
+    chk.add_argument("scene", metavar="SCENE", help="scene file or built-in name")
+    chk.add_argument("port", metavar="PORT", help="folder with positions.txt and "
+                     "velocities.txt, or a trajectory file in any format compare reads")
+    chk.add_argument("--precision", default="float64", choices=("float64", "float32"))
+    chk.add_argument("--tolerance", type=float, default=None,
+                     help="allowed per-vertex distance [m] (default from --precision)")
+    chk.add_argument("--steps", type=int, default=None, help="check only the first N steps")
+    chk.add_argument("--optimality", type=float, default=1e-6,
+                     help="largest relative gradient |grad g(x)| / |grad g(x0)| of a port's "
+                     "answer counted as a minimizer (1e-6)")
+    chk.add_argument("--verbose-steps", action="store_true", help="print every step")
+
+    dif = sub.add_parser("diff-model", help="compare two models: springs, stiffness, rest "
+                         "lengths, masses, pins")
+    dif.add_argument("a", metavar="A", help="scene or folder of model files")
+    dif.add_argument("b", metavar="B", help="scene or folder of model files")
+
+    con = sub.add_parser("conformance", help="write the conformance set: tiny scenes, one "
+                         "effect each, with reference data and iterates")
+    con.add_argument("--out", metavar="DIR", default="conformance",
+                     help="output directory (conformance)")
+
+
+def _positive(args, names) -> str | None:
+    for name in names:
+        value = getattr(args, name)
+        if value is not None and not value >= 0:
+            return f"--{name.replace('_', '-')}: must be a non-negative number, got {value}"
+    return None
+
+
+def _cmd_export(args) -> int:
+    from ..ports.export import export_port
+    from ..scene import load_scene
+
+    bad = _positive(args, ("frames", "iterate_steps"))
+    if bad:
+        return _fail(bad, 2)
+    scene = load_scene(args.scene)
+    out = Path(args.out) if args.out else Path("out") / scene.name / "export"
+    frames = scene.frames if args.frames is None else args.frames
+    manifest = export_port(scene, out, frames=frames, iterate_steps=args.iterate_steps)
+    print(f"{scene.name}: {len(manifest['files'])} files for n = {manifest['vertex_count']}, "
+          f"s = {manifest['spring_count']}, h = {manifest['h']:.6g} s, {frames} frames, "
+          f"κ(M + h²L) = {manifest['condition_number']:.4g} written to {out}")
+    return 0
+
+
+def _cmd_compare(args) -> int:
+    from ..ports.compare import compare_trajectories, plot_deviation
+
+    bad = _positive(args, ("rtol", "atol", "kappa"))
+    if bad:
+        return _fail(bad, 2)
+    if Path(args.trajectory).suffix == ".mtx":
+        from ..ports.compare import compare_matrices
+
+        mres = compare_matrices(args.trajectory, args.reference,
+                                rtol=1e-12 if args.rtol is None else args.rtol,
+                                atol=args.atol or 0.0,
+                                drop_columns="attachments" if args.drop_attachments else None)
+        print(mres.summary())
+        return 0 if mres.passed else 1
+    kappa = args.kappa
+    if kappa is None and args.scene is not None:
+        from ..ports.check import _simulation
+        from ..ports.compare import condition_number
+        from ..scene import load_scene
+
+        sim = _simulation(load_scene(args.scene))
+        p = sim.problem(sim.state)
+        kappa = condition_number(sim.model, sim.h, anchor_vertices=p.anchor_vertices,
+                                 anchor_stiffness=p.anchor_stiffness)
+    result = compare_trajectories(
+        args.trajectory, args.reference, key=args.key or args.field or "positions",
+        frames=args.frames, match=args.match_vertices, kappa=kappa, fmt=args.fmt,
+        dtype=args.dtype, vertex_count=args.vertices, rtol=args.rtol, atol=args.atol,
+        precision=args.precision)
+    for note in result.notes:
+        print(f"note: {note}")
+    print(result.summary())
+    if not args.no_table:
+        print(result.table())
+    if args.plot:
+        plot_deviation(result, args.plot)
+    return 0 if result.passed else 1
+
+
+def _cmd_check(args) -> int:
+    from ..ports.check import check_steps
+    from ..ports.formats import read_trajectory, read_velocities
+    from ..scene import load_scene
+
+    bad = _positive(args, ("tolerance", "steps", "optimality"))
+    if bad:
+        return _fail(bad, 2)
+    scene = load_scene(args.scene)
+    x = read_trajectory(args.port)
+    v = read_velocities(args.port)
+    report = check_steps(scene, x, v, precision=args.precision, tolerance=args.tolerance,
+                         steps=args.steps, optimality=args.optimality)
+    if args.verbose_steps:
+        for step in report.steps:
+            print(step.line())
+    for note in report.notes:
+        print(f"note: {note}")
+    print(report.summary())
+    return 0 if report.passed else 1
+
+
+def _cmd_diff_model(args) -> int:
+    from ..ports.diff import diff_models
+
+    result = diff_models(args.a, args.b)
+    print(result.report())
+    return 0 if result.identical else 1
+
+
+def _cmd_conformance(args) -> int:
+    from ..ports.conformance import write_conformance
+
+    names = write_conformance(args.out)
+    print(f"{len(names)} conformance cases written to {args.out} (read {args.out}/README.md)")
+    return 0
