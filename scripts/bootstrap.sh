@@ -28,7 +28,7 @@ fi
 stamp="$VENV/.clothsim-installed"
 if [ ! -e "$stamp" ] || [ pyproject.toml -nt "$stamp" ]; then
     "$VENV/bin/python" -m pip install -q --upgrade pip
-    "$VENV/bin/python" -m pip install -q -e ".[test,docs]"
+    "$VENV/bin/python" -m pip install -q -e ".[test,docs,cluster]"
     # CHOLMOD is optional: without SuiteSparse the build fails and clothsim uses SuperLU.
     if ! "$VENV/bin/python" -m pip install -q -e ".[cholmod]"; then
         echo "bootstrap: warning: scikit-sparse did not build; the SuperLU fallback will be used" >&2
