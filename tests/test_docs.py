@@ -2,9 +2,10 @@
 builds.
 
 * Every name in ``clothsim.__all__`` and every public function and class of every module of
-  the package (found by walking it, so a new module cannot escape) has a docstring; one that takes parameters has a ``Parameters`` section (classes:
-  ``Parameters`` or ``Attributes``), one that returns a value has ``Returns`` (or
-  ``Yields``). Modules whose docstrings are still being completed are marked xfail.
+  the package (found by walking it, so a new module cannot escape) has a docstring; one
+  that takes parameters has a ``Parameters`` section (classes: ``Parameters`` or
+  ``Attributes``), one that returns a value has ``Returns`` (or ``Yields``). Modules whose
+  docstrings are still being completed are marked xfail.
 * Every Python block of the pages this suite owns runs; every shell line uses ``.venv/bin/``
   (or follows ``. .venv/bin/activate``) so that it works copied into a fresh shell.
 """

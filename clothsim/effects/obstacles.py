@@ -94,6 +94,10 @@ class Obstacle(Effect):
     def contacts(self, x0: np.ndarray, x: np.ndarray):
         """Vertices whose step segment x0 → x touches the solid.
 
+        Parameters
+        ----------
+        x0, x : ndarray, shape (n, 3), positions at the step's start and after the solve [m]
+
         Returns
         -------
         index : ndarray, shape (c,), int
@@ -105,15 +109,42 @@ class Obstacle(Effect):
         raise NotImplementedError
 
     def inside(self, x: np.ndarray) -> np.ndarray:
-        """Boolean mask, shape (n,): strictly inside the solid."""
+        """Which points are strictly inside the solid.
+
+        Parameters
+        ----------
+        x : ndarray, shape (n, 3), points [m]
+
+        Returns
+        -------
+        ndarray, shape (n,), bool
+        """
         raise NotImplementedError
 
     def closest(self, x: np.ndarray):
-        """Nearest surface points to x (k, 3) and the outward normals there (k, 3)."""
+        """Nearest surface points to x and the outward unit normals there.
+
+        Parameters
+        ----------
+        x : ndarray, shape (k, 3), points [m]
+
+        Returns
+        -------
+        point, normal : ndarray, shape (k, 3), surface points [m] and unit normals
+        """
         raise NotImplementedError
 
     def settle(self, x: np.ndarray, normal: np.ndarray):
-        """Final placement of contact points after friction (default: keep)."""
+        """Final placement of contact points after friction (default: keep).
+
+        Parameters
+        ----------
+        x, normal : ndarray, shape (c, 3), contact positions [m] (changed in place) and normals
+
+        Returns
+        -------
+        x, normal : ndarray, shape (c, 3), placed positions [m] and their normals
+        """
         return x, normal
 
     # -- the hooks ---------------------------------------------------------------------
@@ -204,7 +235,16 @@ class Plane(Obstacle):
         self._offset = float(self.point @ self.normal) + self.thickness
 
     def signed_distance(self, x: np.ndarray) -> np.ndarray:
-        """φ(x) = n·x − n·point − thickness [m], shape (n,); negative inside."""
+        """φ(x) = n·x − n·point − thickness, negative inside.
+
+        Parameters
+        ----------
+        x : ndarray, shape (k, 3), points [m]
+
+        Returns
+        -------
+        ndarray, shape (k,), signed distances [m]
+        """
         return x @ self.normal - self._offset
 
     def contacts(self, x0, x):

@@ -5,9 +5,10 @@ in docs/ports.md):
 
 matrices
     Matrix Market, sparse, %.17g; 3n rows interleaved: row 3 i + c is coordinate c of
-    vertex i. ``M.mtx``; ``L.mtx`` = (Σ k_i A_i A_iᵀ + Σ_pins k_p e_p e_pᵀ) ⊗ I3 — **with** the penalty
-    pins, as solved; ``L_springs.mtx`` without them; ``J.mtx`` (3n × 3s, springs only);
-    ``A.mtx`` = M + h² L (3n, with pins) and ``A_scalar.mtx`` (its n × n block).
+    vertex i. ``M.mtx``; ``L.mtx`` = (Σ k_i A_i A_iᵀ + Σ_pins k_p e_p e_pᵀ) ⊗ I3 —
+    **with** the penalty pins, as solved; ``L_springs.mtx`` without them; ``J.mtx``
+    (3n × 3s, springs only); ``A.mtx`` = M + h² L (3n, with pins) and ``A_scalar.mtx``
+    (its n × n block).
 model (plain text)
     ``vertices.txt`` (n lines x y z), ``x0.txt`` (one line of 3n), ``triangles.txt``,
     ``springs.txt`` (a b k r, 0-based), ``masses.txt``, ``pins.txt`` (vertex method
