@@ -37,8 +37,19 @@ def _discover() -> list[str]:
 
 
 MODULES = _discover()
-# docstrings owned elsewhere and not yet complete (see the list printed by the failure)
-INCOMPLETE = set()
+# docstrings owned elsewhere and not yet complete (see the list printed by the failure);
+# "clothsim" and "clothsim.solvers" fail only through names they re-export from these
+INCOMPLETE = {
+    "clothsim", "clothsim.accuracy", "clothsim.factorization", "clothsim.mesh",
+    "clothsim.reference", "clothsim.runner",
+    "clothsim.io", "clothsim.io.assignment", "clothsim.io.cells", "clothsim.io.common",
+    "clothsim.io.frames", "clothsim.io.matrices", "clothsim.io.meshes", "clothsim.io.obj",
+    "clothsim.scene", "clothsim.scene.build", "clothsim.scene.checks",
+    "clothsim.scene.effects", "clothsim.scene.files", "clothsim.scene.schema",
+    "clothsim.scene.tables", "clothsim.scene.validate",
+    "clothsim.solvers", "clothsim.solvers.chebyshev", "clothsim.solvers.local_global",
+    "clothsim.solvers.newton",
+}
 
 
 def _public(module):
@@ -123,6 +134,14 @@ def test_public_docstrings_have_numpydoc_sections(modname):
                 if not meth.startswith("_") and inspect.isfunction(f):
                     missing += problems_method(obj, meth, f"{modname}.{name}.{meth}")
     assert not missing, "\n".join(missing)
+
+
+def test_every_module_is_checked_and_the_exemptions_are_real_modules():
+    # sub-packages are walked too, so a module added anywhere is checked without listing it
+    for name in ("clothsim.problem", "clothsim.effects.base", "clothsim.ports.export",
+                 "clothsim.solvers.symplectic", "clothsim.io", "clothsim.scene"):
+        assert name in MODULES, name
+    assert not INCOMPLETE - set(MODULES), sorted(INCOMPLETE - set(MODULES))
 
 
 def test_the_docstring_check_can_fail():
