@@ -86,7 +86,6 @@ class PinSet:
         Parameters
         ----------
         parts : list of PinSet
-            Pin sets, e.g. one per pin effect.
 
         Returns
         -------
@@ -130,13 +129,11 @@ class PenaltyAnchors:
 
         Parameters
         ----------
-        x : ndarray, shape (n, 3)
-            Positions [m].
+        x : ndarray, shape (n, 3), positions [m]
 
         Returns
         -------
-        float
-            The energy [J].
+        float, the energy [J]
         """
         q = x[self.vertices] - self.positions
         return 0.5 * float(np.sum(self.stiffness[:, None] * q * q))
@@ -146,17 +143,14 @@ class PenaltyAnchors:
 
         Parameters
         ----------
-        out : ndarray, shape (n, 3)
-            Accumulator, modified in place (repeated vertices accumulate).
-        x : ndarray, shape (n, 3)
-            Positions [m].
+        out : ndarray, shape (n, 3), accumulator (repeated vertices accumulate)
+        x : ndarray, shape (n, 3), positions [m]
         scale : float
-            Factor: 1 adds the gradient [N], −1 the force [N], h² the term of ∇g [N·s²].
+            1 adds the gradient [N], −1 the force [N], h² the term of ∇g [N·s²].
 
         Returns
         -------
-        ndarray, shape (n, 3)
-            ``out`` itself.
+        out : ndarray, shape (n, 3)
         """
         if len(self.vertices):
             np.add.at(out, self.vertices,
@@ -167,23 +161,19 @@ class PenaltyAnchors:
                 origin: np.ndarray | None = None) -> np.ndarray:
         """Add the anchors' part of the global step's right-hand side, in place.
 
-        out[v_j] += scale k_j q_j; with ``origin``, out[v_j] += scale k_j (q_j − origin_{v_j})
-        (the right-hand side of a solve for the displacement x − origin). With scale = h²
-        this is the anchors' term of h² J d + M y + h² f.
+        out[v_j] += scale k_j q_j, the anchors' term of h² J d + M y + h² f with scale = h²
+        [s²]; with ``origin`` (n, 3) [m], scale k_j (q_j − origin_{v_j}) instead (the
+        right-hand side of a solve for the displacement x − origin).
 
         Parameters
         ----------
-        out : ndarray, shape (n, 3)
-            Accumulator, modified in place.
+        out : ndarray, shape (n, 3), accumulator
         scale : float
-            Factor, usually h² [s²] (then the added term is in [N·s²]).
         origin : ndarray, shape (n, 3), optional
-            Reference positions [m] subtracted from the anchor points.
 
         Returns
         -------
-        ndarray, shape (n, 3)
-            ``out`` itself.
+        out : ndarray, shape (n, 3)
         """
         if len(self.vertices):
             q = self.positions if origin is None else self.positions - origin[self.vertices]
@@ -261,8 +251,7 @@ class StepProblem:
 
         Returns
         -------
-        ndarray, shape (n, 3)
-            A new array of positions [m].
+        ndarray, shape (n, 3), a new array of positions [m]
         """
         x0 = np.array(self.y, dtype=np.float64)
         x0[self.fixed_vertices] = self.fixed_positions
@@ -273,8 +262,7 @@ class StepProblem:
 
         Parameters
         ----------
-        n : int
-            Number of vertices.
+        n : int, number of vertices
 
         Returns
         -------
@@ -305,13 +293,11 @@ def objective(model: Model, problem: StepProblem, x: np.ndarray) -> float:
     ----------
     model : Model
     problem : StepProblem
-    x : ndarray, shape (n, 3)
-        Positions [m].
+    x : ndarray, shape (n, 3), positions [m]
 
     Returns
     -------
-    float
-        g(x) [J·s²] (= kg·m²).
+    float, g(x) [J·s²] (= kg·m²)
     """
     return (_objective_without_springs(model, problem, x)
             + problem.h ** 2 * energy.spring_energy(model, x))
@@ -323,24 +309,19 @@ def augmented_objective(model: Model, problem: StepProblem, x: np.ndarray,
 
     ĝ(x, d) = ½ (x − y)ᵀ M (x − y) + h² (½ Σ_i k_i |p_i − d_i|² + E_anchor(x) − xᵀ f),
     with p_i = x_{a_i} − x_{b_i}: g with (|p_i| − r_i)² replaced by |p_i − d_i|², i.e.
-    ½ xᵀ (M + h² L) x − h² xᵀ J d − xᵀ (M y + h² f) up to a constant. Since
-    (|p| − r)² = min over |d| = r of |p − d|², ĝ(x, d) ≥ g(x) whenever every |d_i| = r_i,
-    with equality at the local step's d_i = r_i p_i / |p_i|. Neither half step of the
-    method can increase ĝ.
+    ½ xᵀ (M + h² L) x − h² xᵀ J d − xᵀ (M y + h² f) up to a constant. ĝ(x, d) ≥ g(x) when
+    every |d_i| = r_i, with equality at the local step's d_i = r_i p_i / |p_i|.
 
     Parameters
     ----------
     model : Model
     problem : StepProblem
-    x : ndarray, shape (n, 3)
-        Positions [m].
-    d : ndarray, shape (s, 3)
-        One auxiliary vector per spring [m] (normally with |d_i| = r_i).
+    x : ndarray, shape (n, 3), positions [m]
+    d : ndarray, shape (s, 3), one auxiliary vector per spring [m]
 
     Returns
     -------
-    float
-        ĝ(x, d) [J·s²].
+    float, ĝ(x, d) [J·s²]
     """
     q = energy.spring_vectors(model, x) - d
     springs = 0.5 * float(np.sum(model.springs.spring_stiffness[:, None] * q * q))
@@ -357,8 +338,7 @@ def objective_gradient(model: Model, problem: StepProblem, x: np.ndarray) -> np.
     ----------
     model : Model
     problem : StepProblem
-    x : ndarray, shape (n, 3)
-        Positions [m].
+    x : ndarray, shape (n, 3), positions [m]
 
     Returns
     -------
@@ -389,13 +369,11 @@ def gradient_noise_floor(model: Model, problem: StepProblem, x: np.ndarray) -> f
     ----------
     model : Model
     problem : StepProblem
-    x : ndarray, shape (n, 3)
-        Positions [m] (usually the initial guess).
+    x : ndarray, shape (n, 3), positions [m] (usually the initial guess)
 
     Returns
     -------
-    float
-        The floor [N·s²].
+    float, the floor [N·s²]
     """
     force = float(np.linalg.norm(model.springs.spring_stiffness)) * float(np.abs(x).max())
     if problem.f_ext is not None:
@@ -408,10 +386,8 @@ def relative(norm: float, norm0: float) -> float:
 
     Parameters
     ----------
-    norm : float
-        Current residual norm, e.g. of ∇g(x_k) [N·s²].
-    norm0 : float
-        Initial residual norm, same unit.
+    norm, norm0 : float
+        Current and initial residual norms, e.g. of ∇g(x_k) and ∇g(x_0) [N·s²].
 
     Returns
     -------

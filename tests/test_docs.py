@@ -49,6 +49,9 @@ INCOMPLETE = {
     "clothsim.scene.tables", "clothsim.scene.validate",
     "clothsim.solvers", "clothsim.solvers.chebyshev", "clothsim.solvers.local_global",
     "clothsim.solvers.newton",
+    # at the 400-line module limit: complete once split (shapes / matrix comparison out);
+    # "clothsim.effects" and "clothsim.ports" re-export their classes
+    "clothsim.effects.obstacles", "clothsim.effects", "clothsim.ports.compare", "clothsim.ports",
 }
 
 

@@ -109,42 +109,15 @@ class Obstacle(Effect):
         raise NotImplementedError
 
     def inside(self, x: np.ndarray) -> np.ndarray:
-        """Which points are strictly inside the solid.
-
-        Parameters
-        ----------
-        x : ndarray, shape (n, 3), points [m]
-
-        Returns
-        -------
-        ndarray, shape (n,), bool
-        """
+        """Boolean mask, shape (n,): strictly inside the solid."""
         raise NotImplementedError
 
     def closest(self, x: np.ndarray):
-        """Nearest surface points to x and the outward unit normals there.
-
-        Parameters
-        ----------
-        x : ndarray, shape (k, 3), points [m]
-
-        Returns
-        -------
-        point, normal : ndarray, shape (k, 3), surface points [m] and unit normals
-        """
+        """Nearest surface points to x (k, 3) and the outward normals there (k, 3)."""
         raise NotImplementedError
 
     def settle(self, x: np.ndarray, normal: np.ndarray):
-        """Final placement of contact points after friction (default: keep).
-
-        Parameters
-        ----------
-        x, normal : ndarray, shape (c, 3), contact positions [m] (changed in place) and normals
-
-        Returns
-        -------
-        x, normal : ndarray, shape (c, 3), placed positions [m] and their normals
-        """
+        """Final placement of contact points after friction (default: keep)."""
         return x, normal
 
     # -- the hooks ---------------------------------------------------------------------

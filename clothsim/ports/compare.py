@@ -71,13 +71,7 @@ class Comparison:
     notes: list[str] = field(default_factory=list)
 
     def table(self) -> str:
-        """The per-frame table: max and RMS error, absolute and relative to the size.
-
-        Returns
-        -------
-        str
-            One line per frame (errors in [m], or [m/s] for velocities).
-        """
+        """The per-frame table: max and RMS error, absolute and relative to the size."""
         lines = [f"{'frame':>5}  {'max [m]':>10}  {'max/size':>9}  {'rms [m]':>10}  "
                  f"{'tol [m]':>9}  ok"]
         for f in range(self.frames):
@@ -88,12 +82,7 @@ class Comparison:
         return "\n".join(lines)
 
     def summary(self) -> str:
-        """One line: verdict, largest error, the first failing frame and vertex.
-
-        Returns
-        -------
-        str
-        """
+        """One line: verdict, largest error, the first failing frame and vertex."""
         worst = float(np.max(self.max_error)) if self.frames else 0.0
         u, what = ("m/s", "largest speed") if self.field == "velocities" else ("m", "cloth size")
         head = (f"{'PASS' if self.passed else 'FAIL'}: {self.field}, {self.frames} frames, "
@@ -108,17 +97,7 @@ class Comparison:
 
 
 def cloth_size(x: np.ndarray) -> float:
-    """Diagonal of the bounding box of the positions; 1 for a single point.
-
-    Parameters
-    ----------
-    x : array_like, shape (n, 3), positions [m]
-
-    Returns
-    -------
-    float
-        Size [m].
-    """
+    """Diagonal of the bounding box of positions (n, 3) [m]; 1 for a single point."""
     x = np.asarray(x, dtype=np.float64).reshape(-1, 3)
     size = float(np.linalg.norm(x.max(axis=0) - x.min(axis=0))) if len(x) else 0.0
     return size if size > 0 else 1.0
@@ -134,10 +113,6 @@ def match_vertices(x: np.ndarray, reference: np.ndarray, *, tol: float | None = 
         Initial positions in the two orders [m].
     tol : float, optional
         Largest distance of a match [m]; default 1e-6 of the cloth size.
-
-    Returns
-    -------
-    ndarray, shape (n,), int
 
     Raises
     ------
@@ -216,20 +191,6 @@ def tolerances(reference: np.ndarray, *, precision: str = "float64", rtol: float
 
     For ``field="velocities"`` the scale is the reference's largest speed [m/s] and the
     float32 bound is divided by the frame time (not known here: use rtol/atol instead).
-
-    Parameters
-    ----------
-    reference : ndarray, shape (frames, n, 3)
-        Reference trajectory [m] (or [m/s]).
-    precision, rtol, atol, kappa
-        As in :func:`compare_arrays`; ``kappa`` is κ(M + h²L), needed for float32.
-    field : {"positions", "velocities"}
-        What is compared.
-
-    Returns
-    -------
-    ndarray, shape (frames,)
-        Tolerance per frame [m] (or [m/s]); the float32 bound grows with the frame index.
     """
     if precision not in ("float32", "float64"):
         raise InputError(f"precision: must be 'float32' or 'float64', got {precision!r}")
@@ -255,8 +216,6 @@ def compare_arrays(a, b, *, rtol: float | None = None, atol: float | None = None
 
     Parameters
     ----------
-    a, b : array_like, shape (frames, n, 3) or (n, 3)
-        Port and reference positions [m] (velocities [m/s] with ``field="velocities"``).
     rtol : float, optional
         Tolerance relative to the cloth size (default :data:`RTOL64`).
     atol : float, optional
@@ -265,15 +224,10 @@ def compare_arrays(a, b, *, rtol: float | None = None, atol: float | None = None
         float32 widens the tolerance to the κ ε₃₂ |x| bound (needs ``kappa``).
     match : bool
         Pair vertices by their frame-0 positions (:func:`match_vertices`) first.
-    kappa : float, optional
-        κ(M + h²L) for the float32 bound.
-    field : str
-        Name used in messages ("positions" or "velocities").
 
     Returns
     -------
     Comparison
-        Per-frame max and RMS error, tolerance, verdict, first failing frame and vertex.
     """
     a, b = np.asarray(a, np.float64), np.asarray(b, np.float64)
     if a.ndim == 2:
@@ -310,21 +264,6 @@ def compare_trajectories(path, reference, *, key: str = "positions", frames: int
     ``frames``: only the first this many. ``kappa`` defaults to the reference export's
     ``manifest.json`` value when there is one. Other options go to :func:`compare_arrays`.
 
-    Parameters
-    ----------
-    path, reference : path
-        Port trajectory and reference (file or export folder).
-    key, field : str
-        "positions" or "velocities" (``field`` overrides ``key``).
-    frames : int, optional
-        Compare only the first this many frames (default: the common ones).
-    match : bool
-        Pair vertices by their frame-0 positions first.
-    kappa : float, optional
-        κ(M + h²L) for the float32 bound.
-    fmt, dtype, vertex_count
-        How to read ``path`` (see :func:`clothsim.ports.formats.read_trajectory`).
-
     Returns
     -------
     Comparison
@@ -360,17 +299,8 @@ def compare_trajectories(path, reference, *, key: str = "positions", frames: int
 
 @dataclass
 class MatrixComparison:
-    """Outcome of :func:`compare_matrices`.
-
-    Attributes
-    ----------
-    passed : bool
-    error : float
-        max |A − B| / max |B| (dimensionless).
-    shape : tuple of int
-    dropped : int
-        Attachment columns dropped before comparing.
-    """
+    """Outcome of :func:`compare_matrices`: ``passed``, ``error`` (max |A − B| / max |B|),
+    ``shape`` and the ``dropped`` columns."""
 
     passed: bool
     error: float
@@ -378,12 +308,6 @@ class MatrixComparison:
     dropped: int = 0
 
     def summary(self) -> str:
-        """One line: PASS or FAIL, shape and relative error.
-
-        Returns
-        -------
-        str
-        """
         extra = f" after dropping {self.dropped} attachment columns" if self.dropped else ""
         return (f"{'PASS' if self.passed else 'FAIL'}: {self.shape[0]} x {self.shape[1]}"
                 f"{extra}, max |A - B| / max |B| = {self.error:.3e}")
@@ -430,17 +354,7 @@ def attachment_columns(J) -> np.ndarray:
     """Leading columns of a 3n × 3c J whose column triple touches one vertex only.
 
     Spring columns touch two vertices (+k at a, −k at b); an attachment (zero-rest-length
-    spring to a fixed point) touches one.
-
-    Parameters
-    ----------
-    J : sparse matrix, shape (3n, 3c)
-        A port's J, possibly with attachment columns first [N/m].
-
-    Returns
-    -------
-    ndarray, shape (m,), int
-        The column indices to drop.
+    spring to a fixed point) touches one. Returns the column indices to drop.
     """
     J = sp.csc_matrix(J)
     out = []
@@ -460,11 +374,6 @@ def plot_deviation(comparison: Comparison, path) -> None:
     comparison : Comparison
     path : path
         Image file (``.png``, ``.svg``, … by matplotlib).
-
-    Returns
-    -------
-    None
-        The image is written to ``path``.
     """
     import matplotlib
 
