@@ -75,12 +75,13 @@ class Effect:
     def add_force(self, t: float, state, f: np.ndarray) -> None:
         """Add this effect's external force to ``f`` in place.
 
-        Called first in every step, once per step, before the problem is built. ``f``
-        starts at zero and collects every declared force effect's contribution; the sum
-        becomes f_ext of the step (the −xᵀ f_ext term of E(x), so h² f_ext enters the
-        global step's right-hand side). Forces are evaluated at the start of the step
-        (x_n, v_n at time t): an explicit treatment of position- or velocity-dependent
-        forces.
+        Called by :meth:`~clothsim.simulation.Simulation.problem` first: at the start of
+        every step, and again whenever ``problem()`` is called (the port tools do), so it
+        must not change the effect's state. ``f`` starts at zero and collects every
+        declared force effect's contribution; the sum becomes f_ext of the step (the
+        −xᵀ f_ext term of E(x), so h² f_ext enters the global step's right-hand side).
+        Forces are evaluated at the start of the step (x_n, v_n at time t): an explicit
+        treatment of position- or velocity-dependent forces.
 
         Parameters
         ----------
@@ -96,7 +97,8 @@ class Effect:
     def adjust_target(self, t: float, state, y: np.ndarray) -> np.ndarray:
         """Return a changed inertial target y (do not modify ``y`` in place).
 
-        Called once per step after ``add_force``: the step then minimizes
+        Called by ``Simulation.problem()`` after ``add_force`` (at every step, and whenever
+        ``problem()`` is called: keep no state here); the step then minimizes
         g(x) = ½ (x − y)ᵀ M (x − y) + h² E(x) with the returned y. Used by damping models
         (e.g. y = x_n + a h v_n). Effects are chained: each receives the previous one's y.
 
@@ -119,8 +121,8 @@ class Effect:
     def pins(self, t: float) -> PinSet:
         """The pins active in the step ending at time ``t``.
 
-        Called once per step (with t = t_n + h) after ``adjust_target``; the pin sets of
-        all pin effects are merged (:meth:`PinSet.merge`) into the step's
+        Called by ``Simulation.problem()`` (with t = t_n + h) after ``adjust_target``; the
+        pin sets of all pin effects are merged (:meth:`PinSet.merge`) into the step's
         :class:`~clothsim.problem.StepProblem`. Also called at construction (a vertex
         held by two pins is an :class:`~clothsim.errors.InputError`) and whenever an
         effect asks ``pinned(t)`` (see :meth:`connect_pins`), so it must not change the
