@@ -20,31 +20,100 @@ from .model import Model
 
 
 def spring_vectors(model: Model, x: np.ndarray) -> np.ndarray:
-    """p_i = x_{a_i} − x_{b_i}, shape (s, 3) [m]."""
+    """Spring vectors p_i = x_{a_i} − x_{b_i}.
+
+    Parameters
+    ----------
+    model : Model
+        Springs (a_i, b_i, k_i [N/m], r_i [m]) and masses.
+    x : ndarray, shape (n, 3)
+        Positions [m].
+
+    Returns
+    -------
+    ndarray, shape (s, 3)
+        p_i for every spring [m].
+    """
     a, b = model.springs.spring_vertices.T
     return x[a] - x[b]
 
 
 def spring_lengths(model: Model, x: np.ndarray) -> np.ndarray:
-    """|p_i|, shape (s,) [m]."""
+    """Spring lengths |p_i|.
+
+    Parameters
+    ----------
+    model : Model
+        Springs (a_i, b_i, k_i [N/m], r_i [m]) and masses.
+    x : ndarray, shape (n, 3)
+        Positions [m].
+
+    Returns
+    -------
+    ndarray, shape (s,)
+        Current lengths [m].
+    """
     return np.linalg.norm(spring_vectors(model, x), axis=1)
 
 
 def spring_strain(model: Model, x: np.ndarray) -> np.ndarray:
-    """|p_i| / r_i − 1 for springs with r_i > 0 (0 where r_i = 0), shape (s,)."""
+    """Spring strains ε_i = |p_i| / r_i − 1.
+
+    Parameters
+    ----------
+    model : Model
+        Springs (a_i, b_i, k_i [N/m], r_i [m]) and masses.
+    x : ndarray, shape (n, 3)
+        Positions [m].
+
+    Returns
+    -------
+    ndarray, shape (s,)
+        Strain (dimensionless; positive when stretched, 0 where r_i = 0).
+    """
     r = model.springs.spring_rest_length
     length = spring_lengths(model, x)
     return np.divide(length, r, out=np.ones_like(length), where=r > 0) - 1.0
 
 
 def spring_energy(model: Model, x: np.ndarray) -> float:
-    """Σ_i ½ k_i (|p_i| − r_i)² [J]."""
+    """Spring part of the potential energy, E_s(x) = Σ_i ½ k_i (|p_i| − r_i)².
+
+    Parameters
+    ----------
+    model : Model
+        Springs (a_i, b_i, k_i [N/m], r_i [m]) and masses.
+    x : ndarray, shape (n, 3)
+        Positions [m].
+
+    Returns
+    -------
+    float
+        E_s(x) [J].
+    """
     k, r = model.springs.spring_stiffness, model.springs.spring_rest_length
     return float(0.5 * np.sum(k * (spring_lengths(model, x) - r) ** 2))
 
 
 def spring_gradient(model: Model, x: np.ndarray) -> np.ndarray:
-    """∇ of :func:`spring_energy`, shape (n, 3) [N] (minus the spring forces)."""
+    """Gradient of :func:`spring_energy`: ∇E_s(x) = Σ_i A_i ⊗ k_i (1 − r_i/|p_i|) p_i.
+
+    Each spring adds k_i (1 − r_i/|p_i|) p_i at a_i and subtracts it at b_i; a spring of
+    zero length contributes 0 (a subgradient). Equals L x − J d(x) with the local step's
+    d(x): the 3n form of the paper.
+
+    Parameters
+    ----------
+    model : Model
+        Springs (a_i, b_i, k_i [N/m], r_i [m]) and masses.
+    x : ndarray, shape (n, 3)
+        Positions [m].
+
+    Returns
+    -------
+    ndarray, shape (n, 3)
+        ∇E_s(x) [N], i.e. minus the spring forces.
+    """
     p = spring_vectors(model, x)
     length = np.linalg.norm(p, axis=1)
     k, r = model.springs.spring_stiffness, model.springs.spring_rest_length
@@ -72,6 +141,20 @@ def spring_hessian(model: Model, x: np.ndarray, *, definite: bool = True) -> sp.
     H_i = k_i [u uᵀ + (1 − r_i/l_i)(I − u uᵀ)], u = p_i / l_i. With ``definite=True`` the
     factor (1 − r/l) is clamped at 0 for compressed springs (l < r), which makes every H_i
     positive semidefinite (the usual fix; Choi and Ko 2002).
+
+    Parameters
+    ----------
+    model : Model
+        Springs (a_i, b_i, k_i [N/m], r_i [m]) and masses.
+    x : ndarray, shape (n, 3)
+        Positions [m].
+    definite : bool, default True
+        Clamp compressed springs' transverse stiffness at 0 (positive semidefinite).
+
+    Returns
+    -------
+    scipy.sparse.csr_matrix, shape (3n, 3n)
+        ∇²E_s(x) [N/m]; row 3 i + c is coordinate c of vertex i.
     """
     n = model.vertex_count
     a, b = model.springs.spring_vertices.T
@@ -96,11 +179,39 @@ def spring_hessian(model: Model, x: np.ndarray, *, definite: bool = True) -> sp.
 
 
 def kinetic_energy(model: Model, v: np.ndarray) -> float:
-    """½ Σ m_i |v_i|² [J]."""
+    """Kinetic energy ½ Σ_i m_i |v_i|² = ½ vᵀ M v.
+
+    Parameters
+    ----------
+    model : Model
+        Supplies the masses m_i [kg].
+    v : ndarray, shape (n, 3)
+        Velocities [m/s].
+
+    Returns
+    -------
+    float
+        Kinetic energy [J].
+    """
     return float(0.5 * np.sum(model.vertex_mass[:, None] * v * v))
 
 
 def gravity_energy(model: Model, x: np.ndarray, acceleration) -> float:
-    """−Σ m_i g · x_i [J] (potential of a uniform gravity field g)."""
+    """Gravitational potential energy −Σ_i m_i g · x_i of a uniform field g.
+
+    Parameters
+    ----------
+    model : Model
+        Supplies the masses m_i [kg].
+    x : ndarray, shape (n, 3)
+        Positions [m].
+    acceleration : array_like, shape (3,)
+        Gravitational acceleration g [m/s²], e.g. (0, −9.81, 0).
+
+    Returns
+    -------
+    float
+        Potential energy [J] (zero at the origin).
+    """
     g = np.asarray(acceleration, dtype=np.float64)
     return float(-np.sum(model.vertex_mass * (x @ g)))

@@ -90,6 +90,16 @@ def check_finite(name: str, value) -> np.ndarray:
         Field name used in the message, e.g. ``"vertex_mass"``.
     value : array_like
         Numbers to check.
+
+    Returns
+    -------
+    ndarray
+        ``value`` as float64, same shape (no copy when it already is one).
+
+    Raises
+    ------
+    InputError
+        When an entry is NaN or infinite, e.g. "vertex_mass[3]: must be a finite number".
     """
     arr = np.asarray(value, dtype=np.float64)
     bad = ~np.isfinite(arr)
@@ -102,7 +112,27 @@ def check_finite(name: str, value) -> np.ndarray:
 
 
 def check_positive(name: str, value, *, allow_zero: bool = False) -> np.ndarray:
-    """Like :func:`check_finite`, and also require every entry > 0 (>= 0 with ``allow_zero``)."""
+    """Like :func:`check_finite`, and also require every entry > 0 (>= 0 with ``allow_zero``).
+
+    Parameters
+    ----------
+    name : str
+        Field name used in the message.
+    value : array_like
+        Numbers to check.
+    allow_zero : bool, default False
+        Accept zeros.
+
+    Returns
+    -------
+    ndarray
+        ``value`` as float64, same shape.
+
+    Raises
+    ------
+    InputError
+        When an entry is not finite, or not positive (negative with ``allow_zero``).
+    """
     arr = check_finite(name, value)
     bad = arr < 0 if allow_zero else arr <= 0
     if bad.any():

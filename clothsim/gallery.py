@@ -70,8 +70,20 @@ def grid_cloth(n: int = 5, *, k: float = 800.0, bending: float | None = None,
 
 
 def top_corners(n: int, plane: str = "xy") -> list[int]:
-    """The two corners a gallery cloth hangs from: the top row's ends ("xy"), or the
-    ends of row 0 ("xz")."""
+    """The two corners a gallery cloth hangs from.
+
+    Parameters
+    ----------
+    n : int
+        Vertices per side of the :func:`grid_cloth`.
+    plane : {"xy", "xz"}
+        "xy": the ends of the top row; "xz": the ends of row 0.
+
+    Returns
+    -------
+    list of int
+        Two vertex indices.
+    """
     return [n * (n - 1), n * n - 1] if plane == "xy" else [0, n - 1]
 
 
@@ -80,6 +92,27 @@ def hanging_cloth(n: int = 7, *, k: float = 800.0, bending: float | None = None,
                   center=(0.0, 1.0, 0.0), pin_method: str = "constraint",
                   pin_stiffness: float = 1e5) -> tuple[Model, list]:
     """A cloth held at two corners (:func:`top_corners`) under gravity.
+
+    Parameters
+    ----------
+    n : int
+        Vertices per side.
+    k : float
+        Stiffness of structural and shear springs [N/m].
+    bending : float, optional
+        Stiffness of bending springs [N/m]; default ``k / 10``.
+    total_mass : float
+        Mass of the cloth [kg], lumped by area.
+    plane : {"xy", "xz"}
+        Plane of the flat cloth at rest ("xy" is vertical).
+    size : float
+        Side length [m].
+    center : sequence of 3 floats
+        Centre of the cloth [m].
+    pin_method : {"constraint", "penalty"}
+        Exact pins, or zero-rest-length penalty springs.
+    pin_stiffness : float
+        Penalty pin stiffness [N/m] (``pin_method="penalty"`` only).
 
     Returns
     -------
@@ -102,6 +135,34 @@ def curtain(n: int = 7, *, k: float = 800.0, bending: float | None = None,
 
     ``plane="xy"``: a vertical curtain; ``plane="xz"``: a horizontal sheet held at two
     corners that falls, buckles and swings (the paper's Fig. 1 setup).
+
+    Parameters
+    ----------
+    n : int
+        Vertices per side.
+    k : float
+        Stiffness of structural and shear springs [N/m].
+    bending : float, optional
+        Stiffness of bending springs [N/m]; default ``k / 10``.
+    total_mass : float
+        Mass of the cloth [kg], lumped by area.
+    plane : {"xy", "xz"}
+        Plane of the cloth at rest.
+    h : float
+        Time step [s].
+    method : str
+        Solver name (see :func:`clothsim.solvers.make_solver`).
+    iterations : int or None
+        Iterations per step (the maximum with a tolerance); None means 10.
+    tolerance : float or None
+        Relative residual at which a step stops (None: fixed iteration count).
+    **solver_options
+        Passed to the solver's constructor.
+
+    Returns
+    -------
+    Simulation
+        At rest at t = 0, with gravity :data:`GRAVITY` and exact pins on two corners.
     """
     model, effects = hanging_cloth(n, k=k, bending=bending, plane=plane,
                                    total_mass=total_mass)
@@ -117,6 +178,32 @@ def swing(n: int = 7, *, k: float = 800.0, bending: float | None = None,
 
     Its free edge falls about 1 m in 0.5 s: a slow, large motion next to the springs'
     fast vibrations (the trajectory-accuracy scene).
+
+    Parameters
+    ----------
+    n : int
+        Vertices per side.
+    k : float
+        Stiffness of structural and shear springs [N/m].
+    bending : float, optional
+        Stiffness of bending springs [N/m]; default ``k / 10``.
+    total_mass : float
+        Mass of the cloth [kg], lumped by area.
+    h : float
+        Time step [s].
+    method : str
+        Solver name (see :func:`clothsim.solvers.make_solver`).
+    iterations : int or None
+        Iterations per step (the maximum with a tolerance); None means 10.
+    tolerance : float or None
+        Relative residual at which a step stops (None: fixed iteration count).
+    **solver_options
+        Passed to the solver's constructor.
+
+    Returns
+    -------
+    Simulation
+        At rest at t = 0 (cloth at height 1 m), with gravity and row 0 pinned exactly.
     """
     model = grid_cloth(n, k=k, bending=bending, plane="xz", total_mass=total_mass,
                        center=(0.0, 1.0, 0.0))

@@ -36,20 +36,57 @@ I3 = sp.identity(3, format="csr")
 
 
 def expand3(A: sp.spmatrix) -> sp.csr_matrix:
-    """A ⊗ I3: the 3-D (interleaved per vertex) form of a scalar matrix."""
+    """A ⊗ I3: the 3-D (interleaved per vertex) form of a scalar matrix.
+
+    Parameters
+    ----------
+    A : scipy.sparse matrix, shape (p, q)
+        A scalar matrix (one row per vertex, one column per vertex or spring).
+
+    Returns
+    -------
+    scipy.sparse.csr_matrix, shape (3p, 3q)
+        Entry (3 i + c, 3 j + c) is A[i, j] for c = 0, 1, 2; same unit as A.
+    """
     return sp.kron(A, I3, format="csr")
 
 
 def mass_matrix(model: Model, *, expand: bool = True) -> sp.csr_matrix:
-    """M = diag(m) ⊗ I3, shape (3n, 3n) [kg]; with ``expand=False`` M_s, shape (n, n)."""
+    """The mass matrix M = diag(m_1 … m_n) ⊗ I3.
+
+    Parameters
+    ----------
+    model : Model
+        Supplies the vertex masses m_i [kg].
+    expand : bool, default True
+        True: the paper's 3n form (interleaved layout). False: the scalar n-row form.
+
+    Returns
+    -------
+    scipy.sparse.csr_matrix, shape (3n, 3n), or (n, n) with ``expand=False``
+        M, or M_s = diag(m) [kg].
+    """
     Ms = sp.diags(model.vertex_mass, format="csr")
     return expand3(Ms) if expand else Ms
 
 
 def stiffness_matrix(model: Model, *, expand: bool = True) -> sp.csr_matrix:
-    """L = (Σ_i k_i A_i A_iᵀ) ⊗ I3, shape (3n, 3n) [N/m]; ``expand=False``: L_s (n, n).
+    """The stiffness (graph Laplacian) matrix L = (Σ_i k_i A_i A_iᵀ) ⊗ I3.
 
-    Each spring adds k to (a, a) and (b, b) and −k to (a, b) and (b, a).
+    Each spring adds k to (a, a) and (b, b) and −k to (a, b) and (b, a). Penalty pins are
+    not included (see :func:`system_matrix`).
+
+    Parameters
+    ----------
+    model : Model
+        Supplies the springs (a_i, b_i, k_i [N/m]).
+    expand : bool, default True
+        True: the paper's 3n form (interleaved layout). False: the scalar n-row form.
+
+    Returns
+    -------
+    scipy.sparse.csr_matrix, shape (3n, 3n), or (n, n) with ``expand=False``
+        L, or L_s = Σ_i k_i A_i A_iᵀ [N/m].
     """
     n = model.vertex_count
     a, b = model.springs.spring_vertices.T
@@ -62,9 +99,22 @@ def stiffness_matrix(model: Model, *, expand: bool = True) -> sp.csr_matrix:
 
 
 def spring_matrix(model: Model, *, expand: bool = True) -> sp.csr_matrix:
-    """J = (Σ_i k_i A_i S_iᵀ) ⊗ I3, shape (3n, 3s) [N/m]; ``expand=False``: J_s (n, s).
+    """The spring matrix J = (Σ_i k_i A_i S_iᵀ) ⊗ I3.
 
-    Column i holds +k_i at row a_i and −k_i at row b_i.
+    Column i holds +k_i at row a_i and −k_i at row b_i, so J d is the springs' pull
+    toward the directions d of the local step (the h² J d term of the global step).
+
+    Parameters
+    ----------
+    model : Model
+        Supplies the springs (a_i, b_i, k_i [N/m]).
+    expand : bool, default True
+        True: the paper's 3n form (interleaved layout). False: the scalar n-row form.
+
+    Returns
+    -------
+    scipy.sparse.csr_matrix, shape (3n, 3s), or (n, s) with ``expand=False``
+        J, or J_s = Σ_i k_i A_i S_iᵀ [N/m].
     """
     n, s = model.vertex_count, model.spring_count
     a, b = model.springs.spring_vertices.T
@@ -81,15 +131,25 @@ def system_matrix(model: Model, h: float, *, expand: bool = False,
                   anchor_vertices=None, anchor_stiffness=None) -> sp.csc_matrix:
     """The global step's matrix M + h² L (plus penalty-pin stiffness on L's diagonal).
 
+    The global step solves (M + h² L) x = h² J d + M y + h² f_ext; the matrix depends only
+    on masses, stiffnesses, topology, pins and h, so it is factored once.
+
     Parameters
     ----------
+    model : Model
+        Masses [kg] and springs.
     h : float
         Time step [s].
     expand : bool
         False (default): the n × n matrix M_s + h² L_s the solver factors. True: 3n × 3n.
     anchor_vertices, anchor_stiffness : array_like, optional
         Penalty pins: a zero-rest-length spring of stiffness k from vertex v to a fixed
-        point adds k to L_s[v, v].
+        point adds k to L_s[v, v]; vertices (q,), int, and stiffness [N/m], scalar or (q,).
+
+    Returns
+    -------
+    scipy.sparse.csc_matrix, shape (n, n), or (3n, 3n) with ``expand=True``
+        M_s + h² L_s (symmetric positive definite when every mass is positive) [kg].
     """
     A = mass_matrix(model, expand=False) + (h * h) * stiffness_matrix(model, expand=False)
     if anchor_vertices is not None and len(anchor_vertices):

@@ -9,17 +9,13 @@ forces f, exact pins (fixed vertices at prescribed positions, removed from the u
 and penalty pins ("anchors": zero-rest-length springs of stiffness k to fixed points q).
 :class:`StepProblem` holds exactly these data; every solver minimizes the same g.
 
-==========================  ===============================================================
-name                        meaning
-==========================  ===============================================================
-:class:`PinSet`             pins active during one step (what effects hand the simulation)
-:class:`StepProblem`        the data of one step
-:class:`PenaltyAnchors`     the anchor terms: energy, gradient, right-hand side
-:func:`objective`           g(x)
-:func:`augmented_objective` ĝ(x, d) (Eq. 9), ĝ(x, d(x)) = g(x)
-:func:`objective_gradient`  ∇g(x)
-:func:`gradient_noise_floor` ‖∇g‖ below which the gradient is rounding noise
-==========================  ===============================================================
+- :class:`PinSet`: the pins active during one step (what effects hand the simulation);
+- :class:`StepProblem`: the data of one step;
+- :class:`PenaltyAnchors`: the anchor terms (energy, gradient, right-hand side);
+- :func:`objective`: g(x);
+- :func:`augmented_objective`: ĝ(x, d) (Eq. 9), with ĝ(x, d(x)) = g(x);
+- :func:`objective_gradient`: ∇g(x);
+- :func:`gradient_noise_floor`: the norm of ∇g below which the gradient is rounding noise.
 """
 
 from __future__ import annotations
@@ -85,7 +81,17 @@ class PinSet:
 
     @staticmethod
     def merge(parts: list[PinSet]) -> PinSet:
-        """One PinSet holding every pin of ``parts``."""
+        """One PinSet holding every pin of ``parts``.
+
+        Parameters
+        ----------
+        parts : list of PinSet
+
+        Returns
+        -------
+        PinSet
+            Their arrays concatenated in order (``parts[0]`` itself when there is one).
+        """
         if len(parts) == 1:
             return parts[0]
         cat = np.concatenate
@@ -119,12 +125,33 @@ class PenaltyAnchors:
         return len(self.vertices)
 
     def energy(self, x: np.ndarray) -> float:
-        """½ Σ_j k_j |x_{v_j} − q_j|² [J] for positions x, shape (n, 3)."""
+        """Anchor energy E_anchor(x) = ½ Σ_j k_j |x_{v_j} − q_j|².
+
+        Parameters
+        ----------
+        x : ndarray, shape (n, 3), positions [m]
+
+        Returns
+        -------
+        float, the energy [J]
+        """
         q = x[self.vertices] - self.positions
         return 0.5 * float(np.sum(self.stiffness[:, None] * q * q))
 
     def add_gradient(self, out: np.ndarray, x: np.ndarray, scale: float = 1.0) -> np.ndarray:
-        """out[v_j] += scale k_j (x_{v_j} − q_j) in place (scale = −1 adds the force)."""
+        """Add the anchors' gradient: out[v_j] += scale k_j (x_{v_j} − q_j), in place.
+
+        Parameters
+        ----------
+        out : ndarray, shape (n, 3), accumulator (repeated vertices accumulate)
+        x : ndarray, shape (n, 3), positions [m]
+        scale : float
+            1 adds the gradient [N], −1 the force [N], h² the term of ∇g [N·s²].
+
+        Returns
+        -------
+        out : ndarray, shape (n, 3)
+        """
         if len(self.vertices):
             np.add.at(out, self.vertices,
                       scale * self.stiffness[:, None] * (x[self.vertices] - self.positions))
@@ -132,10 +159,21 @@ class PenaltyAnchors:
 
     def add_rhs(self, out: np.ndarray, scale: float = 1.0,
                 origin: np.ndarray | None = None) -> np.ndarray:
-        """out[v_j] += scale k_j q_j in place: the anchors' part of the right-hand side.
+        """Add the anchors' part of the global step's right-hand side, in place.
 
-        With ``origin`` (n, 3), adds scale k_j (q_j − origin_{v_j}) instead (the right-hand
-        side of a solve for the displacement x − origin).
+        out[v_j] += scale k_j q_j, the anchors' term of h² J d + M y + h² f with scale = h²
+        [s²]; with ``origin`` (n, 3) [m], scale k_j (q_j − origin_{v_j}) instead (the
+        right-hand side of a solve for the displacement x − origin).
+
+        Parameters
+        ----------
+        out : ndarray, shape (n, 3), accumulator
+        scale : float
+        origin : ndarray, shape (n, 3), optional
+
+        Returns
+        -------
+        out : ndarray, shape (n, 3)
         """
         if len(self.vertices):
             q = self.positions if origin is None else self.positions - origin[self.vertices]
@@ -209,13 +247,28 @@ class StepProblem:
                                       self.anchor_stiffness)
 
     def initial_guess(self) -> np.ndarray:
-        """y with fixed vertices at their prescribed positions (the paper's starting point)."""
+        """The paper's starting point: y with fixed vertices at their prescribed positions.
+
+        Returns
+        -------
+        ndarray, shape (n, 3), a new array of positions [m]
+        """
         x0 = np.array(self.y, dtype=np.float64)
         x0[self.fixed_vertices] = self.fixed_positions
         return x0
 
     def free_mask(self, n: int) -> np.ndarray:
-        """Boolean mask, shape (n,): True for vertices that are unknowns (not fixed)."""
+        """Which vertices are unknowns (not exactly pinned).
+
+        Parameters
+        ----------
+        n : int, number of vertices
+
+        Returns
+        -------
+        ndarray, shape (n,), bool
+            True for free vertices, False for ``fixed_vertices``.
+        """
         mask = np.ones(n, bool)
         mask[self.fixed_vertices] = False
         return mask
@@ -240,8 +293,11 @@ def objective(model: Model, problem: StepProblem, x: np.ndarray) -> float:
     ----------
     model : Model
     problem : StepProblem
-    x : ndarray, shape (n, 3)
-        Positions [m].
+    x : ndarray, shape (n, 3), positions [m]
+
+    Returns
+    -------
+    float, g(x) [J·s²] (= kg·m²)
     """
     return (_objective_without_springs(model, problem, x)
             + problem.h ** 2 * energy.spring_energy(model, x))
@@ -249,9 +305,23 @@ def objective(model: Model, problem: StepProblem, x: np.ndarray) -> float:
 
 def augmented_objective(model: Model, problem: StepProblem, x: np.ndarray,
                         d: np.ndarray) -> float:
-    """ĝ(x, d): g with |p_i| − r_i replaced by |p_i − d_i| (Eq. 9); ĝ(x, d(x)) = g(x).
+    """The augmented objective ĝ(x, d) of the local/global method (Eq. 9).
 
-    ``x`` has shape (n, 3) [m], ``d`` shape (s, 3) [m].
+    ĝ(x, d) = ½ (x − y)ᵀ M (x − y) + h² (½ Σ_i k_i |p_i − d_i|² + E_anchor(x) − xᵀ f),
+    with p_i = x_{a_i} − x_{b_i}: g with (|p_i| − r_i)² replaced by |p_i − d_i|², i.e.
+    ½ xᵀ (M + h² L) x − h² xᵀ J d − xᵀ (M y + h² f) up to a constant. ĝ(x, d) ≥ g(x) when
+    every |d_i| = r_i, with equality at the local step's d_i = r_i p_i / |p_i|.
+
+    Parameters
+    ----------
+    model : Model
+    problem : StepProblem
+    x : ndarray, shape (n, 3), positions [m]
+    d : ndarray, shape (s, 3), one auxiliary vector per spring [m]
+
+    Returns
+    -------
+    float, ĝ(x, d) [J·s²]
     """
     q = energy.spring_vectors(model, x) - d
     springs = 0.5 * float(np.sum(model.springs.spring_stiffness[:, None] * q * q))
@@ -259,7 +329,22 @@ def augmented_objective(model: Model, problem: StepProblem, x: np.ndarray,
 
 
 def objective_gradient(model: Model, problem: StepProblem, x: np.ndarray) -> np.ndarray:
-    """∇g(x), shape (n, 3) [N·s²]; rows of fixed vertices are zero (they are not unknowns)."""
+    """The gradient of the objective g.
+
+    ∇g(x) = M (x − y) + h² ∇E(x), with ∇E = Σ_i k_i (1 − r_i/|p_i|) p_i at a_i (minus at
+    b_i) + Σ_j k_j (x_{v_j} − q_j) − f. Zero at the solution x_{n+1}.
+
+    Parameters
+    ----------
+    model : Model
+    problem : StepProblem
+    x : ndarray, shape (n, 3), positions [m]
+
+    Returns
+    -------
+    ndarray, shape (n, 3)
+        ∇g(x) [N·s²]; rows of fixed vertices are zero (they are not unknowns).
+    """
     h2 = problem.h ** 2
     grad = model.vertex_mass[:, None] * (x - problem.y) + h2 * energy.spring_gradient(model, x)
     problem.anchors.add_gradient(grad, x, h2)
@@ -280,10 +365,15 @@ def gradient_noise_floor(model: Model, problem: StepProblem, x: np.ndarray) -> f
     below this floor the iterate is optimal to rounding, and the solvers stop and count the
     step as converged instead of warning.
 
+    Parameters
+    ----------
+    model : Model
+    problem : StepProblem
+    x : ndarray, shape (n, 3), positions [m] (usually the initial guess)
+
     Returns
     -------
-    float
-        The floor [N·s²].
+    float, the floor [N·s²]
     """
     force = float(np.linalg.norm(model.springs.spring_stiffness)) * float(np.abs(x).max())
     if problem.f_ext is not None:
@@ -292,7 +382,19 @@ def gradient_noise_floor(model: Model, problem: StepProblem, x: np.ndarray) -> f
 
 
 def relative(norm: float, norm0: float) -> float:
-    """norm / norm0, with 0 when both vanish (the initial guess is already the solution)."""
+    """Relative residual norm / norm0.
+
+    Parameters
+    ----------
+    norm, norm0 : float
+        Current and initial residual norms, e.g. of ∇g(x_k) and ∇g(x_0) [N·s²].
+
+    Returns
+    -------
+    float
+        norm / norm0 (dimensionless); 0 when both vanish (the initial guess is already the
+        solution), inf when only norm0 vanishes or is not finite.
+    """
     if norm0 == 0.0 or not math.isfinite(norm0):
         return 0.0 if norm == 0.0 else math.inf
     return norm / norm0

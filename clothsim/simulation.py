@@ -54,6 +54,12 @@ class State:
         self.time = float(check_finite("state.time", self.time))
 
     def copy(self) -> State:
+        """An independent copy (positions and velocities copied).
+
+        Returns
+        -------
+        State
+        """
         return State(self.positions.copy(), self.velocities.copy(), self.time, self.step)
 
 
@@ -61,8 +67,20 @@ class State:
 class StepRecord:
     """What one step did: solver iterations, final relative residual, wall seconds.
 
-    ``converged`` is True or False when the solver had a tolerance (met or missed) and
-    None ("not checked") for a fixed iteration count.
+    Attributes
+    ----------
+    iterations : int
+        Solver iterations done.
+    residual : float
+        Final relative residual ‖∇g(x_k)‖ / ‖∇g(x_0)‖ (dimensionless).
+    seconds : float
+        Wall time of the whole step [s].
+    converged : bool or None
+        True or False when the solver had a tolerance (met or missed), None ("not
+        checked") for a fixed iteration count.
+    residual_history : list of float
+        Relative residual at each iterate, from k = 0 (the initial guess: 1, or 0 when it
+        is already the solution).
     """
 
     iterations: int
@@ -170,11 +188,37 @@ class Simulation:
                             count, self.model.vertex_count)
 
     def pinned_vertices(self, t: float) -> np.ndarray:
-        """Vertices held by a pin (exact or penalty) in the step ending at time t, sorted."""
+        """Vertices held by a pin (exact or penalty) in the step ending at time t.
+
+        Parameters
+        ----------
+        t : float
+            Time at the end of the step [s].
+
+        Returns
+        -------
+        ndarray, shape (p,), int
+            Sorted, unique vertex indices.
+        """
         return np.unique(self._pin_list(t))
 
     def problem(self, state: State | None = None) -> StepProblem:
-        """The implicit Euler problem of the next step from ``state`` (default: current)."""
+        """The implicit Euler problem of the next step from ``state``.
+
+        Calls the effects' ``add_force``, ``adjust_target`` and ``pins`` hooks: f_ext is
+        the sum of the forces, y = x_n + h v_n as adjusted, pins at t + h.
+
+        Parameters
+        ----------
+        state : State, optional
+            Start of the step; default the current state.
+
+        Returns
+        -------
+        StepProblem
+            h [s], x_n (n, 3) [m], v_n (n, 3) [m/s], y (n, 3) [m], f_ext (n, 3) [N] or
+            None, and the pins.
+        """
         s = self.state if state is None else state
         h, t = self.h, s.time
         f = None
@@ -193,7 +237,17 @@ class Simulation:
                            pins.anchor_stiffness)
 
     def step(self) -> StepRecord:
-        """Advance one time step h; returns what the solver did."""
+        """Advance one time step h.
+
+        Solves x_{n+1} = argmin g(x), applies ``correct_positions``, sets
+        v_{n+1} = (x_{n+1} − x_n) / h, applies ``correct_velocities`` and replaces
+        :attr:`state`.
+
+        Returns
+        -------
+        StepRecord
+            What the solver did (iterations, residual, wall seconds, convergence).
+        """
         start = _time.perf_counter()
         s, h = self.state, self.h
         problem = self.problem(s)
@@ -211,7 +265,20 @@ class Simulation:
         return record
 
     def run(self, steps: int, callback=None) -> list[StepRecord]:
-        """Take ``steps`` steps; ``callback(simulation, record)`` after each."""
+        """Take several steps.
+
+        Parameters
+        ----------
+        steps : int
+            Number of steps of length h.
+        callback : callable, optional
+            ``callback(simulation, record)`` is called after each step.
+
+        Returns
+        -------
+        list of StepRecord
+            One record per step.
+        """
         records = []
         for _ in range(int(steps)):
             rec = self.step()

@@ -76,11 +76,31 @@ class Springs:
         return len(self.spring_vertices)
 
     def family_count(self, family: str) -> int:
-        """Number of springs of ``family`` (one of :data:`FAMILIES`)."""
+        """Number of springs of one family.
+
+        Parameters
+        ----------
+        family : str
+            One of :data:`FAMILIES`.
+
+        Returns
+        -------
+        int
+        """
         return int(np.count_nonzero(self.spring_family == FAMILIES.index(family)))
 
     def with_stiffness(self, stiffness) -> Springs:
-        """A copy with new stiffnesses (scalar or per spring)."""
+        """A copy with new stiffnesses (same pairs, rest lengths and families).
+
+        Parameters
+        ----------
+        stiffness : float or array_like, shape (s,)
+            New k [N/m], one value or one per spring.
+
+        Returns
+        -------
+        Springs
+        """
         return Springs(self.spring_vertices, stiffness, self.spring_rest_length,
                        self.spring_family, self.vertex_count)
 
@@ -238,6 +258,11 @@ def mesh_springs(
         Stiffness [N/m] of the springs on every edge (triangle edges and strands).
     bending : float or None
         Stiffness [N/m] of the springs joining the two vertices opposite each interior edge.
+
+    Returns
+    -------
+    Springs
+        The structural springs, then the bending ones; rest lengths r_i [m] from the mesh.
     """
     parts = []
     k = _check_stiffness("structural", structural)
@@ -256,6 +281,11 @@ def bending_pairs(mesh: Mesh) -> np.ndarray:
     alternating diagonals, the two diagonals of a "diamond"); one bending spring joins
     such a pair, not two.
 
+    Parameters
+    ----------
+    mesh : Mesh
+        A triangle mesh.
+
     Returns
     -------
     ndarray, shape (k, 2), int64
@@ -269,7 +299,23 @@ def bending_pairs(mesh: Mesh) -> np.ndarray:
 
 
 def springs_from_pairs(mesh: Mesh, pairs, stiffness, *, family: str = "structural") -> Springs:
-    """Springs on explicit vertex pairs with rest lengths from ``mesh``'s shape."""
+    """Springs on explicit vertex pairs with rest lengths from ``mesh``'s shape.
+
+    Parameters
+    ----------
+    mesh : Mesh
+        Supplies the rest positions [m]; r_i = |X_{a_i} − X_{b_i}|.
+    pairs : array_like, shape (s, 2), int
+        Vertex pairs (a_i, b_i).
+    stiffness : float or array_like, shape (s,)
+        k_i [N/m].
+    family : str, default "structural"
+        One of :data:`FAMILIES`, recorded for every spring.
+
+    Returns
+    -------
+    Springs
+    """
     pairs = _vertex_pairs(pairs)
     n = mesh.vertex_count
     if pairs.size and (pairs.min() < 0 or pairs.max() >= n):

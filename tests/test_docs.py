@@ -1,10 +1,11 @@
 """The documentation: numpydoc docstrings on the public API, runnable pages, a site that
 builds.
 
-* Every name in ``clothsim.__all__`` and every public function and class of the top-level
-  modules has a docstring; one that takes parameters has a ``Parameters`` section (classes:
-  ``Parameters`` or ``Attributes``), one that returns a value has ``Returns`` (or
-  ``Yields``). Modules whose docstrings are still being completed are marked xfail.
+* Every name in ``clothsim.__all__`` and every public function and class of every module of
+  the package (found by walking it, so a new module cannot escape) has a docstring; one
+  that takes parameters has a ``Parameters`` section (classes: ``Parameters`` or
+  ``Attributes``), one that returns a value has ``Returns`` (or ``Yields``). Modules whose
+  docstrings are still being completed are marked xfail.
 * Every Python block of the pages this suite owns runs; every shell line uses ``.venv/bin/``
   (or follows ``. .venv/bin/activate``) so that it works copied into a fresh shell.
 """
@@ -13,6 +14,7 @@ from __future__ import annotations
 
 import importlib
 import inspect
+import pkgutil
 import re
 import runpy
 import textwrap
@@ -25,22 +27,38 @@ import clothsim
 ROOT = Path(__file__).resolve().parents[1]
 DOCS = ROOT / "docs"
 
-MODULES = ["clothsim", "clothsim.mesh", "clothsim.springs", "clothsim.model",
-           "clothsim.matrices", "clothsim.reference", "clothsim.factorization",
-           "clothsim.energy", "clothsim.simulation", "clothsim.gallery", "clothsim.scene",
-           "clothsim.runner", "clothsim.io", "clothsim.plotting", "clothsim.display",
-           "clothsim.errors", "clothsim.export", "clothsim.compare", "clothsim.accuracy",
-           "clothsim.cli", "clothsim.solvers", "clothsim.effects"]
-MODULES += [f"clothsim.solvers.{m}" for m in ("base", "local_global", "chebyshev", "newton",
-                                              "symplectic")]
-MODULES += [f"clothsim.effects.{m}" for m in ("base", "gravity", "pins", "obstacles", "impulse",
-                                              "wind", "damping", "strain_limit")]
-# modules of the package's new layout, checked once they exist (skipped before)
-MODULES += ["clothsim.problem", "clothsim.polygon", "clothsim.mesh_checks",
-            "clothsim.solvers.anderson", "clothsim.solvers.lbfgs", "clothsim.ports"]
-# docstrings owned elsewhere and not yet complete (see the list printed by the failure)
-INCOMPLETE = set(MODULES) - {"clothsim.plotting", "clothsim.display", "clothsim.cli",
-                              "clothsim.export"}
+def _discover() -> list[str]:
+    """Every module of the package (sub-packages included), so none escapes the check."""
+    found = ["clothsim"]
+    for info in pkgutil.walk_packages(clothsim.__path__, prefix="clothsim."):
+        if not info.name.rsplit(".", 1)[-1].startswith("_"):
+            found.append(info.name)
+    return sorted(found)
+
+
+MODULES = _discover()
+# docstrings owned elsewhere and not yet complete (see the list printed by the failure);
+# "clothsim" and "clothsim.solvers" fail only through names they re-export from these
+INCOMPLETE = {
+    "clothsim", "clothsim.accuracy", "clothsim.factorization", "clothsim.mesh",
+    "clothsim.reference", "clothsim.runner",
+    "clothsim.io", "clothsim.io.assignment", "clothsim.io.cells", "clothsim.io.common",
+    "clothsim.io.frames", "clothsim.io.matrices", "clothsim.io.meshes", "clothsim.io.obj",
+    "clothsim.scene", "clothsim.scene.build", "clothsim.scene.checks",
+    "clothsim.scene.effects", "clothsim.scene.files", "clothsim.scene.schema",
+    "clothsim.scene.tables", "clothsim.scene.validate",
+    "clothsim.solvers", "clothsim.solvers.chebyshev", "clothsim.solvers.local_global",
+    "clothsim.solvers.newton",
+    # at the 400-line module limit: complete once split (shapes / matrix comparison out);
+    # "clothsim.effects" and "clothsim.ports" re-export their classes
+    "clothsim.effects.obstacles", "clothsim.effects", "clothsim.ports.compare", "clothsim.ports",
+    # new on main while these docstrings were written; owned by their authors
+    "clothsim.interrupts", "clothsim.io.runfiles", "clothsim.solvers.anderson",
+    "clothsim.solvers.lbfgs",
+    *(f"clothsim.accuracy.{m}" for m in (
+        "command", "damping", "paper", "plots", "problems", "reference", "report", "study",
+        "sweep", "timestep", "timing", "trace", "trajectory")),
+}
 
 
 def _public(module):
@@ -116,9 +134,6 @@ def problems_method(cls, meth: str, name: str) -> list[str]:
                                             "are completed by its owner after the merge"))
     if m in INCOMPLETE else m for m in MODULES])
 def test_public_docstrings_have_numpydoc_sections(modname):
-    path = ROOT.joinpath(*modname.split("."))
-    if not (path.with_suffix(".py").is_file() or (path / "__init__.py").is_file()):
-        pytest.skip(f"{modname} is not in this checkout")
     module = importlib.import_module(modname)
     missing = []
     for name, obj in _public(module):
@@ -128,6 +143,14 @@ def test_public_docstrings_have_numpydoc_sections(modname):
                 if not meth.startswith("_") and inspect.isfunction(f):
                     missing += problems_method(obj, meth, f"{modname}.{name}.{meth}")
     assert not missing, "\n".join(missing)
+
+
+def test_every_module_is_checked():
+    # sub-packages are walked too, so a module added anywhere is checked without listing it
+    for name in ("clothsim.problem", "clothsim.effects.base", "clothsim.ports.export",
+                 "clothsim.solvers.symplectic", "clothsim.io", "clothsim.scene"):
+        assert name in MODULES, name
+    assert all(m == "clothsim" or m.startswith("clothsim.") for m in INCOMPLETE)
 
 
 def test_the_docstring_check_can_fail():

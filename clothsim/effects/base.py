@@ -14,6 +14,11 @@ need to know which vertices are pinned. One step from t to t + h runs:
 5. ``correct_positions(t + h, state, x) -> x``    move x after the solve (collisions, …)
 6. v = (x − x_n) / h, then ``correct_velocities(t + h, state, x, v) -> v``
 
+Within each hook the simulation calls the effects in the order they were declared, each
+one receiving what the previous one returned. Hooks read the time step from ``self.h`` and
+the model from ``self.model``; they never change the model. Arrays are (n, 3), one row per
+vertex, in the model's vertex order, float64.
+
 An effect instance belongs to one simulation: binding it to a second one is an
 :class:`~clothsim.errors.InputError` (it keeps per-run data such as contacts).
 """
@@ -51,20 +56,32 @@ class Effect:
     def bind(self, model, h: float) -> None:
         """Check the effect against ``model`` and precompute what it needs.
 
-        Called once by the simulation before the first step. Subclasses call
-        ``super().bind(model, h)`` first.
+        Called once by the :class:`~clothsim.simulation.Simulation` constructor, before
+        ``connect_pins`` and before the first step (every hook may rely on ``self.model``
+        and ``self.h``). Subclasses call ``super().bind(model, h)`` first, then validate
+        their parameters against the model (vertex indices in range, …) and raise
+        :class:`~clothsim.errors.InputError` naming the field on bad input.
 
         Parameters
         ----------
         model : Model
+            The cloth model (n vertices); stored as ``self.model``.
         h : float
-            Time step [s].
+            Time step [s]; stored as ``self.h``.
         """
         self.model = model
         self.h = h
 
     def add_force(self, t: float, state, f: np.ndarray) -> None:
         """Add this effect's external force to ``f`` in place.
+
+        Called by :meth:`~clothsim.simulation.Simulation.problem` first: at the start of
+        every step, and again whenever ``problem()`` is called (the port tools do), so it
+        must not change the effect's state. ``f`` starts at zero and collects every
+        declared force effect's contribution; the sum becomes f_ext of the step (the
+        −xᵀ f_ext term of E(x), so h² f_ext enters the global step's right-hand side).
+        Forces are evaluated at the start of the step (x_n, v_n at time t): an explicit
+        treatment of position- or velocity-dependent forces.
 
         Parameters
         ----------
@@ -73,12 +90,17 @@ class Effect:
         state : State
             The state x_n, v_n at time t.
         f : ndarray, shape (n, 3)
-            Force accumulator [N]; add to it, never replace it.
+            Force accumulator [N]; add to it, never replace it. Do not modify ``state``.
         """
         raise NotImplementedError
 
     def adjust_target(self, t: float, state, y: np.ndarray) -> np.ndarray:
         """Return a changed inertial target y (do not modify ``y`` in place).
+
+        Called by ``Simulation.problem()`` after ``add_force`` (at every step, and whenever
+        ``problem()`` is called: keep no state here); the step then minimizes
+        g(x) = ½ (x − y)ᵀ M (x − y) + h² E(x) with the returned y. Used by damping models
+        (e.g. y = x_n + a h v_n). Effects are chained: each receives the previous one's y.
 
         Parameters
         ----------
@@ -92,20 +114,41 @@ class Effect:
         Returns
         -------
         ndarray, shape (n, 3)
+            The new inertial target [m] (a new array).
         """
         raise NotImplementedError
 
     def pins(self, t: float) -> PinSet:
-        """The pins active in the step ending at time ``t`` [s].
+        """The pins active in the step ending at time ``t``.
+
+        Called by ``Simulation.problem()`` (with t = t_n + h) after ``adjust_target``; the
+        pin sets of all pin effects are merged (:meth:`PinSet.merge`) into the step's
+        :class:`~clothsim.problem.StepProblem`. Also called at construction (a vertex
+        held by two pins is an :class:`~clothsim.errors.InputError`) and whenever an
+        effect asks ``pinned(t)`` (see :meth:`connect_pins`), so it must not change the
+        effect's state. Exact pins are removed from the unknowns; penalty anchors add
+        zero-rest-length springs (k_j to L's diagonal, h² k_j q_j to the right-hand side).
+
+        Parameters
+        ----------
+        t : float
+            Time at the end of the step [s].
 
         Returns
         -------
         PinSet
+            Fixed vertices (p,) with positions (p, 3) [m]; anchor vertices (q,), anchor
+            points (q, 3) [m] and stiffnesses (q,) [N/m].
         """
         raise NotImplementedError
 
     def correct_positions(self, t: float, state, x: np.ndarray) -> np.ndarray:
         """Return corrected end-of-step positions (do not modify ``x`` in place).
+
+        Called once per step after the solver, outside the optimization (the paper's
+        collision handling: a vertex inside an obstacle is moved to its surface). The
+        velocities are then computed from the corrected positions, v = (x − x_n) / h, so a
+        correction also changes the velocity. Effects are chained in declaration order.
 
         Parameters
         ----------
@@ -119,12 +162,17 @@ class Effect:
         Returns
         -------
         ndarray, shape (n, 3)
+            Corrected positions [m] (a new array, or ``x`` itself when nothing changes).
         """
         raise NotImplementedError
 
     def correct_velocities(self, t: float, state, x: np.ndarray,
                            v: np.ndarray) -> np.ndarray:
         """Return corrected end-of-step velocities (do not modify ``v`` in place).
+
+        Called once per step, last, after v = (x − x_n) / h (friction, restitution,
+        velocity damping). The returned v is the next step's v_n; positions can no longer
+        change. Effects are chained in declaration order.
 
         Parameters
         ----------
@@ -140,11 +188,16 @@ class Effect:
         Returns
         -------
         ndarray, shape (n, 3)
+            Corrected velocities [m/s] (a new array, or ``v`` itself).
         """
         raise NotImplementedError
 
     def connect_pins(self, pinned: Callable[[float], np.ndarray]) -> None:
         """Receive the simulation's pin query (for effects that must not move pins).
+
+        Called once by the simulation right after every effect is bound, before the first
+        step. Store ``pinned`` and call it from other hooks (e.g. strain limiting leaves
+        pinned vertices where the pins put them).
 
         Parameters
         ----------
@@ -155,12 +208,30 @@ class Effect:
         raise NotImplementedError
 
     def describe(self) -> dict:
-        """JSON-ready description of the effect as built (for run.json)."""
+        """JSON-ready description of the effect as built (for run.json).
+
+        Returns
+        -------
+        dict
+            At least ``{"kind": kind}``; subclasses add their parameters (SI units).
+        """
         return {"kind": self.kind}
 
 
 def overrides(effect: Effect, hook: str) -> bool:
-    """True when ``effect`` implements ``hook`` (the simulation calls only those)."""
+    """Whether ``effect`` implements ``hook`` (the simulation calls only those).
+
+    Parameters
+    ----------
+    effect : Effect
+    hook : str
+        One of :data:`HOOKS`.
+
+    Returns
+    -------
+    bool
+        True when the effect's class overrides the hook of :class:`Effect`.
+    """
     return getattr(type(effect), hook) is not getattr(Effect, hook)
 
 

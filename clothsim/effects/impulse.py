@@ -84,7 +84,17 @@ class Impulse(Effect):
         self.vertex_force = (m / m.sum())[:, None] * self.force
 
     def active(self, t: float) -> bool:
-        """True when start ≤ t < start + duration."""
+        """Whether the push acts at time t: start ≤ t < start + duration.
+
+        Parameters
+        ----------
+        t : float
+            Time at the start of the step [s].
+
+        Returns
+        -------
+        bool
+        """
         return self.start <= t < self.start + self.duration
 
     def add_force(self, t, state, f):

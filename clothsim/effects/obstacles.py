@@ -94,6 +94,10 @@ class Obstacle(Effect):
     def contacts(self, x0: np.ndarray, x: np.ndarray):
         """Vertices whose step segment x0 → x touches the solid.
 
+        Parameters
+        ----------
+        x0, x : ndarray, shape (n, 3), positions at the step's start and after the solve [m]
+
         Returns
         -------
         index : ndarray, shape (c,), int
@@ -204,7 +208,16 @@ class Plane(Obstacle):
         self._offset = float(self.point @ self.normal) + self.thickness
 
     def signed_distance(self, x: np.ndarray) -> np.ndarray:
-        """φ(x) = n·x − n·point − thickness [m], shape (n,); negative inside."""
+        """φ(x) = n·x − n·point − thickness, negative inside.
+
+        Parameters
+        ----------
+        x : ndarray, shape (k, 3), points [m]
+
+        Returns
+        -------
+        ndarray, shape (k,), signed distances [m]
+        """
         return x @ self.normal - self._offset
 
     def contacts(self, x0, x):

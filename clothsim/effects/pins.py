@@ -105,7 +105,21 @@ class Pin(Effect):
         self._empty = PinSet()
 
     def targets(self, t: float) -> np.ndarray:
-        """Pinned vertices' prescribed positions at time t, shape (p, 3) [m]."""
+        """Prescribed positions of the pinned vertices at time t.
+
+        q(t) = q_0 + t v + motion(t), with q_0 the rest positions, v the constant
+        ``velocity`` and ``motion`` the optional prescribed displacement.
+
+        Parameters
+        ----------
+        t : float
+            Time [s].
+
+        Returns
+        -------
+        ndarray, shape (p, 3)
+            Target positions [m].
+        """
         x = self._rest
         if self.velocity is not None:
             x = x + t * self.velocity
@@ -114,6 +128,17 @@ class Pin(Effect):
         return x
 
     def active(self, t: float) -> bool:
+        """Whether the pins hold at time t (until ``release``, if set).
+
+        Parameters
+        ----------
+        t : float
+            Time [s].
+
+        Returns
+        -------
+        bool
+        """
         return self.release is None or t <= self.release + 1e-12 * max(1.0, abs(self.release))
 
     def pins(self, t):

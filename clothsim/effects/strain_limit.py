@@ -141,7 +141,14 @@ class StrainLimit(Effect):
         self.last_max_strain = 0.0
 
     def connect_pins(self, pinned_vertices_at: Callable[[float], np.ndarray]) -> None:
-        """Called by the simulation: ``pinned_vertices_at(t)`` gives the pinned vertices."""
+        """Called by the simulation: store the query of pinned vertices.
+
+        Parameters
+        ----------
+        pinned_vertices_at : callable
+            ``pinned_vertices_at(t)`` returns the sorted vertices held by a pin in the step
+            ending at time t [s], shape (p,), int; they are not moved by the limiting.
+        """
         self.pinned_vertices_at = pinned_vertices_at
 
     def bind(self, model, h):

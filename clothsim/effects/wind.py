@@ -63,7 +63,23 @@ class Wind(Effect):
         self._n = model.vertex_count
 
     def triangle_force(self, x: np.ndarray, v: np.ndarray) -> np.ndarray:
-        """F_t of every triangle [N], shape (m, 3), at positions x and velocities v (n, 3)."""
+        """Drag force of every triangle, F_t = ½ ρ C_d A_t (v_rel·n_t) |v_rel·n_t| n_t.
+
+        v_rel is the wind velocity minus the mean velocity of the triangle's vertices, A_t
+        its area and n_t its unit normal; degenerate triangles get no force.
+
+        Parameters
+        ----------
+        x : ndarray, shape (n, 3)
+            Positions [m].
+        v : ndarray, shape (n, 3)
+            Velocities [m/s].
+
+        Returns
+        -------
+        ndarray, shape (m, 3)
+            Force on each of the m triangles [N].
+        """
         T = self._triangles
         cross = np.cross(x[T[:, 1]] - x[T[:, 0]], x[T[:, 2]] - x[T[:, 0]])   # 2 A n
         twice_area = np.linalg.norm(cross, axis=1)
@@ -74,7 +90,20 @@ class Wind(Effect):
         return (0.25 * self.density * self.drag * vn * np.abs(vn))[:, None] * cross
 
     def vertex_force(self, x: np.ndarray, v: np.ndarray) -> np.ndarray:
-        """Wind force on every vertex [N], shape (n, 3): a third of each triangle's."""
+        """Wind force on every vertex: a third of each adjacent triangle's F_t.
+
+        Parameters
+        ----------
+        x : ndarray, shape (n, 3)
+            Positions [m].
+        v : ndarray, shape (n, 3)
+            Velocities [m/s].
+
+        Returns
+        -------
+        ndarray, shape (n, 3)
+            Force on each vertex [N].
+        """
         F = self.triangle_force(x, v) / 3.0
         T = self._triangles.ravel()
         return np.stack([np.bincount(T, weights=np.repeat(F[:, k], 3), minlength=self._n)

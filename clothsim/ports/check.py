@@ -74,6 +74,12 @@ class StepCheck:
         return self.status in PASSING
 
     def line(self) -> str:
+        """One line naming the step, its verdict, error [m] and vertex.
+
+        Returns
+        -------
+        str
+        """
         text = (f"step {self.k} -> {self.k + 1}: {self.status}, max error {self.error:.3e} m "
                 f"at vertex {self.vertex}")
         if np.isfinite(self.gradient_port):
@@ -84,7 +90,19 @@ class StepCheck:
 
 @dataclass
 class CheckReport:
-    """All steps' verdicts; ``passed`` when every step agrees or is non-unique."""
+    """All steps' verdicts; ``passed`` when every step agrees or is non-unique.
+
+    Attributes
+    ----------
+    steps : list of StepCheck
+        One verdict per checked step.
+    tolerance : float
+        Allowed per-vertex distance [m] (:func:`step_tolerance`).
+    precision : {"float32", "float64"}
+        The port's floating-point precision.
+    notes : list of str
+        Remarks on the whole check.
+    """
 
     steps: list[StepCheck]
     tolerance: float
@@ -104,7 +122,12 @@ class CheckReport:
         return [s for s in self.steps if s.status == "non-unique"]
 
     def summary(self) -> str:
-        """One line: PASS or FAIL, with the first failing step and vertex."""
+        """One line: PASS or FAIL, with the first failing step and vertex.
+
+        Returns
+        -------
+        str
+        """
         n = len(self.steps)
         worst = max((s.error for s in self.steps), default=0.0)
         nu = self.non_unique
@@ -133,6 +156,20 @@ def step_tolerance(sim, x: np.ndarray, precision: str = "float64") -> float:
 
     float64: 1e-9 of the cloth size. float32: κ(M + h²L) ε₃₂ max|x| (at least the float64
     tolerance), with κ of the system matrix including penalty pins.
+
+    Parameters
+    ----------
+    sim : Simulation
+        The simulation at the step's start (supplies M, L, h and the pins).
+    x : ndarray, shape (n, 3)
+        Positions [m] setting the cloth size.
+    precision : {"float64", "float32"}
+        The port's precision.
+
+    Returns
+    -------
+    float
+        Tolerance [m].
     """
     if precision not in ("float32", "float64"):
         raise InputError(f"precision: must be 'float32' or 'float64', got {precision!r}")

@@ -224,6 +224,10 @@ def compare_arrays(a, b, *, rtol: float | None = None, atol: float | None = None
         float32 widens the tolerance to the κ ε₃₂ |x| bound (needs ``kappa``).
     match : bool
         Pair vertices by their frame-0 positions (:func:`match_vertices`) first.
+
+    Returns
+    -------
+    Comparison
     """
     a, b = np.asarray(a, np.float64), np.asarray(b, np.float64)
     if a.ndim == 2:
@@ -259,6 +263,10 @@ def compare_trajectories(path, reference, *, key: str = "positions", frames: int
 
     ``frames``: only the first this many. ``kappa`` defaults to the reference export's
     ``manifest.json`` value when there is one. Other options go to :func:`compare_arrays`.
+
+    Returns
+    -------
+    Comparison
     """
     import json
     from pathlib import Path

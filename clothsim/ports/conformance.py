@@ -87,8 +87,19 @@ def _toml_value(v) -> str:
 
 
 def to_toml(doc: dict) -> str:
-    """A scene document (tables of scalars and arrays, ``effects`` an array of tables) as
-    TOML."""
+    """A scene document as TOML.
+
+    Parameters
+    ----------
+    doc : dict
+        Tables of scalars and arrays; a list value (``effects``) is an array of tables.
+        Numbers are in SI units, as in scene files.
+
+    Returns
+    -------
+    str
+        The TOML text.
+    """
     out = []
     for table, body in doc.items():
         rows = body if isinstance(body, list) else [body]
@@ -100,7 +111,19 @@ def to_toml(doc: dict) -> str:
 
 
 def case_simulation(name: str, scene: Scene):
-    """A fresh Simulation of case ``name`` (the stretched case starts from its stretch)."""
+    """A fresh Simulation of case ``name`` (the stretched case starts from its stretch).
+
+    Parameters
+    ----------
+    name : str
+        A key of :data:`CASES`; "springs-stretch" starts 1.2 times stretched, at rest.
+    scene : Scene
+        The case's scene.
+
+    Returns
+    -------
+    Simulation
+    """
     sim = scene.build_simulation(scene.build_model())
     if name == "springs-stretch":
         x = sim.model.mesh.vertices
@@ -153,6 +176,11 @@ def write_conformance(out_dir, *, frames: int = 20, iterate_steps: int = 2,
         Steps whose iterates are written.
     cases : sequence of str, optional
         A subset of :data:`CASES`.
+
+    Returns
+    -------
+    list of str
+        The case names written, one folder each.
     """
     out = Path(out_dir)
     out.mkdir(parents=True, exist_ok=True)

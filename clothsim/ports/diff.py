@@ -28,11 +28,15 @@ class ModelTables:
     Attributes
     ----------
     x0 : ndarray, shape (n, 3)
+        Initial positions [m].
     springs : ndarray, shape (s, 2), int
+        End vertices (a_i, b_i).
     stiffness, rest : ndarray, shape (s,)
-    masses : ndarray, shape (n,) or None (unknown)
+        k_i [N/m] and r_i [m].
+    masses : ndarray, shape (n,) or None
+        Vertex masses [kg] (None: unknown).
     pins : dict
-        vertex → (method, stiffness); stiffness None for exact pins.
+        vertex → (method, stiffness [N/m]); stiffness None for exact pins.
     source : str
     """
 
@@ -47,13 +51,29 @@ class ModelTables:
 
 @dataclass
 class ModelDiff:
-    """Differences between models A and B; ``identical``, ``lines`` and the likely ``cause``."""
+    """Differences between models A and B.
+
+    Attributes
+    ----------
+    identical : bool
+        True when springs, stiffnesses, rest lengths, masses and pins agree.
+    cause : str
+        The likely cause of the difference (or a confirmation).
+    lines : list of str
+        One line per difference found.
+    """
 
     identical: bool
     cause: str
     lines: list[str] = field(default_factory=list)
 
     def report(self) -> str:
+        """The verdict and cause, then the differences, one per line.
+
+        Returns
+        -------
+        str
+        """
         return "\n".join([("IDENTICAL" if self.identical else "DIFFERENT") + f": {self.cause}"]
                          + [f"  {t}" for t in self.lines])
 
@@ -94,7 +114,18 @@ def _from_folder(d: Path) -> ModelTables:
 
 
 def model_tables(source) -> ModelTables:
-    """Read one side (see the module docstring)."""
+    """Read one side (see the module docstring).
+
+    Parameters
+    ----------
+    source : ModelTables, str, Path, Scene, Simulation or callable
+        A folder of model files, a scene (name or ``.toml`` path, or object), a
+        Simulation or a function returning one.
+
+    Returns
+    -------
+    ModelTables
+    """
     if isinstance(source, ModelTables):
         return source
     if isinstance(source, (str, Path)) and Path(source).is_dir():

@@ -3,11 +3,12 @@
 :func:`export_port` writes into one folder (the layout is listed in its ``manifest.json`` and
 in docs/ports.md):
 
-matrices (Matrix Market, sparse, %.17g; 3n rows interleaved: row 3 i + c is coordinate c of
-vertex i)
-    ``M.mtx``; ``L.mtx`` = (Σ k_i A_i A_iᵀ + Σ_pins k_p e_p e_pᵀ) ⊗ I3 — **with** the penalty
-    pins, as solved; ``L_springs.mtx`` without them; ``J.mtx`` (3n × 3s, springs only);
-    ``A.mtx`` = M + h² L (3n, with pins) and ``A_scalar.mtx`` (its n × n block).
+matrices
+    Matrix Market, sparse, %.17g; 3n rows interleaved: row 3 i + c is coordinate c of
+    vertex i. ``M.mtx``; ``L.mtx`` = (Σ k_i A_i A_iᵀ + Σ_pins k_p e_p e_pᵀ) ⊗ I3 —
+    **with** the penalty pins, as solved; ``L_springs.mtx`` without them; ``J.mtx``
+    (3n × 3s, springs only); ``A.mtx`` = M + h² L (3n, with pins) and ``A_scalar.mtx``
+    (its n × n block).
 model (plain text)
     ``vertices.txt`` (n lines x y z), ``x0.txt`` (one line of 3n), ``triangles.txt``,
     ``springs.txt`` (a b k r, 0-based), ``masses.txt``, ``pins.txt`` (vertex method
@@ -100,6 +101,16 @@ def pin_table(sim) -> np.ndarray:
     """Rows (vertex, method code, stiffness, x, y, z) of the pins acting in the first step.
 
     Method code 0 = exact (constraint, stiffness 0), 1 = penalty.
+
+    Parameters
+    ----------
+    sim : Simulation
+        At the state whose next step's pins are listed.
+
+    Returns
+    -------
+    ndarray, shape (p, 6)
+        Vertex, method code, stiffness [N/m], target position x y z [m].
     """
     p = sim.problem(sim.state)
     rows = [(v, 0, 0.0, *q) for v, q in zip(p.fixed_vertices, p.fixed_positions)]
@@ -122,6 +133,20 @@ def record_iterates(sim, steps: int) -> list[dict]:
 
     A separate local/global solver with the simulation's iteration count and tolerance (so
     the same stop rule) records them; the simulation's own solver is untouched.
+
+    Parameters
+    ----------
+    sim : Simulation
+        Advanced by ``steps`` steps.
+    steps : int
+        Number of steps to record.
+
+    Returns
+    -------
+    list of dict
+        Per step: ``x`` (K + 1, n, 3) iterates [m], ``d`` (K + 1, s, 3) local steps
+        d_i = r_i p_i/|p_i| of each iterate [m], ``gradient_norm`` (K + 1,) [N·s²], and
+        the step's ``y`` [m] and ``f_ext`` [N].
     """
     solver = _RecordingSolver(sim.model, iterations=sim.solver.iterations,
                               tolerance=sim.solver.tolerance)

@@ -155,6 +155,19 @@ def write_trajectory(path, frames, *, key: str = "positions", fmt: str | None = 
     Text uses ``%.17g`` (float64 round-trip exact; ``%.9g`` for ``dtype="float32"``); a
     ``frames`` folder gets ``frame_00000.txt`` …; raw is little-endian ``dtype``.
 
+    Parameters
+    ----------
+    path : path
+        File or folder to write; its suffix chooses the format unless ``fmt`` is given.
+    frames : array_like, shape (frames, n, 3) or (frames, 3n)
+        Positions [m] (or velocities [m/s]).
+    key : str, default "positions"
+        Array name in an ``.npz``.
+    fmt : {"npz", "npy", "text", "frames", "raw"}, optional
+        Override the format implied by the name.
+    dtype : {"float64", "float32"}
+        Precision of text digits and raw files.
+
     Returns
     -------
     Path
@@ -192,6 +205,18 @@ def read_velocities(path, **options) -> np.ndarray | None:
 
     Folders (``velocities.txt``, ``trajectory.npz``, ``trajectory.pvd``), ``.npz`` files with a
     ``velocities`` array and ``.pvd`` collections hold them; other files hold one field only.
+
+    Parameters
+    ----------
+    path : path
+        File or folder.
+    **options
+        Passed to :func:`read_trajectory` (``fmt``, ``dtype``, ``vertex_count``).
+
+    Returns
+    -------
+    ndarray, shape (frames, n, 3), or None
+        Velocities [m/s].
     """
     p = Path(path)
     if p.is_dir():

@@ -40,7 +40,23 @@ SOLVERS: dict[str, type[Solver]] = {
 
 
 def make_solver(method: str, model, **options) -> Solver:
-    """Build the solver named ``method`` for ``model`` (options go to its constructor)."""
+    """Build the solver named ``method`` for ``model``.
+
+    Parameters
+    ----------
+    method : {"local-global", "chebyshev", "newton", "symplectic-euler"}
+        A key of :data:`SOLVERS`; anything else is an :class:`InputError` naming
+        ``solver.method``.
+    model : Model
+        The cloth model.
+    **options
+        Passed to the solver's constructor (``iterations``, ``tolerance``, ``backend``, ...).
+
+    Returns
+    -------
+    Solver
+        A new solver instance.
+    """
     from ..errors import InputError
 
     try:

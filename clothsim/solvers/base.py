@@ -111,6 +111,20 @@ class Solver:
 
         Runs until the consumer stops, or returns when the method can make no further
         progress. A yielded ``x`` is valid until the generator resumes: copy it to keep it.
+        Subclasses implement this; :meth:`solve` and the accuracy traces consume it.
+
+        Parameters
+        ----------
+        problem : StepProblem
+            The step: h [s], x_n [m], v_n [m/s], y [m], f_ext [N], pins.
+        x0 : ndarray, shape (n, 3), optional
+            Initial guess [m]; default :meth:`StepProblem.initial_guess` (y with pins applied).
+
+        Yields
+        ------
+        Iterate
+            k (iterations done), x (n, 3) [m], gradient_norm = ‖∇g(x)‖ over the free
+            degrees of freedom [N·s²].
         """
         raise NotImplementedError
 
@@ -120,6 +134,20 @@ class Solver:
         Stops at ``iterations``, once the relative residual ‖∇g(x_k)‖ / ‖∇g(x_0)‖ is at
         most ``tolerance``, once ‖∇g‖ is at its rounding floor
         (:func:`gradient_noise_floor`, only with a tolerance), or on a non-finite residual.
+
+        Parameters
+        ----------
+        problem : StepProblem
+            The step to solve.
+        x0 : ndarray, shape (n, 3), optional
+            Initial guess [m].
+
+        Returns
+        -------
+        StepResult
+            x_{n+1} (n, 3) [m], iterations done, the relative residual and its history,
+            and ``converged`` (None when no tolerance was set). A missed tolerance also
+            emits a :class:`ConvergenceWarning`.
         """
         history: list[float] = []
         floor = r0 = None
@@ -151,7 +179,13 @@ class Solver:
         return {}
 
     def set_state(self, state: dict) -> None:
-        """Restore what :meth:`get_state` returned (the base class has nothing to restore)."""
+        """Restore what :meth:`get_state` returned (the base class has nothing to restore).
+
+        Parameters
+        ----------
+        state : dict
+            A dictionary returned by :meth:`get_state` of a solver of the same kind.
+        """
 
     def _finish(self, x, iterations, history, *, at_floor: bool = False) -> StepResult:
         residual = history[-1] if history else 0.0

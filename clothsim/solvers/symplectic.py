@@ -122,7 +122,20 @@ class SymplecticEulerSolver(Solver):
                           StabilityWarning, stacklevel=3)
 
     def force(self, problem: StepProblem, x: np.ndarray) -> np.ndarray:
-        """f_ext − ∇E(x), springs and anchors, shape (n, 3) [N]."""
+        """The total force f(x) = f_ext − ∇E(x) (springs and penalty anchors).
+
+        Parameters
+        ----------
+        problem : StepProblem
+            Supplies f_ext [N] and the anchors.
+        x : ndarray, shape (n, 3)
+            Positions [m].
+
+        Returns
+        -------
+        ndarray, shape (n, 3)
+            Force on each vertex [N].
+        """
         f = -energy.spring_gradient(self.model, x)
         if problem.f_ext is not None:
             f += problem.f_ext
@@ -136,6 +149,18 @@ class SymplecticEulerSolver(Solver):
         no objective to minimize, so every gradient norm is reported as 0 (no residual);
         the method can make no progress after its one step and then returns. ``x0`` is
         ignored (the step starts from x_n by definition).
+
+        Parameters
+        ----------
+        problem : StepProblem
+            The step: h [s], x_n [m], v_n [m/s], y [m], f_ext [N], pins.
+        x0 : ndarray, shape (n, 3), optional
+            Ignored.
+
+        Yields
+        ------
+        Iterate
+            k = 0 with x_n, then k = 1 with x_{n+1} (n, 3) [m]; gradient_norm 0.
         """
         if self.check_stability:
             self._check(problem)
