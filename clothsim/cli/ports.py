@@ -113,7 +113,7 @@ def _cmd_compare(args) -> int:
     if bad:
         return _fail(bad, 2)
     if Path(args.trajectory).suffix == ".mtx":
-        from ..ports.compare import compare_matrices
+        from ..ports.matrices import compare_matrices
 
         mres = compare_matrices(args.trajectory, args.reference,
                                 rtol=1e-12 if args.rtol is None else args.rtol,

@@ -7,13 +7,12 @@ from clothsim.cli import main
 from clothsim.errors import InputError
 from clothsim.gallery import grid_cloth
 from clothsim.ports.compare import (
-    attachment_columns,
     compare_arrays,
-    compare_matrices,
     condition_number,
     match_vertices,
     plot_deviation,
 )
+from clothsim.ports.matrices import attachment_columns, compare_matrices
 
 
 @pytest.fixture

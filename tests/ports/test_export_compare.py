@@ -8,8 +8,9 @@ import pytest
 import clothsim as cs
 from clothsim import io, matrices, reference
 from clothsim.errors import InputError
-from clothsim.ports.compare import compare_arrays, compare_matrices, compare_trajectories
+from clothsim.ports.compare import compare_arrays, compare_trajectories
 from clothsim.ports.export import export_matrices
+from clothsim.ports.matrices import compare_matrices
 
 
 @pytest.fixture

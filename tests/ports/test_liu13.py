@@ -4,9 +4,10 @@ import numpy as np
 import pytest
 
 from clothsim.ports.check import check_steps
-from clothsim.ports.compare import compare_arrays, compare_matrices, compare_trajectories
+from clothsim.ports.compare import compare_arrays, compare_trajectories
 from clothsim.ports.diff import diff_models
 from clothsim.ports.export import export_port
+from clothsim.ports.matrices import compare_matrices
 
 from .conftest import liu13_simulation, liu13_trajectory, port_dir
 
