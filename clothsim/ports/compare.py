@@ -71,7 +71,13 @@ class Comparison:
     notes: list[str] = field(default_factory=list)
 
     def table(self) -> str:
-        """The per-frame table: max and RMS error, absolute and relative to the size."""
+        """The per-frame table: max and RMS error, absolute and relative to the size.
+
+        Returns
+        -------
+        str
+            One line per frame.
+        """
         lines = [f"{'frame':>5}  {'max [m]':>10}  {'max/size':>9}  {'rms [m]':>10}  "
                  f"{'tol [m]':>9}  ok"]
         for f in range(self.frames):
@@ -82,7 +88,12 @@ class Comparison:
         return "\n".join(lines)
 
     def summary(self) -> str:
-        """One line: verdict, largest error, the first failing frame and vertex."""
+        """One line: verdict, largest error, the first failing frame and vertex.
+
+        Returns
+        -------
+        str
+        """
         worst = float(np.max(self.max_error)) if self.frames else 0.0
         u, what = ("m/s", "largest speed") if self.field == "velocities" else ("m", "cloth size")
         head = (f"{'PASS' if self.passed else 'FAIL'}: {self.field}, {self.frames} frames, "
@@ -97,7 +108,17 @@ class Comparison:
 
 
 def cloth_size(x: np.ndarray) -> float:
-    """Diagonal of the bounding box of positions (n, 3) [m]; 1 for a single point."""
+    """Diagonal of the bounding box of positions [m]; 1 for a single point.
+
+    Parameters
+    ----------
+    x : ndarray, shape (n, 3)
+        Positions [m].
+
+    Returns
+    -------
+    float
+    """
     x = np.asarray(x, dtype=np.float64).reshape(-1, 3)
     size = float(np.linalg.norm(x.max(axis=0) - x.min(axis=0))) if len(x) else 0.0
     return size if size > 0 else 1.0
@@ -119,6 +140,11 @@ def match_vertices(x: np.ndarray, reference: np.ndarray, *, tol: float | None = 
     InputError
         When a vertex has no partner within ``tol``, two partners (ambiguous), or two
         reference vertices claim the same vertex.
+
+    Returns
+    -------
+    ndarray of int, shape (n,)
+        ``perm`` such that ``x[perm]`` is in the reference's vertex order.
     """
     from scipy.spatial import cKDTree
 
@@ -189,8 +215,24 @@ def tolerances(reference: np.ndarray, *, precision: str = "float64", rtol: float
                field: str = "positions") -> np.ndarray:
     """Allowed per-vertex error per frame [m], shape (frames,) (see the module docstring).
 
-    For ``field="velocities"`` the scale is the reference's largest speed [m/s] and the
-    float32 bound is divided by the frame time (not known here: use rtol/atol instead).
+    Parameters
+    ----------
+    reference : ndarray, shape (frames, n, 3)
+        The reference trajectory [m] (or velocities [m/s]).
+    precision : {"float64", "float32"}
+        The port's floating-point precision.
+    rtol, atol : float, optional
+        Relative (to the cloth size) and absolute tolerance [m]; defaults by precision.
+    kappa : float, optional
+        κ(M + h²L), needed for ``precision="float32"``.
+    field : {"positions", "velocities"}
+        For velocities the scale is the reference's largest speed [m/s]; the float32 bound
+        is for positions only.
+
+    Returns
+    -------
+    ndarray, shape (frames,)
+        The largest allowed per-vertex error in each frame.
     """
     if precision not in ("float32", "float64"):
         raise InputError(f"precision: must be 'float32' or 'float64', got {precision!r}")
@@ -261,8 +303,25 @@ def compare_trajectories(path, reference, *, key: str = "positions", frames: int
                          **options) -> Comparison:
     """Read two trajectories (any format of :mod:`clothsim.ports.formats`) and compare them.
 
-    ``frames``: only the first this many. ``kappa`` defaults to the reference export's
-    ``manifest.json`` value when there is one. Other options go to :func:`compare_arrays`.
+    Parameters
+    ----------
+    path, reference : path
+        The port's trajectory and the reference (file or folder).
+    key : str
+        Array to compare (``"positions"`` or ``"velocities"``, or an npz key).
+    frames : int, optional
+        Compare only the first this many frames.
+    match : bool
+        Pair vertices by their frame-0 positions (:func:`match_vertices`) first.
+    kappa : float, optional
+        κ(M + h²L) for float32 tolerances; default: the reference export's
+        ``manifest.json`` value when there is one.
+    fmt, dtype, vertex_count
+        How to read ``path`` (see :func:`clothsim.ports.formats.read_trajectory`).
+    field : str, optional
+        Alias of ``key``.
+    **options
+        Passed to :func:`compare_arrays` (``precision``, ``rtol``, ``atol``).
 
     Returns
     -------
@@ -305,14 +364,18 @@ def plot_deviation(comparison: Comparison, path) -> None:
     comparison : Comparison
     path : path
         Image file (``.png``, ``.svg``, … by matplotlib).
-    """
-    import matplotlib
 
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
+    Returns
+    -------
+    None
+        The figure is written to ``path``.
+    """
+    from matplotlib.figure import Figure  # no pyplot: the user's backend is left alone
 
     f = np.arange(comparison.frames)
-    fig, ax = plt.subplots(figsize=(6, 3.5))
+    fig = Figure(figsize=(6, 3.5))
+    ax = fig.add_subplot()
+
     def positive(e):  # exact zeros (frame 0) are left out of the log scale
         return np.where(e > 0, e, np.nan)
 
@@ -326,4 +389,3 @@ def plot_deviation(comparison: Comparison, path) -> None:
     ax.legend(fontsize=8)
     fig.tight_layout()
     fig.savefig(path, dpi=100)
-    plt.close(fig)

@@ -18,8 +18,20 @@ from ..errors import InputError
 
 @dataclass
 class MatrixComparison:
-    """Outcome of :func:`compare_matrices`: ``passed``, ``error`` (max |A − B| / max |B|),
-    ``shape`` and the ``dropped`` columns."""
+    """Outcome of :func:`compare_matrices`.
+
+    Attributes
+    ----------
+    passed : bool
+        True when max |A − B| ≤ atol + rtol · max |B|.
+    error : float
+        max |A − B| / max |B| over the union of the sparsity patterns (the absolute error
+        when B is zero).
+    shape : tuple of int
+        Shape of the compared matrices (after dropping columns).
+    dropped : int
+        Columns of the port's matrix left out first (its attachment columns).
+    """
 
     passed: bool
     error: float
@@ -27,6 +39,12 @@ class MatrixComparison:
     dropped: int = 0
 
     def summary(self) -> str:
+        """One line: PASS or FAIL, the shape, dropped columns and the relative error.
+
+        Returns
+        -------
+        str
+        """
         extra = f" after dropping {self.dropped} attachment columns" if self.dropped else ""
         return (f"{'PASS' if self.passed else 'FAIL'}: {self.shape[0]} x {self.shape[1]}"
                 f"{extra}, max |A - B| / max |B| = {self.error:.3e}")
@@ -71,7 +89,18 @@ def attachment_columns(J) -> np.ndarray:
     """Leading columns of a 3n × 3c J whose column triple touches one vertex only.
 
     Spring columns touch two vertices (+k at a, −k at b); an attachment (zero-rest-length
-    spring to a fixed point) touches one. Returns the column indices to drop.
+    spring to a fixed point) touches one.
+
+    Parameters
+    ----------
+    J : sparse matrix or array_like, shape (3n, 3c)
+        A port's J in the paper's 3n form (interleaved x y z per vertex) [N/m].
+
+    Returns
+    -------
+    ndarray of int
+        The indices of the leading attachment columns (three per attachment), to drop
+        before comparing J with clothsim's.
     """
     J = sp.csc_matrix(J)
     out = []
