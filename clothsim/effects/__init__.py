@@ -6,10 +6,11 @@ the models. :data:`EFFECTS` maps a scene's ``kind`` to the class; the scene pars
 """
 
 from .base import Effect, PinSet, overrides
+from .box import Box
 from .damping import Damping
 from .gravity import Gravity
 from .impulse import Impulse
-from .obstacles import Box, Obstacle, Plane, Sphere
+from .obstacles import Obstacle, Plane, Sphere
 from .pins import Pin
 from .strain_limit import StrainLimit
 from .wind import Wind
