@@ -90,7 +90,7 @@ def setup(app):
 #: page whose prefix it has.
 API_PAGES = {
     "model": ("Meshes, springs, models", [
-        "clothsim.errors", "clothsim.mesh", "clothsim.polygon", "clothsim.mesh_checks",
+        "clothsim.mesh", "clothsim.polygon", "clothsim.mesh_checks",
         "clothsim.springs", "clothsim.model", "clothsim.gallery"]),
     "solvers": ("Solvers and the time step", [
         "clothsim.simulation", "clothsim.problem", "clothsim.solvers",
@@ -117,6 +117,10 @@ def _modules() -> list[str]:
     return sorted(n for n in names if not n.endswith("__main__"))
 
 
+def _is_package(name: str) -> bool:
+    return (ROOT.joinpath(*name.split(".")) / "__init__.py").is_file()
+
+
 def _page_of(name: str) -> str | None:
     for page, (_, prefixes) in API_PAGES.items():
         if any(name == p or name.startswith(p + ".") for p in prefixes):
@@ -134,7 +138,10 @@ def _api_pages() -> None:
     for page, (title, _) in API_PAGES.items():
         lines = [title, "=" * len(title), ""]
         for name in pages[page]:
-            lines += [f".. automodule:: {name}", ""]
+            lines += [f".. automodule:: {name}"]
+            if _is_package(name):  # only what the package itself defines: its re-exports
+                lines += ["   :ignore-module-all:"]  # are documented where they are defined
+            lines += [""]
         text = "\n".join(lines)
         out = HERE / "api" / f"{page}.rst"
         if not out.exists() or out.read_text(encoding="utf-8") != text:

@@ -4,10 +4,11 @@ Two kinds of accuracy, both for the implicit Euler problem of Liu et al. (2013),
 (x_{n+1} = argmin g(x), g(x) = ½ (x − y)ᵀ M (x − y) + h² E(x)):
 
 1. **Solver error within a step.** Step problems are recorded along one converged run
-   (:mod:`.problems`); each gets a certified reference x* (:mod:`.reference`); every
-   configuration solves the *same* problems (:mod:`.study`), timed in interleaved repeats
-   (:mod:`.timing`). The error is ‖x − x*‖ / ‖x* − x_n‖. Steps at rest, trivially solved or
-   with two minima are counted, never measured.
+   (:mod:`.problems`); each gets a certified reference x*
+   (:mod:`clothsim.accuracy.reference`); every configuration solves the *same* problems
+   (:mod:`.study`), timed in interleaved repeats (:mod:`.timing`). The error is
+   ‖x − x*‖ / ‖x* − x_n‖. Steps at rest, trivially solved or with two minima are counted,
+   never measured.
 2. **Time-step error** (:mod:`.timestep`): converged solves at several h against a
    Richardson-extrapolated small-h reference (:mod:`.trajectory`), with the regime where
    implicit Euler is not yet first order named instead of fitted.

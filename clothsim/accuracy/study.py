@@ -1,8 +1,9 @@
 """The solver-error study: every configuration on the same recorded step problems.
 
-For each recorded step (:mod:`.problems`) that teaches something, a certified reference
-(:mod:`.reference`) is computed once; every configuration (a method with a fixed iteration
-budget, or with a residual tolerance) then solves the same problems. Per configuration:
+For each recorded step (:mod:`clothsim.accuracy.problems`) that teaches something, a
+certified reference (:mod:`clothsim.accuracy.reference`) is computed once; every
+configuration (a method with a fixed iteration budget, or with a residual tolerance) then
+solves the same problems. Per configuration:
 the distribution (median, 90th percentile, worst) of the relative solver error
 ‖x − x*‖ / ‖x* − x_n‖ and of the iterations it used, over the measured steps. Steps at
 rest, trivially solved or with two minima are counted in their own columns, never measured.

@@ -156,7 +156,7 @@ def check_finite_everywhere(value, path: str) -> None:
 
 
 def constructor_keys(cls) -> tuple[list[str], bool]:
-    """Constructor keyword names of an effect class, and whether it takes **kwargs."""
+    """Constructor keyword names of an effect class, and whether it takes ``**kwargs``."""
     params = inspect.signature(cls).parameters.values()
     names = [p.name for p in params if p.kind not in (p.VAR_POSITIONAL, p.VAR_KEYWORD)]
     return names, any(p.kind is p.VAR_KEYWORD for p in params)
