@@ -43,8 +43,9 @@ COMMANDISH = re.compile(r"^(\$ |\.venv/|(make|cd|git|sh|python3?|clothsim|pip|cp
 ALLOWED = re.compile(r"^(\.venv/bin/\S+|make(\s|$)|cd(\s|$)|git\s|sh scripts/)")
 ACTIVATE = ". .venv/bin/activate"
 AFTER_ACTIVATE = re.compile(r"^(clothsim|python3?)(\s|$)")
-CHEAP = re.compile(r"^\.venv/bin/clothsim (--version|-h|--help|scenes|scenes --show [\w-]+|"
-                   r"validate [\w-]+|[\w-]+ (-h|--help))$")
+NAME = r"[a-z0-9][a-z0-9-]*"  # a built-in scene (placeholders such as SCENE are not run)
+CHEAP = re.compile(rf"^\.venv/bin/clothsim (--version|-h|--help|scenes|scenes --show {NAME}|"
+                   rf"validate {NAME}|[a-z][a-z-]* (-h|--help))$")
 
 
 @dataclass
