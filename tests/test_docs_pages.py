@@ -69,7 +69,14 @@ def blocks(page: Path) -> list[Block]:
     while i < len(lines):
         m = re.match(r"^(\s*)(`{3,}|~{3,})\s*([^\s`]*)", lines[i])
         if not m:
-            i += 1
+            j = i
+            while j < len(lines) and lines[j].startswith("    ") and lines[j].strip():
+                j += 1
+            if j > i and (i == 0 or not lines[i - 1].strip()) and COMMANDISH.match(
+                    lines[i].strip()):  # an indented block of commands: checked too
+                out.append(Block(page, i + 1, "indented",
+                                 "\n".join(s.strip() for s in lines[i:j]) + "\n", None))
+            i = max(j, i + 1)
             continue
         fence, lang, start = m.group(2), m.group(3), i
         j = i + 1
@@ -85,7 +92,7 @@ def blocks(page: Path) -> list[Block]:
 
 
 def is_shell(block: Block) -> bool:
-    if block.lang in SHELL_LANGS:
+    if block.lang in SHELL_LANGS or block.lang == "indented":
         return True
     if block.lang:
         return False
@@ -243,6 +250,14 @@ def test_the_shell_check_can_fail():
     assert not is_shell(_block("clothsim: error: x.toml: cloth.size: bad\n", ""))
     assert commands(_block(".venv/bin/clothsim run \\\n  --frames 3\n")) == [
         ".venv/bin/clothsim run --frames 3"]
+
+
+def test_indented_commands_are_checked(tmp_path):
+    page = tmp_path / "p.md"
+    page.write_text("Run\n\n    python -m benchmarks x\n\ntext\n", encoding="utf-8")
+    (found,) = blocks(page)
+    assert found.lang == "indented" and is_shell(found)
+    assert commands(found) == ["python -m benchmarks x"]
 
 
 def test_not_run_marker_is_read(tmp_path):
