@@ -14,6 +14,7 @@ import numpy as np
 import pytest
 
 import clothsim as cs
+from benchmarks.stability_figures import measure_resting_contact
 from clothsim.effects import (
     EFFECTS,
     Box,
@@ -156,22 +157,6 @@ def test_box_vertex_starting_inside_goes_to_nearest_face():
     x = np.array([[0.5, 0.9, 0.5], [0.05, 0.5, 0.4]])
     out = box.correct_positions(0.0, cs.State(x.copy(), np.zeros((2, 3))), x)
     np.testing.assert_array_equal(out, [[0.5, 1.0, 0.5], [0.0, 0.5, 0.4]])
-
-
-def measure_resting_contact(name: str, friction: float, settle: int) -> dict:
-    """Settle an 8×8 cloth on obstacle ``name`` for ``settle`` steps, then over one more
-    second return the max speed [m/s] and the max depth inside [m] (also used by
-    benchmarks/stability_figures.py)."""
-    make, depth = OBSTACLES[name]
-    model = grid_model(center=(0.0, 0.25, 0.0))
-    sim = cs.Simulation(model, h=H, effects=[cs.Gravity(), make(friction)], iterations=20)
-    sim.run(settle)
-    speed, inside = 0.0, -np.inf
-    for _ in range(30):
-        sim.step()
-        speed = max(speed, np.linalg.norm(sim.state.velocities, axis=1).max())
-        inside = max(inside, depth(sim.state.positions).max())
-    return {"max_speed": speed, "max_inside": inside}
 
 
 @pytest.mark.parametrize("name,friction,settle", [("plane", 0.0, 60), ("sphere", 1.0, 150)])
