@@ -55,6 +55,20 @@ class Scene:
     def from_dict(cls, d: dict, *, source: str = "<dict>", base_dir=None) -> Scene:
         """Validate a scene document (as parsed from TOML) and return the scene.
 
+        Parameters
+        ----------
+        d : dict
+            The document: ``scene``, ``cloth``, ``springs``, ``solver`` tables and an
+            ``effects`` array (units as in ``docs/scenes.md``).
+        source : str
+            Where it came from; starts every error message; its stem is the default name.
+        base_dir : str or Path, optional
+            Folder relative file names are resolved against (default: the working folder).
+
+        Returns
+        -------
+        Scene
+
         Raises
         ------
         SceneError
@@ -75,10 +89,12 @@ class Scene:
     # -- plain properties
     @property
     def name(self) -> str:
+        """``scene.name``: also the output folder's name."""
         return self.data["scene"]["name"]
 
     @property
     def description(self) -> str:
+        """``scene.description``, one line."""
         return self.data["scene"]["description"]
 
     @property
