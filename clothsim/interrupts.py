@@ -22,6 +22,7 @@ class SignalInterrupt(KeyboardInterrupt):
     Attributes
     ----------
     signum : int
+        The signal's number (e.g. ``signal.SIGTERM``).
     """
 
     def __init__(self, signum: int):
@@ -33,7 +34,18 @@ class SignalInterrupt(KeyboardInterrupt):
 def handle_signals() -> Iterator[None]:
     """Within the block, SIGINT, SIGTERM and SIGHUP raise :class:`SignalInterrupt` (once:
     a second signal while the run cleans up is ignored), so all three take Ctrl-C's path.
-    Does nothing outside the main thread."""
+    Does nothing outside the main thread.
+
+    Yields
+    ------
+    None
+        Control to the block; the previous handlers are restored when it ends.
+
+    Raises
+    ------
+    SignalInterrupt
+        Inside the block, on the first SIGINT, SIGTERM or SIGHUP.
+    """
     if threading.current_thread() is not threading.main_thread():
         yield
         return
@@ -57,7 +69,14 @@ def signals_deferred() -> Iterator[None]:
     """Hold SIGINT/SIGTERM/SIGHUP until the block ends, so a frame's files and its record
     are written together; a signal that arrived meanwhile is then handled as it would have
     been (a signal thus interrupts the next frame's computation, never a write). Does
-    nothing outside the main thread."""
+    nothing outside the main thread.
+
+    Yields
+    ------
+    None
+        Control to the block, with the signals blocked (a held signal is delivered when
+        the block ends).
+    """
     if threading.current_thread() is not threading.main_thread():
         yield
         return

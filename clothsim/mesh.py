@@ -76,10 +76,12 @@ class Mesh:
 
     @property
     def vertex_count(self) -> int:
+        """n, the number of vertices."""
         return len(self.vertices)
 
     @property
     def triangle_count(self) -> int:
+        """m, the number of triangles."""
         return len(self.triangles)
 
     @cached_property
@@ -94,7 +96,7 @@ class Mesh:
 
     @cached_property
     def edge_triangles(self) -> tuple[np.ndarray, np.ndarray]:
-        """For every directed triangle half-edge: its sorted edge key and owning triangle.
+        """For every directed triangle half-edge: its sorted edge key and opposite vertex.
 
         Returns
         -------
@@ -132,7 +134,20 @@ class Mesh:
         return np.sort(out, axis=1)
 
     def triangle_areas(self, positions: np.ndarray | None = None) -> np.ndarray:
-        """Area of every triangle [m²], shape (m,), at ``positions`` (default: the mesh's)."""
+        """Area of every triangle [m²], shape (m,), at ``positions`` (default: the mesh's).
+
+        The area of triangle (a, b, c) is ``|(x_b - x_a) × (x_c - x_a)| / 2``.
+
+        Parameters
+        ----------
+        positions : ndarray, shape (n, 3), optional
+            Vertex positions [m]; default the rest positions ``vertices``.
+
+        Returns
+        -------
+        ndarray, shape (m,)
+            Areas [m²] (0 for a degenerate triangle).
+        """
         x = self.vertices if positions is None else positions
         t = self.triangles
         cross = np.cross(x[t[:, 1]] - x[t[:, 0]], x[t[:, 2]] - x[t[:, 0]])
@@ -143,6 +158,12 @@ class Mesh:
 
         For a mesh without triangles (strands only), half of each adjacent strand's length
         [m] is used instead, so lumped masses stay proportional to the material.
+
+        Returns
+        -------
+        ndarray, shape (n,)
+            Lumped areas [m²] at the rest positions (lengths [m] for a strands-only mesh);
+            0 for a vertex that touches nothing.
         """
         n = self.vertex_count
         if self.triangle_count:
@@ -155,7 +176,27 @@ class Mesh:
 
 def place_in_plane(u: np.ndarray, v: np.ndarray, center, plane: str) -> np.ndarray:
     """Map planar coordinates (u, v) [m], shape (k,) each, to 3-D points, shape (k, 3), in
-    ``plane`` (``"xz"``: (u, 0, −v); ``"xy"``: (u, v, 0)) about ``center``."""
+    ``plane`` (``"xz"``: (u, 0, −v); ``"xy"``: (u, v, 0)) about ``center``.
+
+    Parameters
+    ----------
+    u, v : ndarray, shape (k,)
+        In-plane coordinates [m].
+    center : array_like, shape (3,)
+        Point [m] the plane's origin is moved to.
+    plane : {"xz", "xy"}
+        ``"xz"`` is horizontal (normal +y), ``"xy"`` vertical (normal +z).
+
+    Returns
+    -------
+    ndarray, shape (k, 3)
+        The points [m].
+
+    Raises
+    ------
+    InputError
+        On an unknown ``plane`` or a non-finite ``center``.
+    """
     if plane not in PLANES:
         raise InputError(f"plane: must be one of {', '.join(map(repr, PLANES))}, got {plane!r}")
     c = check_finite("center", center).reshape(3)

@@ -48,6 +48,7 @@ class MeshReport:
     Attributes
     ----------
     vertex_count, triangle_count, strand_count : int
+        n, m and e of the mesh.
     boundary_edge_count : int
         Triangle edges with exactly one triangle.
     component_count : int
@@ -87,6 +88,7 @@ def check_mesh(mesh: Mesh, *, field: str = "mesh", warn: bool = True) -> MeshRep
     Parameters
     ----------
     mesh : Mesh
+        Vertices (n, 3) [m], triangles (m, 3), strands (e, 2).
     field : str
         Name used at the start of every message, e.g. ``"cloth.mesh"``.
     warn : bool
@@ -96,6 +98,7 @@ def check_mesh(mesh: Mesh, *, field: str = "mesh", warn: bool = True) -> MeshRep
     Returns
     -------
     MeshReport
+        Counts, unreferenced vertices and near-duplicate vertex pairs.
 
     Raises
     ------

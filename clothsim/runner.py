@@ -79,6 +79,7 @@ class RunResult:
     ----------
     out_dir : Path
     status : {"completed", "interrupted", "failed"}
+        How the run ended (as in run.json).
     last_frame : int
         Index of the last complete frame written.
     frames : list of dict
@@ -97,7 +98,20 @@ class RunResult:
 
 def scene_hash(scene: Scene, model) -> str:
     """SHA-256 (hex, 16 digits) of the resolved scene (without ``scene.frames``) and the
-    model's arrays: what ``resume`` checks before continuing a run."""
+    model's arrays: what ``resume`` checks before continuing a run.
+
+    Parameters
+    ----------
+    scene : Scene
+        The resolved scene.
+    model : Model
+        Built from it: vertices [m], springs, stiffnesses [N/m], rest lengths [m], masses [kg].
+
+    Returns
+    -------
+    str
+        16 hexadecimal digits.
+    """
     doc = copy.deepcopy(scene.to_dict())
     doc.get("scene", {}).pop("frames", None)
     digest = hashlib.sha256(json.dumps(doc, sort_keys=True, default=str).encode())
@@ -113,7 +127,15 @@ def completed_frames(out_dir) -> int | None:
 
     The ``frame_%06d.vtu`` files on disk count (each is written atomically, so each one
     present is complete), whether or not ``trajectory.pvd`` is readable.
-    """
+
+    Parameters
+    ----------
+    out_dir : str or Path
+        A run folder.
+
+    Returns
+    -------
+    int or None"""
     out = Path(out_dir)
     indices = {int(m.group(1)) for p in out.glob("frame_*.vtu")
                if (m := FRAME_PATTERN.fullmatch(p.name))}
@@ -152,6 +174,7 @@ def run_scene(scene, out_dir, *, frames: int | None = None,
     Returns
     -------
     RunResult
+        Status, last complete frame, per-frame records and the files written.
 
     Raises
     ------

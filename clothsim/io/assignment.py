@@ -111,7 +111,23 @@ def _number(path, key, value) -> float:
 
 
 def read_pins(path) -> np.ndarray:
-    """The JSON's ``b``, converted to 0-based vertex indices (range checked on build)."""
+    """The JSON's ``b``, converted to 0-based vertex indices (range checked on build).
+
+    Parameters
+    ----------
+    path : str or path-like
+        The assignment's JSON file.
+
+    Returns
+    -------
+    ndarray, shape (p,), int64
+        Pinned vertices, 0-based, in the file's order.
+
+    Raises
+    ------
+    SceneError
+        On an unreadable file, a ``b`` that is not a list of integers >= 1, or a repeat.
+    """
     path = Path(path)
     b = _load_json(path)["b"]
     if not isinstance(b, list) or not all(isinstance(i, int) and not isinstance(i, bool)
@@ -128,7 +144,24 @@ def read_pins(path) -> np.ndarray:
 
 
 def read_assignment(path) -> Assignment:
-    """Read and check an assignment scene (JSON + OBJ); see the module docstring."""
+    """Read and check an assignment scene (JSON + OBJ); see the module docstring.
+
+    Parameters
+    ----------
+    path : str or path-like
+        The assignment's JSON file (its ``obj`` is relative to it).
+
+    Returns
+    -------
+    Assignment
+        Mesh [m], springs, stiffness [N/m], vertex masses [kg] and pins (read-only
+        arrays; cached by path and modification time).
+
+    Raises
+    ------
+    SceneError
+        ``"<file>: <key>: <what is wrong>"`` for any problem in the JSON or the OBJ.
+    """
     p = Path(path).resolve()
     stamp = p.stat().st_mtime_ns if p.is_file() else 0
     return _read_cached(str(p), stamp)
@@ -180,6 +213,21 @@ def scene_dict(path, *, frames: int = 60, iterations: int = 50) -> dict:
 
     h = 1/30 s as in the assignment, gravity 9.8 m/s² along −y, exact pins from ``b``,
     ``iterations`` local/global iterations per step.
+
+    Parameters
+    ----------
+    path : str or path-like
+        The assignment's JSON file.
+    frames : int
+        Frames to simulate (at 30 frames per second, one step per frame).
+    iterations : int
+        Local/global iterations per step.
+
+    Returns
+    -------
+    dict
+        The scene document: ``scene``, ``cloth`` (shape ``"jacobson"``), ``solver`` and
+        ``effects`` (gravity) tables.
     """
     p = Path(path).resolve()
     _load_json(p)  # fail early, naming the JSON file

@@ -10,7 +10,18 @@ from pathlib import Path
 
 
 def load_meshio():
-    """The meshio module (imported here, so ``import clothsim`` stays light)."""
+    """The meshio module (imported here, so ``import clothsim`` stays light).
+
+    Returns
+    -------
+    module
+        The imported :mod:`meshio`.
+
+    Raises
+    ------
+    ImportError
+        When meshio is not installed.
+    """
     try:
         import meshio
     except ImportError as exc:  # pragma: no cover - meshio is a declared dependency
@@ -19,7 +30,19 @@ def load_meshio():
 
 
 def one_line(exc: BaseException) -> str:
-    """An exception as one line of at most 200 characters."""
+    """An exception as one line of at most 200 characters.
+
+    Parameters
+    ----------
+    exc : BaseException
+        The exception to describe.
+
+    Returns
+    -------
+    str
+        Its message with whitespace collapsed (its type name when empty), cut to 200
+        characters with a trailing ``...``.
+    """
     text = " ".join(str(exc).split()) or type(exc).__name__
     return text if len(text) < 200 else text[:197] + "..."
 
@@ -33,6 +56,24 @@ def quietly(call, *args, **kwargs):
 
     On a file it cannot parse, meshio 5.3.5 prints the reason and calls ``sys.exit(1)``;
     here the output is captured and any failure becomes :class:`MeshioFailure`.
+
+    Parameters
+    ----------
+    call : callable
+        The meshio function, e.g. ``meshio.read``.
+    *args, **kwargs
+        Passed to ``call``.
+
+    Returns
+    -------
+    object
+        What ``call`` returns.
+
+    Raises
+    ------
+    MeshioFailure
+        On any exception or ``SystemExit`` of ``call``; the message is one line holding
+        what meshio printed and the exception text.
     """
     buffer = StringIO()
     try:
@@ -48,7 +89,19 @@ def quietly(call, *args, **kwargs):
 @contextmanager
 def atomic_path(path):
     """Yield a temporary name beside ``path``; on success move it onto ``path``
-    (:func:`os.replace`, atomic), otherwise delete it. Readers never see a partial file."""
+    (:func:`os.replace`, atomic), otherwise delete it. Readers never see a partial file.
+
+    Parameters
+    ----------
+    path : str or path-like
+        The file to write in the end.
+
+    Yields
+    ------
+    pathlib.Path
+        The temporary file ``.<name>.<pid>.tmp`` in the same folder; write to it inside
+        the ``with`` block.
+    """
     path = Path(path)
     tmp = path.with_name(f".{path.name}.{os.getpid()}.tmp")
     try:

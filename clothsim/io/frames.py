@@ -73,7 +73,18 @@ class FrameWriter:
         self._cells = cell_blocks(mesh)
 
     def filename(self, index: int) -> str:
-        """File name of frame ``index``, e.g. ``frame_000012.vtu``."""
+        """File name of frame ``index``, e.g. ``frame_000012.vtu``.
+
+        Parameters
+        ----------
+        index : int
+            Frame number, >= 0.
+
+        Returns
+        -------
+        str
+            ``<basename>_<index:06d>.vtu`` (a name, not a path).
+        """
         return f"{self.basename}_{index:06d}.vtu"
 
     def write(self, index: int, time: float, positions, velocities) -> Path:
@@ -87,6 +98,16 @@ class FrameWriter:
             Simulated time [s].
         positions, velocities : ndarray, shape (n, 3)
             [m] and [m/s]; stored as float64 bit for bit.
+
+        Returns
+        -------
+        pathlib.Path
+            The frame file written.
+
+        Raises
+        ------
+        InputError
+            On a negative or non-integer ``index`` or arrays not of shape (n, 3).
         """
         if int(index) != index or index < 0:
             raise InputError(f"index: must be a non-negative integer, got {index!r}")
@@ -114,13 +135,25 @@ class FrameWriter:
     def adopt(self, entries: dict[int, float]) -> None:
         """Make the collection exactly ``entries`` (index → time [s], frame files already on
         disk) and rewrite ``trajectory.pvd``; later :meth:`write` calls add to it. Used to
-        resume: the index then lists what is kept, even if the old one was unreadable."""
+        resume: the index then lists what is kept, even if the old one was unreadable.
+
+        Parameters
+        ----------
+        entries : dict of int to float
+            Frame index -> time [s] of each frame to list.
+        """
         self._started = True
         self._entries = {int(i): float(t) for i, t in entries.items()}
         self._write_pvd()
 
     def frames(self) -> list[tuple[int, float, Path]]:
-        """(index, time [s], path) of every frame in the collection, by index."""
+        """(index, time [s], path) of every frame in the collection, by index.
+
+        Returns
+        -------
+        list of (int, float, pathlib.Path)
+            Frame index, time [s] and frame file, sorted by index.
+        """
         return [(i, t, self.out_dir / self.filename(i)) for i, t in sorted(self._entries.items())]
 
     def _read_pvd(self) -> dict[int, float]:
@@ -152,7 +185,24 @@ class FrameWriter:
 
 
 def read_pvd(path) -> list[tuple[float, Path]]:
-    """(time [s], frame path) of each DataSet in a ParaView collection, in file order."""
+    """(time [s], frame path) of each DataSet in a ParaView collection, in file order.
+
+    Parameters
+    ----------
+    path : str or path-like
+        A ``.pvd`` file, e.g. ``trajectory.pvd`` written by :class:`FrameWriter`.
+
+    Returns
+    -------
+    list of (float, pathlib.Path)
+        Time [s] and frame file (relative names resolved against the collection's
+        folder) of each ``DataSet``.
+
+    Raises
+    ------
+    InputError
+        When the file cannot be read or parsed.
+    """
     path = Path(path)
     try:
         root = ET.parse(path).getroot()
@@ -165,10 +215,20 @@ def read_pvd(path) -> list[tuple[float, Path]]:
 def read_frame(path) -> tuple[np.ndarray, np.ndarray]:
     """Read a frame written by :class:`FrameWriter`.
 
+    Parameters
+    ----------
+    path : str or path-like
+        A ``.vtu`` frame file with point data ``"velocity"``.
+
     Returns
     -------
     positions, velocities : ndarray, shape (n, 3), float64
         [m] and [m/s], exactly as written.
+
+    Raises
+    ------
+    InputError
+        When the file is missing, unreadable or has no ``"velocity"`` point data.
     """
     path = Path(path)
     if not path.is_file():

@@ -15,6 +15,13 @@ def write_matrix(path, A) -> None:
 
     Use a ``.mtx`` name. The 3n × 3n matrices (M, L, M + h²L) and the 3n × 3s matrix J use
     the interleaved layout of docs/ports.md: row 3 i + c is coordinate c of vertex i.
+
+    Parameters
+    ----------
+    path : str or path-like
+        The ``.mtx`` file to write (overwritten).
+    A : scipy.sparse matrix or array_like, shape (r, c)
+        The matrix, in the units of what it holds (e.g. M in [kg], L in [N/m]).
     """
     import scipy.io
 
@@ -24,7 +31,23 @@ def write_matrix(path, A) -> None:
 
 def read_matrix(path):
     """Read a Matrix Market file: a ``scipy.sparse`` CSR matrix if stored sparse, else an
-    ndarray."""
+    ndarray.
+
+    Parameters
+    ----------
+    path : str or path-like
+        A ``.mtx`` file, e.g. written by :func:`write_matrix`.
+
+    Returns
+    -------
+    scipy.sparse.csr_matrix or ndarray, shape (r, c)
+        The matrix as stored (float64 for real files).
+
+    Raises
+    ------
+    InputError
+        When the file does not exist.
+    """
     import scipy.io
     import scipy.sparse
 
@@ -36,10 +59,30 @@ def read_matrix(path):
 
 
 def write_vector(path, v) -> None:
-    """Write a vector as text, one number per line with ``%.17g`` (exact float64)."""
+    """Write a vector as text, one number per line with ``%.17g`` (exact float64).
+
+    Parameters
+    ----------
+    path : str or path-like
+        The text file to write (overwritten).
+    v : array_like
+        The values; flattened in C order, so an (n, 3) array gives the interleaved
+        layout x0 y0 z0 x1 ... .
+    """
     np.savetxt(path, np.asarray(v, dtype=np.float64).ravel(), fmt="%.17g")
 
 
 def read_vector(path) -> np.ndarray:
-    """Read a vector written by :func:`write_vector`, shape (k,)."""
+    """Read a vector written by :func:`write_vector`, shape (k,).
+
+    Parameters
+    ----------
+    path : str or path-like
+        A text file with one number per line.
+
+    Returns
+    -------
+    ndarray, shape (k,)
+        The float64 values (k = 1 for a single number).
+    """
     return np.atleast_1d(np.loadtxt(path, dtype=np.float64))

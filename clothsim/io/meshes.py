@@ -20,7 +20,13 @@ from .obj import read_obj, write_obj
 
 
 def supported_formats() -> list[str]:
-    """File extensions :func:`read_mesh` accepts (``.obj`` plus meshio's list)."""
+    """File extensions :func:`read_mesh` accepts (``.obj`` plus meshio's list).
+
+    Returns
+    -------
+    list of str
+        Sorted extensions with their dot, e.g. ``[".obj", ".ply", ".stl", ...]``.
+    """
     meshio = load_meshio()
     return sorted(set(meshio.extension_to_filetypes) | {".obj"})
 
@@ -32,8 +38,15 @@ def read_mesh(path, *, field: str = "mesh") -> Mesh:
     Parameters
     ----------
     path : str or os.PathLike
+        The mesh file; coordinates are taken in [m].
     field : str
         Name used in error messages.
+
+    Returns
+    -------
+    Mesh
+        Vertices (n, 3) [m] in the file's order, triangles (m, 3) (polygons
+        fan-triangulated), strands (e, 2) from line cells.
 
     Raises
     ------
@@ -124,11 +137,22 @@ def write_mesh(path, mesh: Mesh, positions=None, point_data=None) -> None:
     Parameters
     ----------
     path : str or os.PathLike
+        The file to write; its extension picks the format.
     mesh : Mesh
+        Connectivity: triangles (m, 3) and strands (e, 2).
     positions : ndarray, shape (n, 3), optional
         Vertex positions [m].
     point_data : dict of str to ndarray (n, …), optional
         Per-vertex arrays (ignored for ``.obj``).
+
+    Returns
+    -------
+    None
+
+    Raises
+    ------
+    InputError
+        When ``positions`` is not of shape (n, 3) or meshio cannot write the file.
     """
     path = Path(path)
     x = mesh.vertices if positions is None else np.asarray(positions, dtype=np.float64)

@@ -14,7 +14,25 @@ from .common import one_line
 
 def read_obj(path, *, field: str = "mesh") -> Mesh:
     """Wavefront OBJ as a :class:`~clothsim.mesh.Mesh` (polygons fan-split; see
-    :func:`read_obj_cells`)."""
+    :func:`read_obj_cells`).
+
+    Parameters
+    ----------
+    path : str or path-like
+        The ``.obj`` file; coordinates are taken in [m].
+    field : str
+        Name used in error messages (e.g. the scene key that named the file).
+
+    Returns
+    -------
+    Mesh
+        Rest positions (n, 3) [m], triangles (m, 3) and strands (e, 2).
+
+    Raises
+    ------
+    InputError
+        On an unreadable file, a bad coordinate or an index out of range.
+    """
     return from_cells(*read_obj_cells(path, field=field), field=field)
 
 
@@ -26,11 +44,24 @@ def read_obj_cells(path, *, field: str = "mesh") -> tuple[np.ndarray, list]:
     polylines (``"line"`` segments); ``i``, ``i/t``, ``i//n``, ``i/t/n`` and negative
     (relative) indices. Everything else (vt, vn, groups, materials) is ignored.
 
+    Parameters
+    ----------
+    path : str or path-like
+        The ``.obj`` file.
+    field : str
+        Name used in error messages.
+
     Returns
     -------
     vertices : ndarray, shape (n, 3), float64
     cells : list of (str, ndarray (c, k) int64)
         0-based vertex indices, as :func:`clothsim.mesh.from_cells` takes them.
+
+    Raises
+    ------
+    InputError
+        On an unreadable file, a bad number, or a vertex index out of range (the message
+        names the line).
     """
     path = Path(path)
     try:
@@ -111,7 +142,17 @@ def read_obj_cells(path, *, field: str = "mesh") -> tuple[np.ndarray, list]:
 
 def write_obj(path, mesh: Mesh, positions: np.ndarray) -> None:
     """Write ``mesh`` at ``positions`` [m] as OBJ: ``%.17g`` coordinates, strands as ``l``
-    lines, so :func:`read_obj` gets the same mesh back exactly."""
+    lines, so :func:`read_obj` gets the same mesh back exactly.
+
+    Parameters
+    ----------
+    path : str or path-like
+        The ``.obj`` file to write (overwritten).
+    mesh : Mesh
+        Connectivity: triangles (m, 3) and strands (e, 2).
+    positions : ndarray, shape (n, 3)
+        Vertex positions [m].
+    """
     with open(path, "w", encoding="utf-8") as f:
         f.write("# written by clothsim\n")
         np.savetxt(f, positions, fmt="v %.17g %.17g %.17g")

@@ -1,16 +1,12 @@
-"""The files of a run besides its frames: ``run.json``, ``trajectory.npz``, and the folder
-lock.
+"""The files of a run besides its frames: ``run.json``, ``trajectory.npz``, the folder lock.
 
-:class:`TrajectoryStore`
-    Positions and velocities appended frame by frame to two raw float64 files in the run
-    folder, so a run never holds its trajectory in memory; :meth:`TrajectoryStore.write_npz`
-    assembles ``trajectory.npz`` from them in fixed-size chunks.
-:class:`FolderLock`
-    An exclusive :func:`fcntl.flock` on ``<folder>/.clothsim.lock`` for the whole run; a
-    second writer gets an :class:`~clothsim.errors.InputError` naming the folder and the
-    holder's process id.
-:func:`write_json`, :func:`read_json`
-    ``run.json``, written atomically (strict JSON: non-finite floats become strings).
+:class:`TrajectoryStore` appends positions and velocities frame by frame to two raw float64
+files (a run never holds its trajectory in memory) and assembles ``trajectory.npz`` from
+them in chunks. :class:`FolderLock` is an exclusive :func:`fcntl.flock` on
+``<folder>/.clothsim.lock`` for the whole run; a second writer gets an
+:class:`~clothsim.errors.InputError` naming the folder and the holder's process id.
+:func:`write_json` writes ``run.json`` atomically (strict JSON: non-finite floats become
+strings); :func:`read_json` reads it.
 """
 
 from __future__ import annotations
@@ -56,7 +52,15 @@ def _clean(value):
 
 
 def write_json(path, data: dict) -> None:
-    """Atomically write ``data`` as indented, strict JSON (numpy values become Python's)."""
+    """Atomically write ``data`` as indented, strict JSON (numpy values become Python's).
+
+    Parameters
+    ----------
+    path : str or path-like
+        The file, e.g. ``run.json``.
+    data : dict
+        JSON-able values, numpy arrays and scalars, paths (non-finite floats: strings).
+    """
     plain = json.loads(json.dumps(data, default=_json_default))
     text = json.dumps(_clean(plain), indent=1, allow_nan=False)
     with atomic_path(Path(path)) as tmp:
@@ -64,7 +68,16 @@ def write_json(path, data: dict) -> None:
 
 
 def read_json(path) -> dict | None:
-    """The JSON object in ``path``, or None when it is missing, unreadable or not an object."""
+    """The JSON object in ``path``, or None when it is missing, unreadable or not an object.
+
+    Parameters
+    ----------
+    path : str or path-like
+        The file, e.g. ``run.json``.
+
+    Returns
+    -------
+    dict or None"""
     try:
         data = json.loads(Path(path).read_text(encoding="utf-8"))
     except (OSError, ValueError):
@@ -101,7 +114,13 @@ class TrajectoryStore:
         return self.n * 3 * 8
 
     def append(self, positions, velocities) -> None:
-        """Append one frame: positions [m] and velocities [m/s], shape (n, 3) each."""
+        """Append one frame: positions [m] and velocities [m/s], shape (n, 3) each.
+
+        Parameters
+        ----------
+        positions, velocities : ndarray, shape (n, 3)
+            Positions [m] and velocities [m/s].
+        """
         for name, a in zip(self.NAMES, (positions, velocities)):
             a = np.ascontiguousarray(a, dtype="<f8")
             if a.shape != (self.n, 3):
@@ -111,7 +130,19 @@ class TrajectoryStore:
         self.count += 1
 
     def view(self, name: str, count: int | None = None) -> np.ndarray:
-        """A read-only memory map of the first ``count`` frames of ``name``, (count, n, 3)."""
+        """A read-only memory map of the first ``count`` frames of ``name``, (count, n, 3).
+
+        Parameters
+        ----------
+        name : {"positions", "velocities"}
+        count : int, optional
+            Frames to map; default all frames appended.
+
+        Returns
+        -------
+        ndarray, shape (count, n, 3)
+            Positions [m] or velocities [m/s] (read-only memmap; empty when count is 0).
+        """
         count = self.count if count is None else int(count)
         if count == 0:
             return np.zeros((0, self.n, 3))
@@ -122,7 +153,15 @@ class TrajectoryStore:
         0..count−1 (copied from the raw files in chunks), then the small ``extra`` arrays.
 
         The archive is what :func:`numpy.savez` writes (stored, not compressed).
-        """
+
+        Parameters
+        ----------
+        path : str or path-like
+            The ``.npz`` file.
+        count : int
+            Frames to write, ``0 <= count <=`` frames appended.
+        extra : dict of str to ndarray
+            More arrays, e.g. ``time`` (count,) [s], ``vertex_mass`` (n,) [kg]."""
         count = int(count)
         if not 0 <= count <= self.count:
             raise InputError(f"count: must be in 0..{self.count}, got {count}")
@@ -147,7 +186,12 @@ class TrajectoryStore:
                     np.lib.format.write_array(f, np.asarray(a), allow_pickle=False)
 
     def close(self, *, remove: bool = True) -> None:
-        """Close the raw files and (by default) delete them."""
+        """Close the raw files and (by default) delete them.
+
+        Parameters
+        ----------
+        remove : bool
+            Delete ``.positions.f64`` and ``.velocities.f64`` after closing."""
         for f in self._files.values():
             f.close()
         if remove:
@@ -156,7 +200,13 @@ class TrajectoryStore:
 
 
 def package_versions() -> dict[str, str | None]:
-    """Versions of python and of the packages a run depends on (None if not installed)."""
+    """Versions of python and of the packages a run depends on (None if not installed).
+
+    Returns
+    -------
+    dict of str to str or None
+        Distribution name (and ``"python"``) to version string.
+    """
     from importlib import metadata
 
     out: dict[str, str | None] = {"python": platform.python_version()}
@@ -169,7 +219,19 @@ def package_versions() -> dict[str, str | None]:
 
 
 def write_trajectory(path: Path, model, positions, velocities, time) -> None:
-    """Atomically write trajectory.npz from in-memory arrays (listed in clothsim.runner)."""
+    """Atomically write trajectory.npz from in-memory arrays (listed in clothsim.runner).
+
+    Parameters
+    ----------
+    path : Path
+        The ``.npz`` file.
+    model : Model
+        Its :func:`model_arrays` are stored too.
+    positions, velocities : array_like, shape (f, n, 3)
+        [m] and [m/s] of f frames.
+    time : array_like, shape (f,)
+        Time of each frame [s].
+    """
     arrays = dict(positions=np.asarray(positions, np.float64),
                   velocities=np.asarray(velocities, np.float64),
                   time=np.asarray(time, np.float64), **model_arrays(model))
@@ -179,7 +241,18 @@ def write_trajectory(path: Path, model, positions, velocities, time) -> None:
 
 def model_arrays(model) -> dict[str, np.ndarray]:
     """The arrays trajectory.npz holds besides the trajectory: ``triangles``, ``springs``,
-    ``strands`` (int64) and ``vertex_mass`` (float64)."""
+    ``strands`` (int64) and ``vertex_mass`` (float64).
+
+    Parameters
+    ----------
+    model : Model
+        The simulated model.
+
+    Returns
+    -------
+    dict of str to ndarray
+        ``triangles`` (m, 3), ``springs`` (s, 2), ``strands`` (e, 2), ``vertex_mass`` (n,) [kg].
+    """
     return dict(triangles=np.asarray(model.mesh.triangles, np.int64),
                 springs=np.asarray(model.springs.spring_vertices, np.int64),
                 strands=np.asarray(model.mesh.strands, np.int64),
@@ -210,7 +283,22 @@ class RunRecord:
 
     def save_npz(self, store: TrajectoryStore, model, fps: float, force: bool = False) -> None:
         """Rebuild trajectory.npz from the store when forced, or when the time since the last
-        rebuild exceeds both 2 s and 20 × its cost (at most ~5 % of the run's time)."""
+        rebuild exceeds both 2 s and 20 × its cost (at most ~5 % of the run's time).
+
+        Parameters
+        ----------
+        store : TrajectoryStore
+            The frames so far; frames ``0..done`` are written.
+        model : Model
+            Its :func:`model_arrays` are stored too.
+        fps : float
+            Frames per second [1/s]; frame k is at time k / fps [s].
+        force : bool
+
+        Returns
+        -------
+        None
+        """
         now = _time.perf_counter()
         if not force and now - self._npz_at < max(2.0, 20 * self._npz_cost):
             return
@@ -222,6 +310,15 @@ class RunRecord:
         self._npz_cost = self._npz_at - now
 
     def write(self, status: str, error: str | None) -> None:
+        """Write ``run.json`` atomically: info, status, error, wall time [s], frame records.
+
+        Parameters
+        ----------
+        status : str
+            ``"running"``, or how the run ended.
+        error : str or None
+            One-line error message, if the run failed.
+        """
         self.status = status
         data = dict(self.info)
         data.update(status=status, last_frame=self.done if self.done >= 0 else None,
@@ -233,6 +330,13 @@ class RunRecord:
         write_json(self.out / "run.json", data)
 
     def finish(self, store, model, fps: float, status: str, error: str | None) -> None:
+        """Write trajectory.npz one last time (if any frame is done), then ``run.json``.
+
+        Parameters
+        ----------
+        store, model, fps, status, error
+            As for :meth:`save_npz` and :meth:`write`.
+        """
         if self.done >= 0:
             self.save_npz(store, model, fps, force=True)
         self.write(status, error)
@@ -258,6 +362,13 @@ class FolderLock:
         self._fd: int | None = None
 
     def acquire(self) -> FolderLock:
+        """Take the lock (without waiting) and write this process's id into the lock file.
+
+        Returns
+        -------
+        FolderLock
+            ``self``.
+        """
         fd = os.open(self.path, os.O_RDWR | os.O_CREAT, 0o644)
         try:
             fcntl.flock(fd, fcntl.LOCK_EX | fcntl.LOCK_NB)
@@ -273,6 +384,7 @@ class FolderLock:
         return self
 
     def release(self) -> None:
+        """Release the lock (no-op when not held); the lock file stays."""
         if self._fd is not None:
             os.close(self._fd)  # closing the descriptor releases the flock
             self._fd = None

@@ -55,6 +55,20 @@ class Scene:
     def from_dict(cls, d: dict, *, source: str = "<dict>", base_dir=None) -> Scene:
         """Validate a scene document (as parsed from TOML) and return the scene.
 
+        Parameters
+        ----------
+        d : dict
+            The document: ``scene``, ``cloth``, ``springs``, ``solver`` tables and an
+            ``effects`` array (units as in ``docs/scenes.md``).
+        source : str
+            Where it came from; starts every error message; its stem is the default name.
+        base_dir : str or Path, optional
+            Folder relative file names are resolved against (default: the working folder).
+
+        Returns
+        -------
+        Scene
+
         Raises
         ------
         SceneError
@@ -75,10 +89,12 @@ class Scene:
     # -- plain properties
     @property
     def name(self) -> str:
+        """``scene.name``: also the output folder's name."""
         return self.data["scene"]["name"]
 
     @property
     def description(self) -> str:
+        """``scene.description``, one line."""
         return self.data["scene"]["description"]
 
     @property
@@ -103,7 +119,13 @@ class Scene:
         return given if given is not None else 1.0 / (self.fps * self.substeps)
 
     def to_dict(self) -> dict:
-        """The resolved document (JSON-ready deep copy; ``tolerance`` may be None)."""
+        """The resolved document (JSON-ready deep copy; ``tolerance`` may be None).
+
+        Returns
+        -------
+        dict
+            Every table with defaults filled in, in the units of the scene reference.
+        """
         return copy.deepcopy(self.data)
 
     def _error(self, path: str, detail: str) -> SceneError:
@@ -206,6 +228,21 @@ class Scene:
 
         The pins a cloth's files declare come first: a ``jacobson`` cloth's exact pins (its
         JSON's ``b`` list), then a spring table's attachments as penalty pins.
+
+        Parameters
+        ----------
+        model : Model, optional
+            The scene's model, used for vertex counts (default: built when needed).
+
+        Returns
+        -------
+        list of Effect
+            New, unbound effect objects (one set per simulation).
+
+        Raises
+        ------
+        SceneError
+            On an effect that cannot be built (naming its key).
         """
         try:
             return [e for _, e in self._effects(model)]
@@ -241,6 +278,16 @@ class Scene:
         substeps : int, optional
             Override the steps per frame (h = 1 / (fps · substeps), or ``scene.h`` /
             substeps when the scene gives ``h``).
+
+        Returns
+        -------
+        Simulation
+            With the scene's effects built fresh and time step h [s].
+
+        Raises
+        ------
+        SceneError
+            On an invalid override or effect.
         """
 
         so = self.data["solver"]

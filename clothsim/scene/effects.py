@@ -49,7 +49,32 @@ def _vec3(v, path: str, *, point=False) -> list[float]:
 
 
 def check_parameter(kind: str, key: str, v, path: str, base_dir: Path):
-    """The value of ``effects[i].key`` checked for its type; returns it (paths resolved)."""
+    """The value of ``effects[i].key`` checked for its type; returns it (paths resolved).
+
+    Parameters
+    ----------
+    kind : str
+        The effect kind, e.g. ``"gravity"``.
+    key : str
+        The parameter's key; its type word comes from :data:`PARAMETERS` (keys without one
+        are passed through unchecked).
+    v : object
+        The value, in the unit the scene reference gives (e.g. [m], [m/s²], [s]).
+    path : str
+        Its key path, e.g. ``"effects[0].acceleration"``.
+    base_dir : Path
+        The scene file's folder, for file names.
+
+    Returns
+    -------
+    object
+        The checked value: a float, an int, a list of 3 floats, a string or a resolved path.
+
+    Raises
+    ------
+    Invalid
+        At ``path`` on a wrong type or value.
+    """
     t = PARAMETERS.get(kind, {}).get(key)
     if t is None:
         return v
@@ -93,7 +118,32 @@ def check_parameter(kind: str, key: str, v, path: str, base_dir: Path):
 
 
 def validate_effect(e, path: str, vertex_count: int | None, base_dir: Path) -> dict:
-    """Check one effect table; return ``{"kind": ..., **parameters}`` (paths resolved)."""
+    """Check one effect table; return ``{"kind": ..., **parameters}`` (paths resolved).
+
+    The parameters' types are checked here, then the effect's constructor is tried (not
+    bound to a model) and its complaints reported at ``path``.
+
+    Parameters
+    ----------
+    e : object
+        The ``[[effects]]`` table.
+    path : str
+        Its key path, e.g. ``"effects[2]"``.
+    vertex_count : int or None
+        n, to range-check a pin's vertex list (None: not checked here).
+    base_dir : Path
+        The scene file's folder, for file names.
+
+    Returns
+    -------
+    dict
+        ``kind`` and the checked parameters.
+
+    Raises
+    ------
+    Invalid
+        On a missing or unknown kind, an unknown key or a bad value.
+    """
     e = table(e, path)
     if "kind" not in e:
         raise Invalid(f"{path}.kind", f"missing: every effect needs a kind ({', '.join(EFFECTS)})")
@@ -135,7 +185,20 @@ def validate_effect(e, path: str, vertex_count: int | None, base_dir: Path) -> d
 
 
 def constructor_params(kind: str, params: dict) -> dict:
-    """The parameters the effect's constructor takes (scene-only keys removed)."""
+    """The parameters the effect's constructor takes (scene-only keys removed).
+
+    Parameters
+    ----------
+    kind : str
+        The effect kind.
+    params : dict
+        A checked effect table (``kind`` may be in it).
+
+    Returns
+    -------
+    dict
+        ``params`` without ``kind`` and the keys only the scene reads (``index_base``).
+    """
     return {k: v for k, v in params.items() if k != "kind"
             and k not in _SCENE_ONLY.get(kind, ())}
 

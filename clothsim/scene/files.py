@@ -49,6 +49,11 @@ def data_dir() -> Path:
     """The folder of A. Jacobson's assignment data (``<data root>/jacobson-a8``).
 
     ``$CLOTHSIM_DATA`` may also name that folder itself (the older convention).
+
+    Returns
+    -------
+    Path
+        The folder (it may not exist).
     """
     root = data_root()
     if (root / ASSIGNMENT_FOLDER).is_dir():
@@ -68,6 +73,20 @@ def _data_candidates(rel: str) -> list[Path]:
 
 def resolve_path(value: str, base_dir: Path, path: str) -> Path:
     """An existing file named in a scene: ``data:...``, absolute, or relative to the scene.
+
+    Parameters
+    ----------
+    value : str
+        The file name as the scene writes it.
+    base_dir : Path
+        The scene file's folder (relative names are resolved against it).
+    path : str
+        The scene key holding ``value``, for error messages (e.g. ``"cloth.mesh"``).
+
+    Returns
+    -------
+    Path
+        The existing file.
 
     Raises
     ------
@@ -98,7 +117,14 @@ def resolve_path(value: str, base_dir: Path, path: str) -> Path:
 
 
 def list_builtin_scenes() -> dict[str, str]:
-    """Built-in scene names and their one-line descriptions."""
+    """Built-in scene names and their one-line descriptions.
+
+    Returns
+    -------
+    dict of str to str
+        Scene name (file stem in ``clothsim/scenes``, sorted) to its ``scene.description``
+        on one line (empty when the file has none or cannot be read).
+    """
     out = {}
     for p in sorted(BUILTIN_DIR.glob("*.toml")):
         try:
@@ -111,12 +137,33 @@ def list_builtin_scenes() -> dict[str, str]:
 
 
 def builtin_scene_path(name: str) -> Path:
-    """Path of the built-in scene ``name`` (``clothsim/scenes/<name>.toml``)."""
+    """Path of the built-in scene ``name`` (``clothsim/scenes/<name>.toml``).
+
+    Parameters
+    ----------
+    name : str
+        Scene name, e.g. ``"hanging"``.
+
+    Returns
+    -------
+    Path
+        The TOML file's path (not checked to exist).
+    """
     return BUILTIN_DIR / f"{name}.toml"
 
 
 def builtin_scene_text(name: str) -> str:
     """The TOML text of a built-in scene (a template to start a scene file from).
+
+    Parameters
+    ----------
+    name : str
+        A name of :func:`list_builtin_scenes`.
+
+    Returns
+    -------
+    str
+        The file's text.
 
     Raises
     ------
@@ -138,6 +185,23 @@ def parse_toml(text: str, source: str) -> dict:
 
     A leading UTF-8 byte-order mark is accepted (and ignored); nesting deeper than
     100 levels is an error.
+
+    Parameters
+    ----------
+    text : str
+        The TOML document.
+    source : str
+        Where it came from (file name), for error messages.
+
+    Returns
+    -------
+    dict
+        The parsed document.
+
+    Raises
+    ------
+    SceneError
+        On a syntax error (naming the line) or nesting deeper than 100 levels.
     """
     if text.startswith("\ufeff"):
         text = text[1:]
@@ -169,7 +233,23 @@ def _check_depth(doc, source: str) -> None:
 
 
 def find_scene(path_or_name) -> Path:
-    """The scene file a command-line argument names: a file, or a built-in scene name."""
+    """The scene file a command-line argument names: a file, or a built-in scene name.
+
+    Parameters
+    ----------
+    path_or_name : str or Path
+        An existing file, or the name of a built-in scene.
+
+    Returns
+    -------
+    Path
+        The scene file.
+
+    Raises
+    ------
+    SceneError
+        A directory, a missing file, or an unknown name (with the closest built-in names).
+    """
     name = str(path_or_name)
     try:
         p = Path(path_or_name).expanduser()

@@ -34,7 +34,18 @@ MIN_H, MAX_H = 1e-9, 1e6  # [s]
 
 
 def sci(n: float) -> str:
-    """``1e7`` rather than ``1e+07``."""
+    """``1e7`` rather than ``1e+07``.
+
+    Parameters
+    ----------
+    n : float
+        A number, shown to one significant digit.
+
+    Returns
+    -------
+    str
+        E.g. ``"1e7"``, ``"2e-3"``.
+    """
     return f"{n:.0e}".replace("e+0", "e").replace("e+", "e")
 
 
@@ -198,13 +209,42 @@ _TYPE_WORDS = {"vec3": "[3] numbers", "point": "[3] numbers", "number": "number"
 
 
 def keys(table: str, shape: str | None = None) -> tuple[str, ...]:
-    """Names of the keys of ``table`` (those a cloth ``shape`` uses, when given)."""
+    """Names of the keys of ``table`` (those a cloth ``shape`` uses, when given).
+
+    Parameters
+    ----------
+    table : str
+        ``"scene"``, ``"cloth"``, ``"springs"`` or ``"solver"``.
+    shape : str, optional
+        A cloth shape (``"grid"``, ``"polygon"``, ...): only the keys it uses.
+
+    Returns
+    -------
+    tuple of str
+        Key names in schema order.
+    """
     return tuple(k.name for k in KEYS
                  if k.table == table and (shape is None or not k.shapes or shape in k.shapes))
 
 
 def spec(table: str, name: str) -> Key:
-    """The :class:`Key` entry of ``table.name``."""
+    """The :class:`Key` entry of ``table.name``.
+
+    Parameters
+    ----------
+    table, name : str
+        The table and the key.
+
+    Returns
+    -------
+    Key
+        Its type, default, unit and meaning.
+
+    Raises
+    ------
+    KeyError
+        When there is no such key.
+    """
     for k in KEYS:
         if k.table == table and k.name == name:
             return k
@@ -212,7 +252,18 @@ def spec(table: str, name: str) -> Key:
 
 
 def default(table: str, name: str):
-    """Default of ``table.name`` (a fresh copy for lists; None for REQUIRED/NONE)."""
+    """Default of ``table.name`` (a fresh copy for lists; None for REQUIRED/NONE).
+
+    Parameters
+    ----------
+    table, name : str
+        The table and the key.
+
+    Returns
+    -------
+    object
+        The default value, in the key's unit.
+    """
     d = spec(table, name).default
     if d is REQUIRED or d is NONE:
         return None

@@ -63,6 +63,13 @@ def _is_float(w: str) -> bool:
 def read_vertices(path, key: str) -> np.ndarray:
     """Positions from n lines of 3 numbers, or one line of 3n numbers.
 
+    Parameters
+    ----------
+    path : str or Path
+        The text file (blank lines and ``#`` comments skipped).
+    key : str
+        The scene key naming the file, for error messages.
+
     Returns
     -------
     ndarray, shape (n, 3), float64
@@ -106,6 +113,17 @@ def _indices(values, line: int, name: str, key: str, base: int, count: int | Non
 def read_triangles(path, key: str, base: int, vertex_count: int) -> np.ndarray:
     """Triangles from lines of 3 vertex indices numbered from ``base``.
 
+    Parameters
+    ----------
+    path : str or Path
+        The text file (blank lines and ``#`` comments skipped).
+    key : str
+        The scene key naming the file, for error messages.
+    base : int
+        Number of the first vertex in the file (0 or 1).
+    vertex_count : int
+        n; every index must be in range.
+
     Returns
     -------
     ndarray, shape (t, 3), int64
@@ -122,12 +140,42 @@ def read_triangles(path, key: str, base: int, vertex_count: int) -> np.ndarray:
 
 
 def read_values(path, key: str) -> np.ndarray:
-    """Every number of a file, in order (e.g. one mass per vertex), shape (m,)."""
+    """Every number of a file, in order (e.g. one mass per vertex), shape (m,).
+
+    Parameters
+    ----------
+    path : str or Path
+        The text file (blank lines and ``#`` comments skipped).
+    key : str
+        The scene key naming the file, for error messages.
+
+    Returns
+    -------
+    ndarray, shape (m,), float64
+        The numbers, in the unit the key gives (e.g. [kg]).
+    """
     return np.asarray([v for _, vs in _rows(path, key) for v in vs], dtype=np.float64)
 
 
 def read_index_list(path, key: str, base: int, vertex_count: int) -> np.ndarray:
-    """Vertex indices (numbered from ``base``), any number a line; 0-based, shape (p,)."""
+    """Vertex indices (numbered from ``base``), any number a line; 0-based, shape (p,).
+
+    Parameters
+    ----------
+    path : str or Path
+        The text file (blank lines and ``#`` comments skipped).
+    key : str
+        The scene key naming the file, for error messages.
+    base : int
+        Number of the first vertex in the file (0 or 1).
+    vertex_count : int
+        n; every index must be in range.
+
+    Returns
+    -------
+    ndarray, shape (p,), int64
+        0-based vertex indices, in file order.
+    """
     name = Path(path).name
     out = []
     for line, values in _rows(path, key):
@@ -162,7 +210,28 @@ class SpringTable:
 
 def read_spring_table(path, key: str, columns: list[str], base: int,
                       vertex_count: int) -> SpringTable:
-    """Read a spring table (see :class:`SpringTable`); checks every row."""
+    """Read a spring table (see :class:`SpringTable`); checks every row.
+
+    Parameters
+    ----------
+    path : str or Path
+        The text file (blank lines and ``#`` comments skipped).
+    key : str
+        The scene key naming the file, for error messages.
+    columns : list of str
+        The meaning of each column: ``"a"``, ``"b"``, ``"stiffness"`` [N/m] and optionally
+        ``"rest"`` [m]; ``b`` = −1 marks an attachment of ``a``.
+    base : int
+        Number of the first vertex in the file (0 or 1).
+    vertex_count : int
+        n; every index must be in range.
+
+    Returns
+    -------
+    SpringTable
+        Springs (s, 2), stiffness (s,) [N/m], rest lengths (s,) [m] and attachments
+        (cached by path and modification time).
+    """
     p = Path(path).resolve()
     stamp = p.stat().st_mtime_ns if p.is_file() else 0
     return _read_table(str(p), stamp, key, tuple(columns), base, vertex_count)

@@ -240,7 +240,29 @@ def _springs(raw: dict, shape: str, base_dir: Path) -> dict:
 
 
 def validate_solver(method, iterations, tolerance, backend) -> dict:
-    """Check the ``[solver]`` values (also used for overrides)."""
+    """Check the ``[solver]`` values (also used for overrides).
+
+    Parameters
+    ----------
+    method : str
+        A solver name of :data:`clothsim.solvers.SOLVERS`, e.g. ``"local-global"``.
+    iterations : int
+        Maximum iterations per step, 1 to 100 000.
+    tolerance : float or None
+        Relative residual to stop at, > 0 (dimensionless); None: run all iterations.
+    backend : str
+        The factorization backend, one of the scene's backend names.
+
+    Returns
+    -------
+    dict
+        ``method``, ``iterations``, ``tolerance``, ``backend``, checked.
+
+    Raises
+    ------
+    Invalid
+        At ``solver.<key>`` for the first bad value.
+    """
     return {
         "method": string(method, "solver.method", choices=tuple(SOLVERS)),
         "iterations": integer(iterations, "solver.iterations", minimum=1,
@@ -253,6 +275,21 @@ def validate_solver(method, iterations, tolerance, backend) -> dict:
 
 def validate(raw: dict, base_dir: Path, default_name: str) -> dict:
     """Check every key of a scene document; return it resolved (defaults, absolute paths).
+
+    Parameters
+    ----------
+    raw : dict
+        The document as parsed from TOML or JSON.
+    base_dir : Path
+        The scene file's folder; relative file names are resolved against it.
+    default_name : str
+        ``scene.name`` when the document gives none (e.g. the file's stem).
+
+    Returns
+    -------
+    dict
+        The ``scene``, ``cloth``, ``springs``, ``solver`` and ``effects`` tables, checked,
+        with defaults filled in (lengths [m], masses [kg], times [s], stiffnesses [N/m]).
 
     Raises
     ------
