@@ -174,8 +174,9 @@ class NewtonSolver(Solver):
             The step's h [s] and pins.
         x : ndarray, shape (n, 3)
             The current iterate [m].
-        free : ndarray of int, shape (3f,)
-            Indices of the free degrees of freedom in the interleaved 3n layout.
+        free : ndarray of bool, shape (3n,)
+            Mask (or indices) of the free degrees of freedom in the interleaved 3n layout;
+            3f of them.
         grad : ndarray, shape (3f,), optional
             ∇g(x) over those degrees of freedom [N·s²].
 
