@@ -83,6 +83,7 @@ class AndersonSolver(LocalGlobalSolver):
         θ = argmin ‖f_k − ΔF θ‖ and proposes x_{k+1} = G(x_k) − ΔG θ (Peng et al. 2018,
         type II); it is kept only when g(x_{k+1}) < g(x_k), else x_{k+1} = G(x_k) and the
         window restarts. Returns when G(x) = x in floating point (nothing left to improve).
+
         Parameters
         ----------
         problem : StepProblem

@@ -254,6 +254,7 @@ class ChebyshevSolver(LocalGlobalSolver):
         docstring),
 
             x_{k+1} = ω_{k+1} (γ (G(x_k) − x_k) + x_k − x_{k−1}) + x_{k−1}.
+
         Parameters
         ----------
         problem : StepProblem

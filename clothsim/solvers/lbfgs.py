@@ -78,6 +78,7 @@ class LBFGSSolver(LocalGlobalSolver):
         ρ_j = 1 / (s_jᵀ t_j) > 0; then x_{k+1} = x_k + α p with α from a backtracking
         Armijo search (Liu, Bouaziz, Kavan 2017; Nocedal and Wright Alg. 7.4). Returns when
         no step length along p decreases g.
+
         Parameters
         ----------
         problem : StepProblem
