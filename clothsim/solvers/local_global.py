@@ -268,7 +268,7 @@ class LocalGlobalSolver(Solver):
         return b
 
     def global_step(self, problem: StepProblem, d: np.ndarray) -> np.ndarray:
-        """Solve (M + h² L) x = b(d) for the free vertices; fixed ones at their targets.
+        """The global step (M + h² L) x = h² J d + M y + h² f (+ penalty-pin terms) over free x.
 
         Solved for the displacement δ = x − y: A_FF δ_F = (b − A y)_F − A_FP δ_P, then
         x = y + δ. Same x as solving for x directly, but translation invariant to rounding
@@ -284,7 +284,7 @@ class LocalGlobalSolver(Solver):
         Returns
         -------
         ndarray, shape (n, 3)
-            x after the global step [m].
+            x after the global step [m]; exactly pinned vertices at their targets.
         """
         sysf = self.system(problem)
         rhs_all = self.displacement_right_hand_side(problem, d)
