@@ -53,7 +53,13 @@ _warned_fallback = False
 
 
 def cholmod_available() -> bool:
-    """True when scikit-sparse's CHOLMOD binding imports."""
+    """Whether scikit-sparse's CHOLMOD binding imports.
+
+    Returns
+    -------
+    bool
+        True when ``sksparse.cholmod`` imports.
+    """
     try:
         from sksparse.cholmod import cholesky  # noqa: F401
     except ImportError:
@@ -62,7 +68,23 @@ def cholmod_available() -> bool:
 
 
 def resolve_backend(backend: str) -> str:
-    """Map ``"auto"`` to the backend that will run; check the name."""
+    """Map ``"auto"`` to the backend that will run; check the name.
+
+    Parameters
+    ----------
+    backend : {"auto", "cholmod", "splu"}
+        The requested backend.
+
+    Returns
+    -------
+    str
+        ``"cholmod"`` or ``"splu"``.
+
+    Raises
+    ------
+    InputError
+        For an unknown name, or ``"cholmod"`` without scikit-sparse.
+    """
     global _warned_fallback
     if backend not in BACKENDS:
         raise InputError(f"solver.backend: must be one of {', '.join(map(repr, BACKENDS))}, "
@@ -90,6 +112,7 @@ class Factor:
     A : sparse matrix, shape (n, n)
         Symmetric positive definite.
     backend : {"auto", "cholmod", "splu"}
+        See the module docstring and :func:`resolve_backend`.
     check_conditioning : bool
         Estimate cond₁(A) and warn (:class:`ConditioningWarning`) above
         :data:`CONDITION_WARNING_THRESHOLD`.
@@ -98,8 +121,17 @@ class Factor:
 
     Attributes
     ----------
+    A : scipy.sparse.csc_matrix, shape (n, n)
+        The factored matrix.
+    shape : tuple of int
+        ``(n, n)``.
     backend : str
         The backend that ran ("cholmod" or "splu").
+
+    Raises
+    ------
+    FactorizationError
+        When A is singular or not positive definite.
     """
 
     def __init__(self, A, *, backend: str = "auto", check_conditioning: bool = True,
@@ -153,7 +185,18 @@ class Factor:
                               ConditioningWarning, stacklevel=3)
 
     def solve(self, b: np.ndarray) -> np.ndarray:
-        """x = A⁻¹ b for b of shape (n,) or (n, k)."""
+        """x = A⁻¹ b.
+
+        Parameters
+        ----------
+        b : ndarray, shape (n,) or (n, k)
+            Right-hand side(s), in the units of A x.
+
+        Returns
+        -------
+        ndarray, float64, shape of b
+            The solution x.
+        """
         if self.shape[0] == 0:
             return np.zeros_like(b, dtype=np.float64)
         return self._solve(np.ascontiguousarray(b, dtype=np.float64))
@@ -165,6 +208,16 @@ class Factor:
 
         Returns xᵀ, shape (k, n). CHOLMOD works on column-major (n, k) blocks, so passing
         the transpose of a C-ordered (k, n) array avoids the copy :meth:`solve` makes.
+
+        Parameters
+        ----------
+        bT : ndarray, shape (k, n)
+            The right-hand sides as rows (for the global step, the x, y, z columns).
+
+        Returns
+        -------
+        ndarray, float64, shape (k, n)
+            The solutions as rows.
         """
         if self.shape[0] == 0:
             return np.zeros_like(bT, dtype=np.float64)
@@ -211,6 +264,11 @@ def single_threaded_blas():
     machine, BLAS worker threads that spin or wait for a busy core can stall them for far
     longer than they take. :class:`~clothsim.solvers.LocalGlobalSolver` therefore runs each
     step with one BLAS thread.
+
+    Returns
+    -------
+    contextlib.AbstractContextManager
+        ``with single_threaded_blas(): ...`` runs its body with one BLAS thread.
     """
     global _blas_controller
     if _blas_controller is None:

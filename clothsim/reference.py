@@ -21,7 +21,20 @@ from .model import Model
 
 
 def incidence_vector(n: int, a: int, b: int) -> np.ndarray:
-    """A_i ∈ R^n: +1 at a, −1 at b."""
+    """The spring's incidence vector A_i ∈ R^n: +1 at a, −1 at b (paper, Sec. 3).
+
+    Parameters
+    ----------
+    n : int
+        Number of vertices.
+    a, b : int
+        The spring's two vertices, in ``range(n)``.
+
+    Returns
+    -------
+    ndarray, shape (n,)
+        A_i (dimensionless).
+    """
     A = np.zeros(n)
     A[a] = 1.0
     A[b] = -1.0
@@ -29,19 +42,54 @@ def incidence_vector(n: int, a: int, b: int) -> np.ndarray:
 
 
 def indicator_vector(s: int, i: int) -> np.ndarray:
-    """S_i ∈ R^s: 1 at i."""
+    """The spring's indicator vector S_i ∈ R^s: 1 at i, 0 elsewhere (paper, Sec. 3).
+
+    Parameters
+    ----------
+    s : int
+        Number of springs.
+    i : int
+        The spring's index, in ``range(s)``.
+
+    Returns
+    -------
+    ndarray, shape (s,)
+        S_i (dimensionless).
+    """
     S = np.zeros(s)
     S[i] = 1.0
     return S
 
 
 def mass_matrix(model: Model) -> np.ndarray:
-    """M = diag(m_1 … m_n) ⊗ I3, dense (3n, 3n)."""
+    """The mass matrix M = diag(m_1 … m_n) ⊗ I3, dense.
+
+    Parameters
+    ----------
+    model : Model
+        Its ``vertex_mass``, shape (n,) [kg].
+
+    Returns
+    -------
+    ndarray, shape (3n, 3n)
+        M in the interleaved layout (x0 y0 z0 x1 …) [kg].
+    """
     return np.kron(np.diag(model.vertex_mass), np.eye(3))
 
 
 def stiffness_matrix(model: Model) -> np.ndarray:
-    """L = (Σ_i k_i A_i A_iᵀ) ⊗ I3, dense (3n, 3n)."""
+    """The stiffness Laplacian L = (Σ_i k_i A_i A_iᵀ) ⊗ I3, one spring at a time, dense.
+
+    Parameters
+    ----------
+    model : Model
+        Its springs' vertices (s, 2) and stiffnesses k_i (s,) [N/m].
+
+    Returns
+    -------
+    ndarray, shape (3n, 3n)
+        L in the interleaved layout [N/m].
+    """
     n = model.vertex_count
     Ls = np.zeros((n, n))
     for (a, b), k in zip(model.springs.spring_vertices, model.springs.spring_stiffness):
@@ -51,7 +99,18 @@ def stiffness_matrix(model: Model) -> np.ndarray:
 
 
 def spring_matrix(model: Model) -> np.ndarray:
-    """J = (Σ_i k_i A_i S_iᵀ) ⊗ I3, dense (3n, 3s)."""
+    """The spring matrix J = (Σ_i k_i A_i S_iᵀ) ⊗ I3, one spring at a time, dense.
+
+    Parameters
+    ----------
+    model : Model
+        Its springs' vertices (s, 2) and stiffnesses k_i (s,) [N/m].
+
+    Returns
+    -------
+    ndarray, shape (3n, 3s)
+        J in the interleaved layout (rows per vertex, columns per spring) [N/m].
+    """
     n, s = model.vertex_count, model.spring_count
     Js = np.zeros((n, s))
     for i, ((a, b), k) in enumerate(zip(model.springs.spring_vertices,
@@ -61,7 +120,23 @@ def spring_matrix(model: Model) -> np.ndarray:
 
 
 def local_step(model: Model, x: np.ndarray) -> np.ndarray:
-    """d_i = r_i (x_a − x_b) / |x_a − x_b| one spring at a time; x, d as (n, 3), (s, 3)."""
+    """The local step d_i = r_i p_i / |p_i|, p_i = x_{a_i} − x_{b_i}, one spring at a time.
+
+    Minimizes |p_i − d_i|² over |d_i| = r_i (paper, Sec. 4). Where the two ends coincide
+    (|p_i| = 0) any direction is optimal; this literal version leaves d_i = 0 there.
+
+    Parameters
+    ----------
+    model : Model
+        Its springs' vertices (s, 2) and rest lengths r_i (s,) [m].
+    x : ndarray, shape (n, 3)
+        Vertex positions [m].
+
+    Returns
+    -------
+    ndarray, shape (s, 3)
+        The spring vectors d [m].
+    """
     d = np.zeros((model.spring_count, 3))
     for i, ((a, b), r) in enumerate(zip(model.springs.spring_vertices,
                                         model.springs.spring_rest_length)):
@@ -73,7 +148,20 @@ def local_step(model: Model, x: np.ndarray) -> np.ndarray:
 
 
 def spring_energy(model: Model, x: np.ndarray) -> float:
-    """E_springs(x) = Σ_i ½ k_i (|x_a − x_b| − r_i)², one spring at a time [J]."""
+    """The springs' energy E_springs(x) = Σ_i ½ k_i (|x_{a_i} − x_{b_i}| − r_i)², literally.
+
+    Parameters
+    ----------
+    model : Model
+        Its springs' vertices, stiffnesses [N/m] and rest lengths [m].
+    x : ndarray, shape (n, 3)
+        Vertex positions [m].
+
+    Returns
+    -------
+    float
+        The energy [J].
+    """
     e = 0.0
     for (a, b), k, r in zip(model.springs.spring_vertices, model.springs.spring_stiffness,
                             model.springs.spring_rest_length):
@@ -86,6 +174,18 @@ def spring_gradient(model: Model, x: np.ndarray) -> np.ndarray:
 
     Spring i adds k_i (|p_i| − r_i) p_i / |p_i| to vertex a_i and subtracts it from b_i,
     p_i = x_{a_i} − x_{b_i} (nothing when the ends coincide).
+
+    Parameters
+    ----------
+    model : Model
+        Its springs' vertices, stiffnesses [N/m] and rest lengths [m].
+    x : ndarray, shape (n, 3)
+        Vertex positions [m].
+
+    Returns
+    -------
+    ndarray, shape (n, 3)
+        The gradient ∂E_springs/∂x [N].
     """
     grad = np.zeros((model.vertex_count, 3))
     for (a, b), k, r in zip(model.springs.spring_vertices, model.springs.spring_stiffness,
@@ -110,6 +210,7 @@ def global_step(model: Model, problem, d: np.ndarray) -> np.ndarray:
     Parameters
     ----------
     model : Model
+        Masses [kg], springs' stiffnesses [N/m], vertices and rest lengths [m].
     problem : clothsim.problem.StepProblem
         The step's h, y, f_ext and pins (read only; not imported here, so that this
         module stays below the solvers in the pipeline).
@@ -146,6 +247,17 @@ def global_step(model: Model, problem, d: np.ndarray) -> np.ndarray:
 def iteration(model: Model, problem, x: np.ndarray) -> tuple[np.ndarray,
                                                                            np.ndarray]:
     """One local/global iteration from x: the local step, then the global step.
+
+    d_i = r_i p_i / |p_i| (:func:`local_step`), then (M + h² L) x = h² J d + M y + h² f
+    (:func:`global_step`).
+
+    Parameters
+    ----------
+    model : Model
+    problem : clothsim.problem.StepProblem
+        The step's h [s], y [m], f_ext [N] and pins.
+    x : ndarray, shape (n, 3)
+        The current iterate [m].
 
     Returns
     -------

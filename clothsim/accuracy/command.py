@@ -43,7 +43,22 @@ log = logging.getLogger(__name__)
 
 def scene_factory(scene):
     """(factory, model, frame_time) for a scene: ``factory(method, h, iterations,
-    tolerance)`` builds a fresh simulation at step h (h must divide 1 / fps)."""
+    tolerance)`` builds a fresh simulation at step h (h must divide 1 / fps).
+
+    Parameters
+    ----------
+    scene : clothsim.scene.Scene
+        A validated scene.
+
+    Returns
+    -------
+    factory : callable
+        ``factory(method, h, iterations, tolerance) -> Simulation``, h [s].
+    model : Model
+        The scene's model (shared by every simulation the factory builds).
+    frame_time : float
+        1 / fps [s].
+    """
     model = scene.build_model()
     frame_time = 1.0 / scene.fps
 

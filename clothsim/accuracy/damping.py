@@ -27,6 +27,11 @@ def implicit_euler_amplitude(omega: float, h: float, steps) -> np.ndarray:
         Time step [s].
     steps : array_like of int
         Step counts n.
+
+    Returns
+    -------
+    ndarray, shape of ``steps``
+        (1 + ω²h²)^(−n/2), the amplitude relative to the initial one (dimensionless).
     """
     return (1.0 + (omega * h) ** 2) ** (-0.5 * np.asarray(steps, dtype=np.float64))
 
@@ -34,6 +39,17 @@ def implicit_euler_amplitude(omega: float, h: float, steps) -> np.ndarray:
 def single_spring(*, stiffness: float = 100.0, mass: float = 1.0, rest_length: float = 1.0,
                   amplitude: float = 0.1):
     """A mass hanging on one spring below a pinned vertex (no gravity), pulled down.
+
+    Parameters
+    ----------
+    stiffness : float, default 100
+        k [N/m].
+    mass : float, default 1
+        Mass of each vertex [kg].
+    rest_length : float, default 1
+        r [m].
+    amplitude : float, default 0.1
+        Initial stretch [m].
 
     Returns
     -------
@@ -57,7 +73,28 @@ def single_spring(*, stiffness: float = 100.0, mass: float = 1.0, rest_length: f
 def damping_curves(factory: SimulationFactory, *, h: float, frames: int, frame_time: float,
                    settings: Sequence[tuple[str, int | None, float | None]], vertex: int
                    ) -> dict[str, np.ndarray]:
-    """Height (y) of ``vertex`` at every frame for a few (method, iterations, tolerance)."""
+    """Height (y) of ``vertex`` at every frame for a few (method, iterations, tolerance).
+
+    Parameters
+    ----------
+    factory : callable
+        ``factory(method, h, iterations, tolerance) -> Simulation``, a fresh simulation.
+    h : float
+        Time step [s].
+    frames : int
+        Frames to run.
+    frame_time : float
+        Time between frames [s]; h must divide it.
+    settings : sequence of (str, int or None, float or None)
+        (method, iterations, tolerance) per curve.
+    vertex : int
+        The vertex whose height is recorded.
+
+    Returns
+    -------
+    dict of str to ndarray, shape (frames + 1,)
+        Label (e.g. ``"local-global, 10 it"``) → y coordinate per frame [m].
+    """
     out = {}
     with warnings.catch_warnings():
         warnings.simplefilter("ignore")
@@ -73,7 +110,28 @@ def energy_curves(factory: SimulationFactory, *, h: float, frames: int, frame_ti
                   settings: Sequence[tuple[str, int | None, float | None]],
                   reference: np.ndarray | None = None) -> dict[str, np.ndarray]:
     """Mechanical energy (:func:`mechanical_energy`) at every frame for a few (method,
-    iterations, tolerance); ``reference`` (shape (frames + 1,)) is added as-is."""
+    iterations, tolerance); ``reference`` (shape (frames + 1,)) is added as-is.
+
+    Parameters
+    ----------
+    factory : callable
+        ``factory(method, h, iterations, tolerance) -> Simulation``, a fresh simulation.
+    h : float
+        Time step [s].
+    frames : int
+        Frames to run.
+    frame_time : float
+        Time between frames [s]; h must divide it.
+    settings : sequence of (str, int or None, float or None)
+        (method, iterations, tolerance) per curve.
+    reference : ndarray, shape (frames + 1,), optional
+        A reference energy curve [J].
+
+    Returns
+    -------
+    dict of str to ndarray, shape (frames + 1,)
+        Label → mechanical energy per frame [J].
+    """
     out = {}
     with warnings.catch_warnings():
         warnings.simplefilter("ignore")
@@ -91,6 +149,19 @@ def single_spring_heights(*, h: float, steps: int, stiffness: float = 100.0,
                           mass: float = 1.0, amplitude: float = 0.1
                           ) -> tuple[np.ndarray, dict[str, np.ndarray], np.ndarray]:
     """Displacement of the single spring's mass over ``steps`` steps.
+
+    Parameters
+    ----------
+    h : float
+        Time step [s].
+    steps : int
+        Steps to run.
+    stiffness : float, default 100
+        k [N/m].
+    mass : float, default 1
+        m [kg].
+    amplitude : float, default 0.1
+        Initial stretch [m].
 
     Returns
     -------

@@ -41,6 +41,11 @@ def paper_report(*, n: int = 41, k: float = 1000.0, frames: int = 15, repeats: i
         Wall-time cap of one local/global trace [s].
     threads : int
         BLAS threads during timing.
+
+    Returns
+    -------
+    str
+        The report (plain text, Markdown tables).
     """
     with warnings.catch_warnings():
         warnings.simplefilter("ignore")

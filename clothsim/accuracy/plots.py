@@ -54,7 +54,22 @@ def _save(plt, fig, path) -> Path:
 
 
 def plot_solver_accuracy(traces: dict[str, IterateTrace], path, *, title: str = "") -> Path:
-    """Two panels: relative error against iterations, and against cumulative wall time."""
+    """Two panels: relative error against iterations, and against cumulative wall time.
+
+    Parameters
+    ----------
+    traces : dict of str to IterateTrace
+        Method name → trace (:func:`~clothsim.accuracy.trace.solver_accuracy`).
+    path : str or Path
+        The PNG file to write (overwritten).
+    title : str, optional
+        Figure title (default: a description of the plot).
+
+    Returns
+    -------
+    Path
+        ``path``.
+    """
     plt = _pyplot()
     fig, (a, b) = plt.subplots(1, 2, figsize=(11, 4.2))
     for name, tr in traces.items():
@@ -76,7 +91,22 @@ def plot_solver_accuracy(traces: dict[str, IterateTrace], path, *, title: str = 
 
 def plot_frontier(rows: Sequence[SweepRow], path, *, title: str = "") -> Path:
     """Trajectory and solver error against seconds per frame, with the Pareto front and
-    the cheapest configuration for each accuracy level marked."""
+    the cheapest configuration for each accuracy level marked.
+
+    Parameters
+    ----------
+    rows : sequence of SweepRow
+        The sweep (:func:`~clothsim.accuracy.sweep.run_sweep`).
+    path : str or Path
+        The PNG file to write (overwritten).
+    title : str, optional
+        Figure title (default: a description of the plot).
+
+    Returns
+    -------
+    Path
+        ``path``.
+    """
     plt = _pyplot()
     fig, axes = plt.subplots(1, 2, figsize=(11, 4.4))
     for ax, col, levels in zip(axes, ("trajectory_error", "solver_error"),
@@ -110,7 +140,22 @@ def plot_frontier(rows: Sequence[SweepRow], path, *, title: str = "") -> Path:
 
 def plot_convergence(rows: Sequence[SweepRow], path, *, title: str = "") -> Path:
     """Trajectory error against h (log-log), one line per (method, iterations), with a
-    slope-1 guide (implicit Euler is first order) and each line's fitted slope."""
+    slope-1 guide (implicit Euler is first order) and each line's fitted slope.
+
+    Parameters
+    ----------
+    rows : sequence of SweepRow
+        The sweep, with several h per series.
+    path : str or Path
+        The PNG file to write (overwritten).
+    title : str, optional
+        Figure title (default: a description of the plot).
+
+    Returns
+    -------
+    Path
+        ``path``.
+    """
     plt = _pyplot()
     fig, ax = plt.subplots(figsize=(6.4, 4.6))
     series = dict.fromkeys((r.method, r.iterations) for r in rows
@@ -146,7 +191,30 @@ def plot_damping(path, *, h: float = 1 / 30, steps: int = 90,
                  frame_time: float = 1 / 30, cloth_ylabel: str = "mechanical energy [J]",
                  cloth_title: str = "cloth: energy, iterations per step") -> Path:
     """Implicit Euler's damping: the single spring against its closed-form envelope, and
-    (optionally) a cloth quantity (:func:`energy_curves`) for a few iteration counts."""
+    (optionally) a cloth quantity (:func:`energy_curves`) for a few iteration counts.
+
+    The envelope is (1 + ω²h²)^(−n/2) for a linear spring (ω = 10 rad/s here).
+
+    Parameters
+    ----------
+    path : str or Path
+        The PNG file to write (overwritten).
+    h : float, default 1/30
+        Time step of the single spring [s].
+    steps : int, default 90
+        Steps of the single spring.
+    cloth_curves : dict of str to ndarray, optional
+        Label → per-frame cloth quantity (second panel).
+    frame_time : float, default 1/30
+        Time between the cloth curves' samples [s].
+    cloth_ylabel, cloth_title : str
+        Labels of the second panel.
+
+    Returns
+    -------
+    Path
+        ``path``.
+    """
     plt = _pyplot()
     panels = 2 if cloth_curves else 1
     fig, axes = plt.subplots(1, panels, figsize=(5.6 * panels, 4.2), squeeze=False)
@@ -175,7 +243,24 @@ def plot_damping(path, *, h: float = 1 / 30, steps: int = 90,
 
 def plot_fixed_budget(table, path, *, title: str = "", uncertainty: float = 0.0) -> Path:
     """Solver error (median; dotted: p90) against iterations per step; levels below the
-    reference's ``uncertainty`` are not plotted (a grey band marks them)."""
+    reference's ``uncertainty`` are not plotted (a grey band marks them).
+
+    Parameters
+    ----------
+    table : sequence of Row
+        The study's rows (:func:`~clothsim.accuracy.report.rows`).
+    path : str or Path
+        The PNG file to write (overwritten).
+    title : str, optional
+        Figure title (default: a description of the plot).
+    uncertainty : float, default 0
+        The references' relative uncertainty.
+
+    Returns
+    -------
+    Path
+        ``path``.
+    """
     plt = _pyplot()
     fig, ax = plt.subplots(figsize=(6.4, 4.4))
     for method in dict.fromkeys(r.method for r in table):

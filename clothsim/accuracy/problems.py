@@ -48,6 +48,7 @@ class RecordedStep:
     time : float
         Simulated time at the start of the step [s].
     problem : StepProblem
+        A copy of the step's problem (h, y, f_ext, pins).
     """
 
     index: int
@@ -84,7 +85,20 @@ def record_problems(sim: Simulation, *, steps: int, count: int = 8) -> list[Reco
 
 
 def at_rest_ratio(model: Model, problem: StepProblem) -> float:
-    """‖∇g(y)‖ / its rounding floor (∞ when the floor is 0): "how far from rest"."""
+    """‖∇g(y)‖ / its rounding floor (∞ when the floor is 0): "how far from rest".
+
+    Parameters
+    ----------
+    model : Model
+        The cloth.
+    problem : StepProblem
+        The step.
+
+    Returns
+    -------
+    float
+        The ratio (dimensionless).
+    """
     x0 = problem.initial_guess()
     norm = float(np.linalg.norm(objective_gradient(model, problem, x0)))
     floor = gradient_noise_floor(model, problem, x0)
@@ -92,7 +106,22 @@ def at_rest_ratio(model: Model, problem: StepProblem) -> float:
 
 
 def one_iteration_error(model: Model, problem: StepProblem, x_star: np.ndarray) -> float:
-    """Relative error ‖x_1 − x*‖ / ‖x* − x_n‖ after one local/global iteration."""
+    """Relative error ‖x_1 − x*‖ / ‖x* − x_n‖ after one local/global iteration.
+
+    Parameters
+    ----------
+    model : Model
+        The cloth.
+    problem : StepProblem
+        The step.
+    x_star : ndarray, shape (n, 3)
+        The converged step [m].
+
+    Returns
+    -------
+    float
+        The relative error (dimensionless).
+    """
     gen = LocalGlobalSolver(model, check_conditioning=False).iterates(problem)
     next(gen)
     x1 = next(gen).x
@@ -102,7 +131,26 @@ def one_iteration_error(model: Model, problem: StepProblem, x_star: np.ndarray) 
 
 
 def classify(model: Model, problem: StepProblem, x_star: np.ndarray) -> tuple[str, float, float]:
-    """("measured" | "at-rest" | "trivial", ‖∇g(y)‖ / floor, one-iteration error)."""
+    """Classify a step as in the module docstring.
+
+    Parameters
+    ----------
+    model : Model
+        The cloth.
+    problem : StepProblem
+        The step.
+    x_star : ndarray, shape (n, 3)
+        The converged step [m].
+
+    Returns
+    -------
+    kind : str
+        "measured", "at-rest" or "trivial".
+    ratio : float
+        ‖∇g(y)‖ / rounding floor (:func:`at_rest_ratio`).
+    error : float
+        One-iteration relative error (0 when at rest: not computed).
+    """
     ratio = at_rest_ratio(model, problem)
     if ratio <= AT_REST_FACTOR:
         return "at-rest", ratio, 0.0

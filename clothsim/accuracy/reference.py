@@ -62,7 +62,25 @@ class CertifiedReference:
 
 
 def smallest_eigenvalue(newton: NewtonSolver, problem: StepProblem, x: np.ndarray) -> float:
-    """Smallest eigenvalue of ∇²g(x) over free degrees of freedom / min vertex mass."""
+    """Smallest eigenvalue of ∇²g(x) over free degrees of freedom / min vertex mass.
+
+    ∇²g(x) = M + h² ∇²E(x); a negative value means g is not convex at x (buckling).
+
+    Parameters
+    ----------
+    newton : NewtonSolver
+        Builds the Hessian (:meth:`~clothsim.solvers.NewtonSolver.hessian`).
+    problem : StepProblem
+        The step (h, pins).
+    x : ndarray, shape (n, 3)
+        Where to evaluate [m].
+
+    Returns
+    -------
+    float
+        λ_min(∇²g) / min m_i (dimensionless; 1 for M alone); NaN when there is no free
+        degree of freedom or ARPACK does not converge.
+    """
     from scipy.sparse.linalg import ArpackNoConvergence, eigsh
 
     free = np.repeat(problem.free_mask(newton.model.vertex_count), 3)
@@ -86,8 +104,11 @@ def certified_reference(model: Model, problem: StepProblem, *, backend: str = "a
     Parameters
     ----------
     model : Model
+        The cloth.
     problem : StepProblem
+        The step.
     backend : {"auto", "cholmod", "splu"}
+        Factorization backend.
     second_start : bool
         Also solve from the converged local/global point (the uncertainty check).
 

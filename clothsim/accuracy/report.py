@@ -27,7 +27,39 @@ FIXED_BUDGETS = (5, 10, 20)
 
 @dataclass
 class Row:
-    """One CSV row (see :data:`COLUMNS`)."""
+    """One CSV row (see :data:`COLUMNS`).
+
+    Attributes
+    ----------
+    method : str
+        Solver name.
+    h : float
+        Time step [s].
+    iterations : int
+        Iterations per step (the cap when ``tolerance`` is set).
+    tolerance : float or None
+        Relative-residual tolerance, or None (fixed budget).
+    solver_error_median, solver_error_p90, solver_error_max : float
+        Relative solver error ‖x − x*‖ / ‖x* − x_n‖ over the measured steps.
+    iterations_median, iterations_max : float
+        Iterations used per step.
+    steps_measured, steps_skipped, steps_at_rest, steps_trivial, steps_two_minima : int
+        How the recorded steps were classified (skipped = not measured).
+    time_step_error : float
+        Relative error of implicit Euler itself at this h (NaN when not measured).
+    trajectory_error : float
+        ‖X − X_ref‖ / ‖X_ref − X_0‖ over the run (NaN when not measured).
+    seconds_per_step_median, seconds_per_step_iqr : float
+        Wall time per step and its interquartile range [s].
+    repeats : int
+        Timing repeats.
+    solves_per_step : float
+        Global-step solves per step (median iterations; 0 for Newton).
+    factorizations_per_step : float
+        Factorizations per step (Newton).
+    setting : str
+        A short description, e.g. ``"chebyshev, 10 it/step"``.
+    """
 
     method: str
     h: float
@@ -61,7 +93,26 @@ class Row:
 def rows(results: Sequence[ConfigResult], steps: Sequence[StudyStep], *, h: float,
          time_step_error: float = math.nan,
          trajectory_errors: dict | None = None) -> list[Row]:
-    """One :class:`Row` per configuration."""
+    """One :class:`Row` per configuration.
+
+    Parameters
+    ----------
+    results : sequence of ConfigResult
+        From :func:`~clothsim.accuracy.study.measure` (with timings filled in).
+    steps : sequence of StudyStep
+        The classified steps (for the step counts).
+    h : float
+        The time step [s].
+    time_step_error : float, optional
+        Relative time-discretization error at h.
+    trajectory_errors : dict, optional
+        Configuration → trajectory error.
+
+    Returns
+    -------
+    list of Row
+        Same order as ``results``.
+    """
     kinds = [s.kind for s in steps]
     count = {k: kinds.count(k) for k in ("measured", "at-rest", "trivial", "two-minima")}
     out = []
@@ -85,7 +136,20 @@ def _median(v):
 
 
 def write_csv(table: Sequence[Row], path) -> Path:
-    """Write rows to ``path`` (columns :data:`COLUMNS`; empty cell for no tolerance)."""
+    """Write rows to ``path`` (columns :data:`COLUMNS`; empty cell for no tolerance).
+
+    Parameters
+    ----------
+    table : sequence of Row
+        The rows.
+    path : str or Path
+        The CSV file (overwritten).
+
+    Returns
+    -------
+    Path
+        ``path``.
+    """
     path = Path(path)
     with path.open("w", newline="") as fh:
         w = csv.DictWriter(fh, fieldnames=COLUMNS)
@@ -96,7 +160,20 @@ def write_csv(table: Sequence[Row], path) -> Path:
 
 
 def write_sidecar(info: dict, path) -> Path:
-    """Machine, versions, threads and one-off costs as JSON next to the CSV."""
+    """Machine, versions, threads and one-off costs as JSON next to the CSV.
+
+    Parameters
+    ----------
+    info : dict
+        What to record (values that JSON cannot hold are written as strings).
+    path : str or Path
+        The JSON file (overwritten).
+
+    Returns
+    -------
+    Path
+        ``path``.
+    """
     path = Path(path)
     path.write_text(json.dumps(info, indent=2, sort_keys=True, default=str) + "\n")
     return path
@@ -104,7 +181,22 @@ def write_sidecar(info: dict, path) -> Path:
 
 def cheapest(table: Sequence[Row], level: float, *, error: str = "solver_error_p90"
              ) -> Row | None:
-    """The row with the least median seconds per step whose ``error`` is ≤ ``level``."""
+    """The row with the least median seconds per step whose ``error`` is ≤ ``level``.
+
+    Parameters
+    ----------
+    table : sequence of Row
+        The rows.
+    level : float
+        Accuracy target (relative error).
+    error : str, default "solver_error_p90"
+        The Row column compared with ``level``.
+
+    Returns
+    -------
+    Row or None
+        None when no timed row reaches ``level``.
+    """
     ok = [r for r in table if math.isfinite(getattr(r, error)) and getattr(r, error) <= level
           and math.isfinite(r.seconds_per_step_median)]
     return min(ok, key=lambda r: r.seconds_per_step_median) if ok else None
@@ -116,6 +208,22 @@ def answer_table(table: Sequence[Row], *, levels: Sequence[float] = ACCURACY_LEV
 
     Solver-error levels below ``uncertainty`` (the largest reference uncertainty over the
     measured steps) are not answered: the reference cannot tell them apart.
+
+    Parameters
+    ----------
+    table : sequence of Row
+        The rows.
+    levels : sequence of float
+        Solver-error targets (p90 over the steps).
+    trajectory_levels : sequence of float
+        Trajectory-error targets.
+    uncertainty : float, default 0
+        The references' relative uncertainty.
+
+    Returns
+    -------
+    str
+        A Markdown table, one line per target.
     """
     lines = ["| target | error measured | cheapest setting | ms/step (median) | IQR [ms] |",
              "|---|---|---|---|---|"]
@@ -137,7 +245,20 @@ def answer_table(table: Sequence[Row], *, levels: Sequence[float] = ACCURACY_LEV
 
 
 def fixed_budget_table(table: Sequence[Row], budgets: Sequence[int] = FIXED_BUDGETS) -> str:
-    """Solver error (median / p90) after 5, 10, 20 iterations per step, per method."""
+    """Solver error (median / p90) after 5, 10, 20 iterations per step, per method.
+
+    Parameters
+    ----------
+    table : sequence of Row
+        The rows (Newton's are left out).
+    budgets : sequence of int
+        The iteration budgets shown.
+
+    Returns
+    -------
+    str
+        A Markdown table, one line per method.
+    """
     methods = list(dict.fromkeys(r.method for r in table if r.method != "newton"))
     head = "| method | " + " | ".join(f"{b} it: median / p90" for b in budgets) + " |"
     lines = [head, "|---" * (len(budgets) + 1) + "|"]
@@ -153,14 +274,36 @@ def fixed_budget_table(table: Sequence[Row], budgets: Sequence[int] = FIXED_BUDG
 
 
 def reference_uncertainty(steps: Sequence[StudyStep]) -> float:
-    """Largest reference uncertainty over the measured steps (0 when none)."""
+    """Largest reference uncertainty over the measured steps (0 when none).
+
+    Parameters
+    ----------
+    steps : sequence of StudyStep
+        The classified steps.
+
+    Returns
+    -------
+    float
+        Relative uncertainty of x* (dimensionless).
+    """
     u = [s.reference.uncertainty for s in steps if s.kind == "measured"
          and s.reference is not None and math.isfinite(s.reference.uncertainty)]
     return max(u, default=0.0)
 
 
 def steps_table(steps: Sequence[StudyStep]) -> str:
-    """One line per recorded step: kind, rest ratio, one-iteration error, certificate."""
+    """One line per recorded step: kind, rest ratio, one-iteration error, certificate.
+
+    Parameters
+    ----------
+    steps : sequence of StudyStep
+        The classified steps.
+
+    Returns
+    -------
+    str
+        A Markdown table.
+    """
     lines = ["| step | t [s] | kind | ‖∇g(y)‖/floor | 1-iteration error | Newton residual "
              "| λ_min(H)/m_min | uncertainty | g(x₂) − g(x*) |", "|---" * 9 + "|"]
     for s in steps:

@@ -38,7 +38,21 @@ DEFAULT_CAP = 5000
 
 @dataclass(frozen=True)
 class Configuration:
-    """One setting a user could run: a method with an iteration budget or a tolerance."""
+    """One setting a user could run: a method with an iteration budget or a tolerance.
+
+    Attributes
+    ----------
+    method : str
+        Solver name (:data:`clothsim.solvers.SOLVERS`).
+    iterations : int
+        Iterations per step (the cap when ``tolerance`` is set).
+    tolerance : float or None
+        Relative-residual tolerance ‖∇g(x_k)‖ / ‖∇g(x_0)‖, or None (fixed budget).
+    options : tuple of (str, object)
+        Extra solver constructor options, as sorted (name, value) pairs.
+    label : str
+        A short name for tables, e.g. ``"chebyshev 10 it"``.
+    """
 
     method: str
     iterations: int
@@ -46,6 +60,17 @@ class Configuration:
     options: tuple = ()
 
     def solver(self, model: Model):
+        """A fresh solver of this configuration.
+
+        Parameters
+        ----------
+        model : Model
+            The cloth.
+
+        Returns
+        -------
+        Solver
+        """
         return make_solver(self.method, model, iterations=self.iterations,
                            tolerance=self.tolerance, **dict(self.options))
 
@@ -58,7 +83,21 @@ class Configuration:
 
 @dataclass
 class StudyStep:
-    """A recorded step with its classification and (when measured) its reference."""
+    """A recorded step with its classification and (when measured) its reference.
+
+    Attributes
+    ----------
+    step : RecordedStep
+        The step problem as recorded.
+    kind : str
+        "measured", "at-rest", "trivial" or "two-minima" (:func:`classify`).
+    rest_ratio : float
+        ‖∇g(y)‖ / rounding floor.
+    one_iteration_error : float
+        Relative error of one local/global iteration.
+    reference : CertifiedReference or None
+        The certified x* (None for steps at rest).
+    """
 
     step: RecordedStep
     kind: str                      # "measured", "at-rest", "trivial", "two-minima"
@@ -69,7 +108,20 @@ class StudyStep:
 
 @dataclass
 class ConfigResult:
-    """Errors and iterations of one configuration over the measured steps."""
+    """Errors and iterations of one configuration over the measured steps.
+
+    Attributes
+    ----------
+    config : Configuration
+    errors : ndarray, shape (m,)
+        Relative solver error ‖x − x*‖ / ‖x* − x_n‖ per measured step (inf if not finite).
+    iterations : ndarray of int, shape (m,)
+        Iterations used per step.
+    seconds : list of float
+        Per-step wall time [s], one entry per timing repeat.
+    factorizations : float
+        Mean factorizations per step (Newton), hardware independent.
+    """
 
     config: Configuration
     errors: np.ndarray                       # (m,) relative solver error per measured step
@@ -80,7 +132,22 @@ class ConfigResult:
 
 def prepare_steps(model: Model, recorded: Sequence[RecordedStep], *,
                   backend: str = "auto") -> list[StudyStep]:
-    """Classify each recorded step and certify the reference of those worth measuring."""
+    """Classify each recorded step and certify the reference of those worth measuring.
+
+    Parameters
+    ----------
+    model : Model
+        The cloth.
+    recorded : sequence of RecordedStep
+        Steps recorded from a run (:mod:`clothsim.accuracy.problems`).
+    backend : {"auto", "cholmod", "splu"}
+        Factorization backend.
+
+    Returns
+    -------
+    list of StudyStep
+        One per recorded step, in order.
+    """
     out = []
     for rec in recorded:
         ref = certified_reference(model, rec.problem, backend=backend)
@@ -97,7 +164,23 @@ def prepare_steps(model: Model, recorded: Sequence[RecordedStep], *,
 def default_configurations(methods: Sequence[str], *, budgets: Sequence[int] = BUDGETS,
                            tolerances: Sequence[float] = TOLERANCES,
                            options: dict | None = None) -> list[Configuration]:
-    """Budget and tolerance configurations for each method (Newton budgets ≤ 10)."""
+    """Budget and tolerance configurations for each method (Newton budgets ≤ 10).
+
+    Parameters
+    ----------
+    methods : sequence of str
+        Solver names.
+    budgets : sequence of int
+        Iterations per step of the fixed-budget configurations.
+    tolerances : sequence of float
+        Relative-residual tolerances (iterations capped at 5000, Newton 100).
+    options : dict, optional
+        Extra solver options per method, e.g. ``{"chebyshev": {"rho": 0.99}}``.
+
+    Returns
+    -------
+    list of Configuration
+    """
     out = []
     for m in methods:
         opts = tuple(sorted((options or {}).get(m, {}).items()))
@@ -110,7 +193,22 @@ def default_configurations(methods: Sequence[str], *, budgets: Sequence[int] = B
 
 def chebyshev_rho(model: Model, steps: Sequence[StudyStep], *, backend: str = "auto") -> float:
     """ρ for the chebyshev configurations: the largest estimate over the measured steps
-    (an underestimate diverges; see :mod:`clothsim.solvers.chebyshev`)."""
+    (an underestimate diverges; see :mod:`clothsim.solvers.chebyshev`).
+
+    Parameters
+    ----------
+    model : Model
+        The cloth.
+    steps : sequence of StudyStep
+        Only ``kind == "measured"`` steps are used.
+    backend : {"auto", "cholmod", "splu"}
+        Factorization backend.
+
+    Returns
+    -------
+    float
+        ρ in [0, 1) (0 when no step is measured).
+    """
     rhos = [estimate_spectral_radius(model, s.step.problem, backend=backend)
             for s in steps if s.kind == "measured"]
     return max(rhos, default=0.0)
@@ -137,9 +235,11 @@ def measure(model: Model, steps: Sequence[StudyStep], configs: Sequence[Configur
     Parameters
     ----------
     model : Model
+        The cloth.
     steps : sequence of StudyStep
         From :func:`prepare_steps`; only ``kind == "measured"`` steps are solved.
     configs : sequence of Configuration
+        What to run.
     jobs : int
         Parallel workers (joblib, loky backend); 1 runs serially.
     scheduler : str, optional
@@ -180,7 +280,18 @@ def _parallel(model, tasks, jobs, scheduler):
 
 
 def quantiles(values: np.ndarray) -> tuple[float, float, float]:
-    """(median, 90th percentile, max) of ``values`` (NaN when empty; inf propagates)."""
+    """(median, 90th percentile, max) of ``values`` (NaN when empty; inf propagates).
+
+    Parameters
+    ----------
+    values : array_like, shape (m,)
+        Any samples (e.g. relative errors).
+
+    Returns
+    -------
+    tuple of float
+        (median, 90th percentile, maximum), in the unit of ``values``.
+    """
     v = np.asarray(values, dtype=np.float64)
     if len(v) == 0:
         return math.nan, math.nan, math.nan

@@ -75,12 +75,15 @@ def run_sweep(factory: SimulationFactory, *, time_steps: Sequence[float],
         A precomputed reference trajectory (then ``reference_*`` are ignored).
     probe_frame : int, optional
         Frame at whose first step the solver error is measured (default frames // 2).
+    backend : {"auto", "cholmod", "splu"}
+        Factorization backend of the solver-error probe.
     progress : bool
         Show a tqdm progress bar.
 
     Returns
     -------
     list of SweepRow
+        One row per configuration, in the order run.
     """
     if frames < 1:
         raise InputError(f"accuracy.frames: must be >= 1, got {frames}")
@@ -148,7 +151,20 @@ def _progress(total: int, enabled: bool):
 
 
 def write_csv(rows: Iterable[SweepRow], path) -> Path:
-    """Write the sweep to ``path`` (columns :data:`CSV_FIELDS`)."""
+    """Write the sweep to ``path`` (columns :data:`CSV_FIELDS`).
+
+    Parameters
+    ----------
+    rows : iterable of SweepRow
+        The sweep's rows.
+    path : str or Path
+        The CSV file to write (overwritten).
+
+    Returns
+    -------
+    Path
+        ``path``.
+    """
     path = Path(path)
     with path.open("w", newline="") as fh:
         w = csv.DictWriter(fh, fieldnames=CSV_FIELDS)
@@ -161,7 +177,22 @@ def write_csv(rows: Iterable[SweepRow], path) -> Path:
 def cheapest(rows: Sequence[SweepRow], *, error: str = "trajectory_error",
              levels: Sequence[float] = ACCURACY_LEVELS) -> list[tuple[float, SweepRow | None]]:
     """For each accuracy level, the configuration with the least seconds per frame whose
-    ``error`` column is at most the level (None when no configuration reaches it)."""
+    ``error`` column is at most the level (None when no configuration reaches it).
+
+    Parameters
+    ----------
+    rows : sequence of SweepRow
+        The sweep.
+    error : str, default "trajectory_error"
+        The SweepRow column to compare (relative, dimensionless).
+    levels : sequence of float
+        The accuracy levels.
+
+    Returns
+    -------
+    list of (float, SweepRow or None)
+        (level, cheapest row) per level.
+    """
     out = []
     for level in levels:
         ok = [r for r in rows if math.isfinite(getattr(r, error))
@@ -174,7 +205,20 @@ def cheapest_in_step(traces: dict[str, IterateTrace], *,
                      levels: Sequence[float] = ACCURACY_LEVELS
                      ) -> list[tuple[float, str | None, int, float]]:
     """For each level, (level, method, iterations, seconds) of the fastest method to reach
-    that relative error within the step (method None when none does)."""
+    that relative error within the step (method None when none does).
+
+    Parameters
+    ----------
+    traces : dict of str to IterateTrace
+        Method name → its trace on one step.
+    levels : sequence of float
+        Relative errors ‖x_k − x*‖ / ‖x* − x_n‖.
+
+    Returns
+    -------
+    list of (float, str or None, int, float)
+        (level, method, iterations, seconds [s]); seconds is inf when no method reaches it.
+    """
     out = []
     for level in levels:
         best = (level, None, 0, math.inf)
@@ -187,7 +231,20 @@ def cheapest_in_step(traces: dict[str, IterateTrace], *,
 
 
 def pareto_front(rows: Sequence[SweepRow], *, error: str = "trajectory_error") -> list[SweepRow]:
-    """Configurations that no other is both cheaper and more accurate than, by cost."""
+    """Configurations that no other is both cheaper and more accurate than, by cost.
+
+    Parameters
+    ----------
+    rows : sequence of SweepRow
+        The sweep.
+    error : str, default "trajectory_error"
+        The SweepRow column to compare.
+
+    Returns
+    -------
+    list of SweepRow
+        The Pareto front, cheapest first (error decreasing).
+    """
     pts = sorted((r for r in rows if math.isfinite(getattr(r, error))),
                  key=lambda r: (r.seconds_per_frame, getattr(r, error)))
     front, best = [], math.inf

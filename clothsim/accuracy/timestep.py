@@ -79,6 +79,11 @@ def time_step_study(factory: SimulationFactory, *, frame_time: float, frames: in
         At least three h [s].
     reference_h : float, optional
         Default min(time_steps) / 8.
+
+    Returns
+    -------
+    TimeStepStudy
+        Errors per h, their fitted slope, ω_max and the note on the asymptotic regime.
     """
     hs = sorted(float(h) for h in time_steps)
     h_ref = hs[0] / 8.0 if reference_h is None else reference_h
@@ -115,6 +120,19 @@ def trajectory_errors(factory: SimulationFactory, configs, reference: np.ndarray
                       h: float, frame_time: float) -> dict:
     """Trajectory error (against ``reference``) of the configurations a user would run
     for a whole trajectory: budgets 1, 5, 10, 20 and every tolerance, at step h.
+
+    Parameters
+    ----------
+    factory : callable
+        ``factory(method, h, iterations, tolerance) -> Simulation``.
+    configs : sequence of Configuration
+        The study's configurations (those with other budgets are skipped).
+    reference : ndarray, shape (frames + 1, n, 3)
+        The reference trajectory [m].
+    h : float
+        Time step [s].
+    frame_time : float
+        Time between frames [s].
 
     Returns
     -------

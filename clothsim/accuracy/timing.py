@@ -40,6 +40,24 @@ def time_configurations(model: Model, steps: Sequence[StudyStep],
 
     Each repeat solves all measured steps with one configuration and records the mean
     seconds per step; configurations are interleaved within each repeat.
+
+    Parameters
+    ----------
+    model : Model
+        The cloth.
+    steps : sequence of StudyStep
+        Only measured steps are solved.
+    results : sequence of ConfigResult
+        Filled in place (``seconds``).
+    repeats : int, default 5
+        Interleaved repeats.
+    threads : int, default 1
+        BLAS threads during timing.
+
+    Returns
+    -------
+    None
+        ``results`` are changed in place.
     """
     measured = [s for s in steps if s.kind == "measured"]
     if not measured:
@@ -58,7 +76,18 @@ def time_configurations(model: Model, steps: Sequence[StudyStep],
 
 
 def median_iqr(seconds: Sequence[float]) -> tuple[float, float]:
-    """(median, inter-quartile range) [s]; NaN when empty."""
+    """(median, inter-quartile range) [s]; NaN when empty.
+
+    Parameters
+    ----------
+    seconds : sequence of float
+        Wall times [s].
+
+    Returns
+    -------
+    tuple of float
+        (median, q3 − q1) [s].
+    """
     if not len(seconds):
         return math.nan, math.nan
     q1, q2, q3 = np.quantile(np.asarray(seconds), [0.25, 0.5, 0.75])
@@ -67,7 +96,25 @@ def median_iqr(seconds: Sequence[float]) -> tuple[float, float]:
 
 def one_off_costs(model: Model, steps: Sequence[StudyStep], *, repeats: int = 3,
                   threads: int = 1) -> dict[str, float]:
-    """Median seconds of the one-off costs: factoring M + h² L and estimating ρ."""
+    """Median seconds of the one-off costs: factoring M + h² L and estimating ρ.
+
+    Parameters
+    ----------
+    model : Model
+        The cloth.
+    steps : sequence of StudyStep
+        The first measured step is used.
+    repeats : int, default 3
+        Repeats (medians are returned).
+    threads : int, default 1
+        BLAS threads.
+
+    Returns
+    -------
+    dict of str to float
+        ``factorization_seconds`` and ``rho_estimation_seconds`` [s]; empty when no
+        step is measured.
+    """
     measured = [s for s in steps if s.kind == "measured"]
     if not measured:
         return {}
@@ -87,7 +134,18 @@ def one_off_costs(model: Model, steps: Sequence[StudyStep], *, repeats: int = 3,
 
 
 def machine_info(threads: int = 1) -> dict:
-    """Machine, Python and library versions, and the thread settings of the measurement."""
+    """Machine, Python and library versions, and the thread settings of the measurement.
+
+    Parameters
+    ----------
+    threads : int, default 1
+        BLAS threads used by the measurement (recorded as given).
+
+    Returns
+    -------
+    dict
+        JSON-able description (platform, versions, threadpools, CHOLMOD availability).
+    """
     from importlib.metadata import PackageNotFoundError, version
 
     import scipy

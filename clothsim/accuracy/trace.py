@@ -44,6 +44,21 @@ def converged_solution(model: Model, problem: StepProblem, *, tolerance: float =
                        iterations: int = 200, backend: str = "auto") -> np.ndarray:
     """x* = argmin g for one step, by Newton's method to ‖∇g‖/‖∇g(x_0)‖ ≤ ``tolerance``.
 
+    g(x) = ½ (x − y)ᵀ M (x − y) + h² E(x) (Liu et al. 2013, Eq. 3).
+
+    Parameters
+    ----------
+    model : Model
+        The cloth.
+    problem : StepProblem
+        The step's h [s], y [m], f_ext [N] and pins.
+    tolerance : float, default 1e-12
+        Relative residual ‖∇g(x_k)‖ / ‖∇g(x_0)‖ to reach.
+    iterations : int, default 200
+        Maximum Newton iterations.
+    backend : {"auto", "cholmod", "splu"}
+        Factorization backend.
+
     Returns
     -------
     ndarray, shape (n, 3)
@@ -63,6 +78,7 @@ class IterateTrace:
     Attributes
     ----------
     method : str
+        The solver's name.
     iterations : ndarray, shape (k,), int
         Iteration count of each iterate (0 is the initial guess y).
     seconds : ndarray, shape (k,)
@@ -82,7 +98,18 @@ class IterateTrace:
     objective_gap: np.ndarray
 
     def first_below(self, level: float) -> tuple[int, float] | None:
-        """(iterations, seconds) of the first iterate with error ≤ ``level``, or None."""
+        """The first iterate whose relative error is at most ``level``.
+
+        Parameters
+        ----------
+        level : float
+            Relative error ‖x_k − x*‖ / ‖x* − x_n‖ to reach.
+
+        Returns
+        -------
+        tuple of (int, float) or None
+            (iterations, cumulative seconds [s]) of that iterate; None when none reaches it.
+        """
         hit = np.flatnonzero(self.error <= level)
         if len(hit) == 0:
             return None
@@ -95,6 +122,18 @@ def iterates(solver: Solver, problem: StepProblem) -> Iterator[np.ndarray]:
     """x_0, x_1, … of ``solver`` on ``problem`` (x_0 = y with pins applied).
 
     Ends when the method can make no further progress (see :meth:`Solver.iterates`).
+
+    Parameters
+    ----------
+    solver : Solver
+        Any iterative solver.
+    problem : StepProblem
+        The step to solve.
+
+    Returns
+    -------
+    iterator of ndarray, shape (n, 3)
+        The iterates [m]; each is valid until the next is drawn (copy it to keep it).
     """
     return (it.x for it in solver.iterates(problem))
 
@@ -106,8 +145,19 @@ def representative_problem(sim: Simulation, *, steps: int) -> StepProblem:
     A step of a cloth at rest has ‖∇g(y)‖ near its rounding floor
     (:func:`clothsim.solvers.base.gradient_noise_floor`), where no method can show
     more than a few digits of accuracy. ``sim`` is advanced by ``steps`` steps.
-    """
 
+    Parameters
+    ----------
+    sim : Simulation
+        The scene's simulation (advanced in place).
+    steps : int
+        Steps to look at (at least one).
+
+    Returns
+    -------
+    StepProblem
+        A copy of the chosen step's problem.
+    """
     best, best_norm = None, -1.0
     with warnings.catch_warnings():
         warnings.simplefilter("ignore")
@@ -131,14 +181,20 @@ def trace_solver(solver: Solver, problem: StepProblem, x_star: np.ndarray, *,
     solver : Solver
         Any iterative solver; traced through its :meth:`~clothsim.solvers.Solver.iterates`.
     problem : StepProblem
+        The step to solve.
     x_star : ndarray, shape (n, 3)
-        The converged step (:func:`converged_solution`).
+        The converged step (:func:`converged_solution`) [m].
     iterations : int
         Maximum iterations to trace.
     max_seconds : float, optional
         Stop once the cumulative solver time passes this [s].
     min_error : float, default 1e-13
         Stop once the relative error is below this (rounding level).
+
+    Returns
+    -------
+    IterateTrace
+        One entry per traced iterate (k = 0 the initial guess).
     """
     if isinstance(solver, LocalGlobalSolver):
         solver.system(problem)  # the cached factor: paid once per scene and h, not timed
@@ -179,7 +235,9 @@ def solver_accuracy(model: Model, problem: StepProblem, *,
 
     Parameters
     ----------
-    model, problem
+    model : Model
+        The cloth.
+    problem : StepProblem
         The step to solve (a representative one: mid-motion, not from rest).
     methods : sequence of str
         Iterative methods (names in :data:`clothsim.solvers.SOLVERS`).
@@ -189,6 +247,10 @@ def solver_accuracy(model: Model, problem: StepProblem, *,
         Iterations traced for Newton.
     max_seconds : float, optional
         Per-method wall-time budget [s].
+    backend : {"auto", "cholmod", "splu"}
+        Factorization backend.
+    x_star : ndarray, shape (n, 3), optional
+        The converged step [m]; default :func:`converged_solution`.
     solver_options : dict, optional
         Extra constructor options per method, e.g. ``{"chebyshev": {"rho": 0.99}}``.
 

@@ -30,7 +30,29 @@ SimulationFactory = Callable[[str, float, "int | None", "float | None"], Simulat
 
 @dataclass
 class SweepRow:
-    """One configuration of the sweep (a row of accuracy.csv, see :data:`CSV_FIELDS`)."""
+    """One configuration of the sweep (a row of accuracy.csv, see :data:`CSV_FIELDS`).
+
+    Attributes
+    ----------
+    method : str
+        Solver name.
+    h : float
+        Time step [s] (NaN in a configuration before its stable explicit step is chosen).
+    iterations : int or None
+        Iterations per step (the maximum when ``tolerance`` is set).
+    tolerance : float or None
+        Relative-residual tolerance per step, or None (fixed iterations).
+    steps_per_frame : int
+        Steps per recorded frame.
+    seconds_per_step, seconds_per_frame : float
+        Median wall time per step and the corresponding time per frame [s].
+    solver_error : float
+        ‖x − x*‖ / ‖x* − x_n‖ on the probe step (NaN for explicit methods).
+    objective_gap : float
+        g(x) − g(x*) on the probe step [J·s²].
+    trajectory_error : float
+        ‖X − X_ref‖ / ‖X_ref − X_0‖ over all frames (:func:`trajectory_error`).
+    """
 
     method: str
     h: float
@@ -46,7 +68,21 @@ class SweepRow:
 
 @dataclass
 class Trajectory:
-    """Positions at every frame of a run, and the per-step wall times."""
+    """Positions at every frame of a run, and the per-step wall times.
+
+    Attributes
+    ----------
+    frames : ndarray, shape (f + 1, n, 3)
+        Positions [m]; frame 0 is the initial state (NaN after a blow-up).
+    step_seconds : list of float
+        Wall time of every step [s].
+    energy : ndarray, shape (f + 1,), optional
+        Mechanical energy at each frame [J] (with gravity), when recorded.
+    solver_error : float
+        Relative error ‖x − x*‖ / ‖x* − x_n‖ on the probe step, NaN when not probed.
+    objective_gap : float
+        g(x) − g(x*) on the probe step [J·s²], NaN when not probed.
+    """
 
     frames: np.ndarray                       # (f + 1, n, 3) [m], frame 0 the initial state
     step_seconds: list[float] = field(default_factory=list)
@@ -56,7 +92,20 @@ class Trajectory:
 
 
 def steps_per_frame(frame_time: float, h: float) -> int:
-    """frame_time / h as an integer; raise InputError when h does not divide the frame."""
+    """frame_time / h as an integer; raise InputError when h does not divide the frame.
+
+    Parameters
+    ----------
+    frame_time : float
+        Time between frames [s].
+    h : float
+        Time step [s].
+
+    Returns
+    -------
+    int
+        Steps per frame (≥ 1).
+    """
     ratio = frame_time / h
     steps = int(round(ratio))
     if steps < 1 or abs(ratio - steps) > 1e-6 * ratio:
@@ -70,6 +119,16 @@ def mechanical_energy(sim: Simulation) -> float:
 
     Gravity is taken from the simulation's :class:`~clothsim.effects.Gravity` effects
     (none: no potential term). Pins and other effects store no energy.
+
+    Parameters
+    ----------
+    sim : Simulation
+        Its current positions [m] and velocities [m/s].
+
+    Returns
+    -------
+    float
+        ½ vᵀ M v + Σ_i ½ k_i (|p_i| − r_i)² − Σ m_i gᵀ x_i [J].
     """
     x, v = sim.state.positions, sim.state.velocities
     e = energy.kinetic_energy(sim.model, v) + energy.spring_energy(sim.model, x)
@@ -88,6 +147,26 @@ def run_trajectory(sim: Simulation, *, frames: int, frame_time: float,
     Newton and the simulation's solver error on it is recorded (relative error against
     x*, and objective gap). With ``record_energy``, :func:`mechanical_energy` at each
     frame is recorded in ``Trajectory.energy``.
+
+    Parameters
+    ----------
+    sim : Simulation
+        A fresh simulation (advanced in place).
+    frames : int
+        Frames to run.
+    frame_time : float
+        Time between frames [s]; ``sim.h`` must divide it.
+    probe_frame : int, optional
+        Frame whose first step is compared with the converged step.
+    backend : {"auto", "cholmod", "splu"}
+        Factorization backend of the converged (Newton) solve.
+    record_energy : bool, default False
+        Record the mechanical energy at each frame.
+
+    Returns
+    -------
+    Trajectory
+        frames of shape (frames + 1, n, 3) [m]; NaN frames after a blow-up.
     """
     per_frame = steps_per_frame(frame_time, sim.h)
     out = [sim.state.positions.copy()]
@@ -129,7 +208,20 @@ def _is_implicit(solver: Solver) -> bool:
 
 
 def trajectory_error(frames: np.ndarray, reference: np.ndarray) -> float:
-    """‖X − X_ref‖ / ‖X_ref − X_0‖ over all frames and vertices (inf if X is not finite)."""
+    """‖X − X_ref‖ / ‖X_ref − X_0‖ over all frames and vertices (inf if X is not finite).
+
+    Parameters
+    ----------
+    frames : ndarray, shape (f + 1, n, 3)
+        The run's positions X [m].
+    reference : ndarray, shape (f + 1, n, 3)
+        The reference X_ref [m].
+
+    Returns
+    -------
+    float
+        Relative error (dimensionless; Frobenius norms).
+    """
     if not np.all(np.isfinite(frames)):
         return math.inf
     den = float(np.linalg.norm(reference - reference[0]))
@@ -145,6 +237,25 @@ def reference_trajectory(factory: SimulationFactory, *, h: float, frames: int,
     Implicit Euler solved to ``tolerance`` at h and at 2h. Its global error is
     X(h) − X_exact = C h + O(h²) (first order), so with ``extrapolate`` the returned
     frames are Richardson's 2 X(h) − X(2h), whose error is O(h²).
+
+    Parameters
+    ----------
+    factory : callable
+        ``factory(method, h, iterations, tolerance) -> Simulation``.
+    h : float
+        The reference time step [s] (2h must divide ``frame_time`` too).
+    frames : int
+        Frames to run.
+    frame_time : float
+        Time between frames [s].
+    method : str, default "newton"
+        Solver of the reference runs.
+    tolerance : float, default 1e-10
+        Relative residual per step.
+    iterations : int, default 50
+        Maximum iterations per step.
+    extrapolate : bool, default True
+        Return the Richardson extrapolation rather than X(h).
 
     Returns
     -------
@@ -167,6 +278,20 @@ def convergence_slope(rows: Sequence[SweepRow], *, method: str,
 
     Implicit Euler solved to convergence is first order: the slope should be about 1.
     NaN when fewer than two finite points exist.
+
+    Parameters
+    ----------
+    rows : sequence of SweepRow
+        The sweep.
+    method : str
+        The series' solver.
+    iterations : int or None
+        The series' iterations per step.
+
+    Returns
+    -------
+    float
+        d log(error) / d log(h), a least-squares fit.
     """
     pts = [(r.h, r.trajectory_error) for r in rows
            if r.method == method and r.iterations == iterations

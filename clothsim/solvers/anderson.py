@@ -53,12 +53,16 @@ class AndersonSolver(LocalGlobalSolver):
     window : int, default 6
         m: how many past differences enter the extrapolation (Peng et al. use 5–10).
     backend : {"auto", "cholmod", "splu"}
+        Sparse factorization of M + h² L (:class:`~clothsim.factorization.Factor`).
     check_conditioning : bool, default True
+        Warn when a new factor's condition estimate passes 1e12.
 
     Attributes
     ----------
     rejections : int
         Accelerated iterates rejected by the energy safeguard (over the solver's life).
+    window : int
+        m, as given.
     """
 
     name = "anderson"
@@ -75,7 +79,23 @@ class AndersonSolver(LocalGlobalSolver):
     def iterates(self, problem: StepProblem, x0: np.ndarray | None = None) -> Iterator[Iterate]:
         """Yield the initial guess, then each accepted iterate, g never increasing.
 
-        Returns when G(x) = x in floating point (nothing left to improve).
+        With f_j = G(x_j) − x_j over the free vertices, each iteration solves
+        θ = argmin ‖f_k − ΔF θ‖ and proposes x_{k+1} = G(x_k) − ΔG θ (Peng et al. 2018,
+        type II); it is kept only when g(x_{k+1}) < g(x_k), else x_{k+1} = G(x_k) and the
+        window restarts. Returns when G(x) = x in floating point (nothing left to improve).
+
+        Parameters
+        ----------
+        problem : StepProblem
+            The step's h [s], y [m], f_ext [N] and pins.
+        x0 : ndarray, shape (n, 3), optional
+            Initial guess [m]; default y with the pins applied.
+
+        Yields
+        ------
+        Iterate
+            k, x of shape (n, 3) [m] (the solver's array: copy it to keep it) and
+            ‖∇g(x)‖ over the free degrees of freedom [N·s²].
         """
         sysf = self.system(problem)
         free = sysf.free

@@ -80,6 +80,7 @@ def estimate_spectral_radius(model: Model, problem: StepProblem, *, iterations: 
     Parameters
     ----------
     model : Model
+        The cloth (masses [kg], springs [N/m, m]).
     problem : StepProblem
         A representative step of the scene (e.g. one taken mid-motion).
     iterations : int, default 150
@@ -91,6 +92,7 @@ def estimate_spectral_radius(model: Model, problem: StepProblem, *, iterations: 
     safety : float, default 1.0
         The returned value is ``safety * ρ``, capped at 0.99999.
     backend : {"auto", "cholmod", "splu"}
+        Factorization backend of the solver built when ``solver`` is not given.
     solver : LocalGlobalSolver, optional
         Reuse this solver's cached factor (its ``iterates`` are consumed; the solver's
         settings are not changed).
@@ -98,7 +100,7 @@ def estimate_spectral_radius(model: Model, problem: StepProblem, *, iterations: 
     Returns
     -------
     float
-        ρ in [0, 1).
+        ρ in [0, 1) (dimensionless); 0 when the iteration converged at once.
     """
     if iterations < 3 or fit_last < 1:
         raise InputError(f"estimate_spectral_radius: need iterations >= 3 and fit_last >= 1, "
@@ -144,12 +146,20 @@ class ChebyshevSolver(LocalGlobalSolver):
     gamma : float, optional
         Relaxation γ ∈ (0, 2); default 2 / (2 − ρ), the shift that centres the spectrum.
     backend : {"auto", "cholmod", "splu"}
+        Sparse factorization of M + h² L (:class:`~clothsim.factorization.Factor`).
     check_conditioning : bool, default True
+        Warn when a new factor's condition estimate passes 1e12.
 
     Attributes
     ----------
     rho_estimations : int
         How many times ρ was estimated (one-off cost, reported apart from per-step cost).
+    rho : float or None
+        ρ in use (None until estimated).
+    delay : int
+        S, as given.
+    gamma_option : float or None
+        γ as given (None: 2 / (2 − ρ)); :attr:`gamma` is the value in use.
     """
 
     name = "chebyshev"
@@ -189,7 +199,23 @@ class ChebyshevSolver(LocalGlobalSolver):
         return max(abs(1.0 - gamma), gamma * rho + 1.0 - gamma)
 
     def omega(self, k: int, omega_prev: float) -> float:
-        """ω_{k+1} for iteration k (0-based) given ω_k (Wang 2015, Eq. 11 with delay S)."""
+        """The Chebyshev weight ω_{k+1} (Wang 2015, Eq. 11, with delay S).
+
+        ω = 1 for k < S, ω_S = 2 / (2 − ρ'²), then ω_{k+1} = 4 / (4 − ρ'² ω_k), with
+        ρ' = :attr:`shifted_rho`.
+
+        Parameters
+        ----------
+        k : int
+            The iteration (0-based).
+        omega_prev : float
+            ω_k, the previous weight (ignored for k ≤ S).
+
+        Returns
+        -------
+        float
+            ω_{k+1} (dimensionless, in [1, 2)).
+        """
         rho2 = self.shifted_rho ** 2
         if k < self.delay:
             return 1.0
@@ -198,11 +224,23 @@ class ChebyshevSolver(LocalGlobalSolver):
         return 4.0 / (4.0 - rho2 * omega_prev)
 
     def get_state(self) -> dict:
-        """{"rho": ρ or None}: what a resumed run needs to continue bit for bit."""
+        """The per-run state a resumed run needs to continue bit for bit.
+
+        Returns
+        -------
+        dict
+            ``{"rho": ρ or None}`` (JSON-able).
+        """
         return {"rho": self.rho}
 
     def set_state(self, state: dict) -> None:
-        """Restore :meth:`get_state`'s output (a missing key leaves ρ unchanged)."""
+        """Restore :meth:`get_state`'s output (a missing key leaves ρ unchanged).
+
+        Parameters
+        ----------
+        state : dict
+            ``{"rho": float or None}``.
+        """
         if "rho" in state:
             rho = state["rho"]
             self.rho = None if rho is None else float(rho)
@@ -211,7 +249,24 @@ class ChebyshevSolver(LocalGlobalSolver):
         """Yield the initial guess, then each accelerated iterate, without end.
 
         Each iterate costs one local step, one gradient norm and one global step (the cost
-        of a local/global iteration). ρ is estimated first when not known.
+        of a local/global iteration). ρ is estimated first when not known. With
+        G(x_k) the plain local/global iterate from x_k (Wang 2015, shifted as in the module
+        docstring),
+
+            x_{k+1} = ω_{k+1} (γ (G(x_k) − x_k) + x_k − x_{k−1}) + x_{k−1}.
+
+        Parameters
+        ----------
+        problem : StepProblem
+            The step's h [s], y [m], f_ext [N] and pins.
+        x0 : ndarray, shape (n, 3), optional
+            Initial guess [m]; default y with the pins applied.
+
+        Yields
+        ------
+        Iterate
+            k, x of shape (n, 3) [m] (the solver's array: copy it to keep it) and
+            ‖∇g(x)‖ over the free degrees of freedom [N·s²].
         """
         self.system(problem)
         if self.rho is None:

@@ -47,7 +47,14 @@ class LBFGSSolver(LocalGlobalSolver):
     window : int, default 7
         m: curvature pairs kept (Liu et al. use 5–10).
     backend : {"auto", "cholmod", "splu"}
+        Sparse factorization of H₀⁻¹ = M + h² L (:class:`~clothsim.factorization.Factor`).
     check_conditioning : bool, default True
+        Warn when a new factor's condition estimate passes 1e12.
+
+    Attributes
+    ----------
+    window : int
+        m, as given.
     """
 
     name = "lbfgs"
@@ -66,7 +73,24 @@ class LBFGSSolver(LocalGlobalSolver):
     def iterates(self, problem: StepProblem, x0: np.ndarray | None = None) -> Iterator[Iterate]:
         """Yield the initial guess, then each L-BFGS iterate, g never increasing.
 
-        Returns when no step length along the search direction decreases g.
+        The direction is p = −H ∇g(x_k), H the L-BFGS inverse Hessian built by the
+        two-loop recursion from H₀ = (M + h² L)⁻¹ and the pairs (s_j, t_j) with
+        ρ_j = 1 / (s_jᵀ t_j) > 0; then x_{k+1} = x_k + α p with α from a backtracking
+        Armijo search (Liu, Bouaziz, Kavan 2017; Nocedal and Wright Alg. 7.4). Returns when
+        no step length along p decreases g.
+
+        Parameters
+        ----------
+        problem : StepProblem
+            The step's h [s], y [m], f_ext [N] and pins.
+        x0 : ndarray, shape (n, 3), optional
+            Initial guess [m]; default y with the pins applied.
+
+        Yields
+        ------
+        Iterate
+            k, x of shape (n, 3) [m] (the solver's array: copy it to keep it) and
+            ‖∇g(x)‖ over the free degrees of freedom [N·s²].
         """
         sysf = self.system(problem)
         free = sysf.free

@@ -35,12 +35,11 @@ more than its sparse solve (docs/performance.md):
   mask; at x_0 = y (pins applied) p(y) is reused and only the springs at exact pins are
   recomputed.
 
-The result equals the plain half steps to rounding (tested against them and against the
-paper-literal dense iteration in :mod:`clothsim.reference`). The reported ‖∇g‖ is exact up
-to the sparse solve's rounding; ∇g is a small difference of large terms, so any change of
-rounding in x moves it by about eps h² ‖k‖ |x| (:func:`~clothsim.problem.gradient_noise_floor`):
-on a 9 × 9 curtain mid-swing the free and the explicit evaluation differ by at most
-2e-15 N·s² over 30 iterations, below that floor (1.8e-14 N·s² there).
+The result equals the plain half steps to rounding (tested against them and the dense
+iteration of :mod:`clothsim.reference`). ‖∇g‖ is exact up to the solve's rounding; any change
+of rounding in x moves it by about eps h² ‖k‖ |x| (:func:`~clothsim.problem.gradient_noise_floor`):
+on a 9 × 9 curtain mid-swing the free and the explicit evaluation differ by ≤ 2e-15 N·s² over
+30 iterations, below that floor (1.8e-14 N·s² there).
 
 References
 ----------
@@ -84,14 +83,11 @@ class SystemFactor:
     h2J_F : csr_matrix, shape (f, s)
         h² J_s restricted to the free rows (the right-hand side's d-dependent part).
     free_runs : list of (start, stop, offset) or None
-        The free vertices as runs of consecutive indices (vertex start..stop−1 is unknown
-        offset..), when there are few runs; None otherwise.
+        Free vertices as runs (vertices start..stop−1 are unknowns offset..), or None.
     pinned_springs : ndarray, shape (q,), int
-        Springs with an end at an exactly pinned vertex (the only ones whose vector differs
-        between y and the initial guess).
+        Springs with an end at an exact pin (their vectors differ between y and x_0).
     work : ndarray, shape (4, 3, f)
-        The iteration's right-hand-side buffers (two consecutive right-hand sides, ∇g and
-        the per-step constant c_F), coordinate-major.
+        Coordinate-major buffers: two consecutive right-hand sides, ∇g and the constant c_F.
     """
 
     A: sp.csc_matrix
@@ -146,9 +142,8 @@ class LocalGlobalSolver(Solver):
         self._a, self._b = (np.ascontiguousarray(v, dtype=np.intp)
                             for v in model.springs.spring_vertices.T)
         s = model.spring_count
-        # work buffers, coordinate-major (one contiguous row per coordinate): spring vectors
-        # p, turned into directions d in place (the current one and the previous one, kept
-        # where a spring's ends coincide: any |d| = r is optimal), p(y) and d − p(y)
+        # coordinate-major work buffers: spring vectors p turned into d in place (current and
+        # previous d, kept where ends coincide: any |d| = r is optimal), p(y) and d − p(y)
         self._dT = np.zeros((3, s))
         self._dT_spare = np.empty((3, s))
         self._pyT = np.empty((3, s))
@@ -210,9 +205,7 @@ class LocalGlobalSolver(Solver):
     def _directions_from(self, pT: np.ndarray) -> np.ndarray:
         """The local step on spring vectors pT (3, s), in place: pT becomes d = (r / |p|) p.
 
-        pT must be the spare direction buffer; it becomes the current one. Where a
-        spring's ends coincide (|p| = 0) the previous direction is kept.
-        """
+        pT, the spare buffer, becomes the current one; where |p| = 0 the previous d is kept."""
         length = self._length
         np.einsum("ij,ij->j", pT, pT, out=length)            # |p|
         np.sqrt(length, out=length)
@@ -236,7 +229,17 @@ class LocalGlobalSolver(Solver):
         """d_i = r_i (x_a − x_b) / |x_a − x_b| for all springs at once, shape (s, 3).
 
         Where a spring's two ends coincide, any d with |d| = r is optimal: the previous
-        direction is kept (never a division by zero). Returns a new array.
+        direction is kept (never a division by zero).
+
+        Parameters
+        ----------
+        x : array_like, shape (n, 3)
+            Positions [m].
+
+        Returns
+        -------
+        ndarray, shape (s, 3)
+            d [m] (a new array).
         """
         return self._directions_into(np.ascontiguousarray(np.asarray(x, np.float64).T)).T.copy()
 
@@ -265,11 +268,23 @@ class LocalGlobalSolver(Solver):
         return b
 
     def global_step(self, problem: StepProblem, d: np.ndarray) -> np.ndarray:
-        """Solve (M + h² L) x = b(d) for the free vertices; fixed ones at their targets.
+        """The global step (M + h² L) x = h² J d + M y + h² f (+ penalty-pin terms) over free x.
 
         Solved for the displacement δ = x − y: A_FF δ_F = (b − A y)_F − A_FP δ_P, then
         x = y + δ. Same x as solving for x directly, but translation invariant to rounding
         (a cloth 1 km from the origin moves like one at the origin).
+
+        Parameters
+        ----------
+        problem : StepProblem
+            The step's h [s], y [m], f_ext [N] and pins.
+        d : ndarray, shape (s, 3)
+            Spring vectors from the local step [m].
+
+        Returns
+        -------
+        ndarray, shape (n, 3)
+            x after the global step [m]; exactly pinned vertices at their targets.
         """
         sysf = self.system(problem)
         rhs_all = self.displacement_right_hand_side(problem, d)

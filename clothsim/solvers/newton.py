@@ -67,9 +67,13 @@ class _Solved:
 class NewtonSolver(Solver):
     """Newton's method with line search on the implicit Euler objective g.
 
+    Each iteration solves (M + h² ∇²E(x_k)) Δ = −∇g(x_k) over the free degrees of freedom
+    and takes x_{k+1} = x_k + α Δ, α the largest of 1, ½, ¼, … with Armijo's decrease.
+
     Parameters
     ----------
     model : Model
+        The cloth (masses [kg], springs [N/m, m]).
     iterations : int, default 50
         Maximum Newton iterations per step.
     tolerance : float, optional, default 1e-12
@@ -81,6 +85,10 @@ class NewtonSolver(Solver):
 
     Attributes
     ----------
+    indefinite : str
+        As given.
+    backend : str or None
+        The factorization backend that ran last.
     stalled : bool
         The last step ended because x could not be improved in floating point.
     factor_count : int
@@ -106,7 +114,20 @@ class NewtonSolver(Solver):
                 definite: bool = False) -> sp.csr_matrix:
         """∇²g(x) = M + h² (∇²E_springs(x) + K_anchor), shape (3n, 3n).
 
-        ``definite=True`` projects each spring's block onto the PSD cone.
+        Parameters
+        ----------
+        problem : StepProblem
+            The step's h [s] and penalty pins (K_anchor [N/m]).
+        x : ndarray, shape (n, 3)
+            Where to evaluate [m].
+        definite : bool, default False
+            Project each spring's block onto the positive semidefinite cone (transverse
+            factor 1 − r/l clamped at 0).
+
+        Returns
+        -------
+        csr_matrix, shape (3n, 3n)
+            ∇²g(x) in the interleaved layout [kg] (= N·s²/m).
         """
         n = self.model.vertex_count
         H = (problem.h ** 2) * energy.spring_hessian(self.model, x, definite=definite)
@@ -144,7 +165,26 @@ class NewtonSolver(Solver):
 
         ``grad`` (free entries of ∇g) lets an indefinite exact Hessian be used when its
         Newton step still descends (a saddle in symmetric directions the gradient does not
-        excite: keeps quadratic convergence there).
+        excite: keeps quadratic convergence there). Otherwise, per ``indefinite``, the
+        Levenberg–Marquardt shift H + τ M or the projected Hessian is factored.
+
+        Parameters
+        ----------
+        problem : StepProblem
+            The step's h [s] and pins.
+        x : ndarray, shape (n, 3)
+            The current iterate [m].
+        free : ndarray of bool, shape (3n,)
+            Mask (or indices) of the free degrees of freedom in the interleaved 3n layout;
+            3f of them.
+        grad : ndarray, shape (3f,), optional
+            ∇g(x) over those degrees of freedom [N·s²].
+
+        Returns
+        -------
+        Factor
+            An object whose ``solve(b)`` applies the inverse of the (modified) Hessian over
+            the free degrees of freedom, shape (3f, 3f) [kg].
         """
         H = self.hessian(problem, x)[free][:, free]
         try:
@@ -175,6 +215,18 @@ class NewtonSolver(Solver):
 
         Returns (sets :attr:`stalled`) when no step length decreases g or the step no longer
         changes x in floating point: x is then optimal to rounding.
+
+        Parameters
+        ----------
+        problem : StepProblem
+            The step's h [s], y [m], f_ext [N] and pins.
+        x0 : ndarray, shape (n, 3), optional
+            Initial guess [m]; default y with the pins applied.
+
+        Yields
+        ------
+        Iterate
+            k, x of shape (n, 3) [m] and ‖∇g(x)‖ over the free degrees of freedom [N·s²].
         """
         n = self.model.vertex_count
         x = problem.initial_guess() if x0 is None else np.array(x0, dtype=np.float64)
