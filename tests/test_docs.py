@@ -37,16 +37,8 @@ def _discover() -> list[str]:
 
 
 MODULES = _discover()
-# docstrings owned elsewhere and not yet complete (see the list printed by the failure);
-# "clothsim" and "clothsim.solvers" fail only through names they re-export from these
-INCOMPLETE = {
-    "clothsim", "clothsim.accuracy", "clothsim.factorization", "clothsim.reference",
-    "clothsim.solvers", "clothsim.solvers.chebyshev", "clothsim.solvers.local_global",
-    "clothsim.solvers.newton", "clothsim.solvers.anderson", "clothsim.solvers.lbfgs",
-    *(f"clothsim.accuracy.{m}" for m in (
-        "command", "damping", "paper", "plots", "problems", "reference", "report", "study",
-        "sweep", "timestep", "timing", "trace", "trajectory")),
-}
+# modules whose docstrings are not complete yet (xfail); every module is complete now
+INCOMPLETE: set[str] = set()
 
 
 def _public(module):

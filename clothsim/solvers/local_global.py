@@ -5,10 +5,9 @@ Each iteration is
 1. local step (x fixed): d_i = r_i p_i / |p_i|, p_i = x_{a_i} − x_{b_i}   — :meth:`local_step`
 2. global step (d fixed): (M + h² L) x = h² J d + M y + h² f             — :meth:`global_step`
 
-The matrix M + h² L depends only on masses, stiffnesses, topology, h and the pins, so it is
-factored once (sparse Cholesky) and cached: every iteration is then two triangular solves.
-Because M = M_s ⊗ I3 and L = L_s ⊗ I3, the solver factors the n × n matrix
-M_s + h² L_s and solves for the three coordinate columns at once.
+M + h² L depends only on masses, stiffnesses, topology, h and the pins: its n × n scalar
+form M_s + h² L_s is factored once and cached (:mod:`clothsim.solvers.system`), and each
+global step solves for the three coordinate columns at once (M = M_s ⊗ I3, L = L_s ⊗ I3).
 
 With exact pins the fixed vertices P are removed: the free vertices F solve
 A_FF x_F = b_F − A_FP x_P. The solve is done for the displacement δ = x − y (same x,
@@ -18,28 +17,11 @@ add their stiffness k to L_s's diagonal and h² k q to the right-hand side.
 :meth:`LocalGlobalSolver.local_step`, :meth:`~LocalGlobalSolver.global_step` and
 :meth:`~LocalGlobalSolver.gradient` are the half steps written plainly; the iteration
 (:meth:`LocalGlobalSolver.iterates`) runs the same two half steps on preallocated,
-coordinate-major buffers (x as three contiguous rows), so that an iteration costs little
-more than its sparse solve (docs/performance.md):
-
-- everything that does not change within a step is computed once per step: the
-  right-hand side is h² (J (d − p(y)))_F plus c_F = (h² f + h² K_anchor (q − y))_F
-  − A_FP δ_P, with p(y) (the spring vectors of y) and c_F fixed during the step
-  (d − p(y) rather than J d − J p(y): no cancellation of large terms, so momentum is
-  conserved to rounding of the motion);
-- the residual comes for free: after a global step A_FF δ_F + A_FP δ_P = rhs(d_k)_F, so
-  ∇g(x_{k+1}) = (A x_{k+1} − b(d_{k+1}))_F = rhs(d_k)_F − rhs(d_{k+1})_F, the difference of
-  two consecutive right-hand sides the iteration forms anyway;
-- spring vectors p_i = x_{a_i} − x_{b_i} come from two ``np.take`` per coordinate into the
-  spare direction buffer, which the local step then scales in place into d (no
-  temporaries); coincident ends (|p| = 0) are detected from one minimum, not a boolean
-  mask; at x_0 = y (pins applied) p(y) is reused and only the springs at exact pins are
-  recomputed.
-
-The result equals the plain half steps to rounding (tested against them and the dense
-iteration of :mod:`clothsim.reference`). ‖∇g‖ is exact up to the solve's rounding; any change
-of rounding in x moves it by about eps h² ‖k‖ |x| (:func:`~clothsim.problem.gradient_noise_floor`):
-on a 9 × 9 curtain mid-swing the free and the explicit evaluation differ by ≤ 2e-15 N·s² over
-30 iterations, below that floor (1.8e-14 N·s² there).
+coordinate-major buffers (docs/performance.md): per-step constants (p(y), forces, pins) are
+computed once per step, the residual comes for free (after a global step
+∇g(x_{k+1})_F = rhs(d_k)_F − rhs(d_{k+1})_F), and d − p(y) is formed before J is applied
+(no cancellation: momentum is conserved to rounding). The result equals the plain half
+steps and the dense iteration of :mod:`clothsim.reference` to rounding (tested).
 
 References
 ----------
@@ -51,54 +33,16 @@ from __future__ import annotations
 
 import logging
 import math
-from dataclasses import dataclass
 
 import numpy as np
-import scipy.sparse as sp
 
 from .. import matrices
-from ..factorization import Factor, single_threaded_blas, spmv_add
+from ..factorization import single_threaded_blas, spmv_add
 from ..model import Model
 from .base import Iterate, Solver, StepProblem, StepResult
+from .system import SystemFactor, factor_system
 
 log = logging.getLogger(__name__)
-
-
-@dataclass(eq=False)
-class SystemFactor:
-    """The cached factorization for one pin configuration and time step.
-
-    Attributes
-    ----------
-    A : csc_matrix, shape (n, n)
-        M_s + h² (L_s + K_anchor) over all vertices.
-    free : ndarray, shape (f,), int
-        Free vertices (the unknowns).
-    fixed : ndarray, shape (p,), int
-        Exactly pinned vertices.
-    A_FF_factor : Factor
-        Factorization of A restricted to free rows and columns.
-    A_FP : csr_matrix, shape (f, p)
-        Coupling of free to fixed vertices (moves fixed positions to the right-hand side).
-    h2J_F : csr_matrix, shape (f, s)
-        h² J_s restricted to the free rows (the right-hand side's d-dependent part).
-    free_runs : list of (start, stop, offset) or None
-        Free vertices as runs (vertices start..stop−1 are unknowns offset..), or None.
-    pinned_springs : ndarray, shape (q,), int
-        Springs with an end at an exact pin (their vectors differ between y and x_0).
-    work : ndarray, shape (4, 3, f)
-        Coordinate-major buffers: two consecutive right-hand sides, ∇g and the constant c_F.
-    """
-
-    A: sp.csc_matrix
-    free: np.ndarray
-    fixed: np.ndarray
-    A_FF_factor: Factor
-    A_FP: sp.csr_matrix
-    h2J_F: sp.csr_matrix
-    free_runs: list | None = None
-    pinned_springs: np.ndarray | None = None
-    work: np.ndarray | None = None
 
 
 class LocalGlobalSolver(Solver):
@@ -157,7 +101,18 @@ class LocalGlobalSolver(Solver):
         self._cache = None
 
     def system(self, problem: StepProblem) -> SystemFactor:
-        """The factor for this problem's h and pins: cached, rebuilt only when they change."""
+        """The factor for this problem's h and pins: cached, rebuilt only when they change.
+
+        Parameters
+        ----------
+        problem : StepProblem
+            The step's h [s], y [m], forces [N] and pins.
+
+        Returns
+        -------
+        SystemFactor
+            The factorization of M + h² L over the free vertices, with its buffers.
+        """
         key = (problem.h, problem.fixed_vertices.tobytes(), problem.anchor_vertices.tobytes(),
                problem.anchor_stiffness.tobytes())
         if key != self._cache_key:
@@ -166,32 +121,12 @@ class LocalGlobalSolver(Solver):
         return self._cache
 
     def _factor(self, problem: StepProblem) -> SystemFactor:
-        n = self.model.vertex_count
-        A = matrices.system_matrix(self.model, problem.h, anchor_vertices=problem.anchor_vertices,
-                                   anchor_stiffness=problem.anchor_stiffness)
-        fixed = np.unique(problem.fixed_vertices)
-        free = np.flatnonzero(problem.free_mask(n))
-        A_csr = A.tocsr()
-        A_FF = A_csr[free][:, free]
-        A_FP = A_csr[free][:, fixed]
-        # simplicial CHOLMOD: faster than supernodal for three right-hand sides
-        factor = Factor(A_FF, backend=self.backend_requested,
-                        check_conditioning=self.check_conditioning, cholmod_mode="simplicial")
+        sysf = factor_system(self.model, problem, self._Js, self._a, self._b,
+                             backend=self.backend_requested,
+                             check_conditioning=self.check_conditioning)
         self.factor_count += 1
-        self.backend = factor.backend
-        log.info("factored M + h^2 L: %d free of %d vertices, h=%g, backend=%s",
-                 len(free), n, problem.h, factor.backend)
-        h2J_F = (problem.h ** 2 * self._Js[free]).tocsr()
-        breaks = np.flatnonzero(np.diff(free) != 1) + 1
-        runs = None
-        if len(breaks) < 64:
-            starts = np.concatenate([[0], breaks]).astype(int)
-            stops = np.concatenate([breaks, [len(free)]]).astype(int)
-            runs = [(int(free[i]), int(free[j - 1]) + 1, int(i)) for i, j in zip(starts, stops)
-                    if j > i]
-        pinned_springs = np.flatnonzero(np.isin(self._a, fixed) | np.isin(self._b, fixed))
-        return SystemFactor(A, free, fixed, factor, A_FP.tocsr(), h2J_F, runs, pinned_springs,
-                            np.empty((4, 3, len(free))))
+        self.backend = sysf.A_FF_factor.backend
+        return sysf
 
     # -- the two half steps ---------------------------------------------------------------
     def _spring_vectors_into(self, xT: np.ndarray, pT: np.ndarray) -> None:
@@ -244,7 +179,20 @@ class LocalGlobalSolver(Solver):
         return self._directions_into(np.ascontiguousarray(np.asarray(x, np.float64).T)).T.copy()
 
     def right_hand_side(self, problem: StepProblem, d: np.ndarray) -> np.ndarray:
-        """b = h² J d + M y + h² f + h² K_anchor q, shape (n, 3)."""
+        """The paper's right-hand side b = h² J d + M y + h² f + h² K_anchor q.
+
+        Parameters
+        ----------
+        problem : StepProblem
+            The step's h [s], y [m], forces [N] and pins.
+        d : ndarray, shape (s, 3)
+            Spring directions from the local step [m].
+
+        Returns
+        -------
+        ndarray, shape (n, 3)
+            b [kg·m].
+        """
         h2 = problem.h ** 2
         b = self._Ms[:, None] * problem.y + h2 * (self._Js @ d)
         if problem.f_ext is not None:
@@ -258,6 +206,18 @@ class LocalGlobalSolver(Solver):
         Uses L y = J p(y), p(y)_i = y_{a_i} − y_{b_i}: only differences of positions enter,
         so the result does not depend on where the cloth is (no cancellation of large
         coordinates, unlike forming b and A y separately).
+
+        Parameters
+        ----------
+        problem : StepProblem
+            The step's h [s], y [m], forces [N] and pins.
+        d : ndarray, shape (s, 3)
+            Spring directions from the local step [m].
+
+        Returns
+        -------
+        ndarray, shape (n, 3)
+            b(d) − A y [kg·m].
         """
         h2 = problem.h ** 2
         y = problem.y
@@ -303,6 +263,20 @@ class LocalGlobalSolver(Solver):
         Evaluated as M (x − y) + h² J (p(x) − d) − h² f + h² K_anchor (x − q) (L x = J p(x)),
         from differences of positions only, so its rounding floor does not grow with the
         distance of the cloth from the origin.
+
+        Parameters
+        ----------
+        problem : StepProblem
+            The step's h [s], y [m], forces [N] and pins.
+        x : ndarray, shape (n, 3)
+            Positions [m].
+        d : ndarray, shape (s, 3)
+            The local step's directions at x [m].
+
+        Returns
+        -------
+        ndarray, shape (f, 3)
+            ∇g(x) over the free vertices [N·s²].
         """
         sysf = self.system(problem)
         h2 = problem.h ** 2
@@ -315,7 +289,19 @@ class LocalGlobalSolver(Solver):
 
     # -- the iteration --------------------------------------------------------------------
     def solve(self, problem: StepProblem, x0: np.ndarray | None = None) -> StepResult:
-        """:meth:`Solver.solve` with BLAS limited to one thread (:func:`single_threaded_blas`)."""
+        """:meth:`Solver.solve` with BLAS limited to one thread (:func:`single_threaded_blas`).
+
+        Parameters
+        ----------
+        problem : StepProblem
+            The step's h [s], y [m], forces [N] and pins.
+        x0 : ndarray, shape (n, 3), optional
+            Initial guess [m]; default y with the pins applied.
+
+        Returns
+        -------
+        StepResult
+        """
         with single_threaded_blas():
             return super().solve(problem, x0)
 
@@ -326,6 +312,18 @@ class LocalGlobalSolver(Solver):
         computed from its definition for x_0, and for k ≥ 1 as the difference of the
         right-hand sides of two consecutive global steps (see the module docstring). The
         yielded ``x`` is a view of the solver's buffer: copy it to keep it.
+
+        Parameters
+        ----------
+        problem : StepProblem
+            The step's h [s], y [m], forces [N] and pins.
+        x0 : ndarray, shape (n, 3), optional
+            Initial guess [m]; default y with the pins applied.
+
+        Yields
+        ------
+        Iterate
+            k, x_k (n, 3) [m] and ‖∇g(x_k)‖ [N·s²].
         """
         sysf = self.system(problem)
         free, fixed, h2 = sysf.free, sysf.fixed, problem.h ** 2
