@@ -177,3 +177,20 @@ def test_cli_accuracy_command(tmp_path, capsys):
     assert code == 0 and "cheapest setting" in out and "Fixed budget" in out
     assert (tmp_path / "out" / "accuracy.csv").exists()
     assert main(["accuracy", str(scene), "--methods", "nope"]) == 2
+
+
+def test_dask_scheduler_gives_the_same_errors_as_serial():
+    distributed = pytest.importorskip(
+        "dask.distributed", reason="dask.distributed is not installed (extra 'cluster')")
+    sim = stiff_settling()
+    steps = prepare_steps(sim.model, record_problems(sim, steps=4, count=2))
+    configs = default_configurations(("local-global", "newton"), budgets=(1, 5),
+                                     tolerances=(1e-6,))
+    serial = measure(sim.model, steps, configs, jobs=1)
+    with distributed.LocalCluster(processes=False, n_workers=1, threads_per_worker=1,
+                                  dashboard_address=None) as cluster:
+        remote = measure(sim.model, steps, configs, scheduler=cluster.scheduler_address)
+    assert [r.config for r in remote] == configs
+    for a, b in zip(serial, remote):
+        np.testing.assert_array_equal(a.errors, b.errors)
+        np.testing.assert_array_equal(a.iterations, b.iterations)
