@@ -194,3 +194,25 @@ def test_dask_scheduler_gives_the_same_errors_as_serial():
     for a, b in zip(serial, remote):
         np.testing.assert_array_equal(a.errors, b.errors)
         np.testing.assert_array_equal(a.iterations, b.iterations)
+
+
+def test_rho_per_step_matches_the_decay_of_the_local_global_error():
+    from clothsim.accuracy.report import steps_table
+    from clothsim.solvers import LocalGlobalSolver
+
+    sim = two_minima_simulation()
+    steps = prepare_steps(sim.model, record_problems(sim, steps=2, count=2))
+    for s in steps:
+        assert 0.0 < s.rho < 1.0, s.rho
+    step = steps[0]  # measured: compare with the error decay against the certified x*
+    errors = []
+    for it in LocalGlobalSolver(sim.model, check_conditioning=False).iterates(
+            step.step.problem):
+        errors.append(float(np.linalg.norm(it.x - step.reference.x)))
+        if it.k >= 150:
+            break
+    decay = (errors[150] / errors[100]) ** (1 / 50)
+    assert abs(step.rho - decay) < 0.02, (step.rho, decay)
+    table = steps_table(steps)
+    assert "rho_local_global" in table.splitlines()[0]
+    assert f"{step.rho:.4f}" in table.splitlines()[2]
