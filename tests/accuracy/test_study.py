@@ -216,3 +216,43 @@ def test_rho_per_step_matches_the_decay_of_the_local_global_error():
     table = steps_table(steps)
     assert "rho_local_global" in table.splitlines()[0]
     assert f"{step.rho:.4f}" in table.splitlines()[2]
+
+
+def box_factory(top: float = 0.5, gap: float = 0.1):
+    """``factory(method, h, iterations, tolerance)``: a 4 × 4 sheet ``gap`` above a box."""
+    def factory(method, h, iterations, tolerance):
+        model = gallery.grid_cloth(4, k=800.0, plane="xz", center=(0.0, top + gap, 0.0))
+        return cs.Simulation(model, h=h, solver=method, iterations=iterations,
+                             tolerance=tolerance,
+                             effects=[cs.Gravity(gallery.GRAVITY),
+                                      cs.Box((-0.3, 0.0, -0.3), (0.3, top, 0.3))])
+    return factory
+
+
+def test_time_step_error_is_fitted_only_before_contact():
+    from clothsim.accuracy.timestep import contact_free_window, time_step_study
+
+    assert contact_free_window(np.array([0, 0, 1, 0, 0, 0, 1], bool)) == (3, 6)
+    assert contact_free_window(np.array([1, 1], bool)) is None
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        ts = time_step_study(box_factory(), frame_time=1 / 30, frames=8,
+                             time_steps=(1 / 30, 1 / 60, 1 / 120))
+    a, b = ts.window
+    # free fall of 0.1 m takes 0.143 s = 4.3 frames: the window is frames 0 … 4 at most
+    assert a == 0 and 2 <= b <= 4 and ts.contact[b] and not ts.contact[:b].any()
+    assert ts.reference[: b + 1, :, 1].min() > 0.5  # above the box all along the window
+    assert ts.reference[-1, :, 1].min() < 0.5 + 1e-3  # and it lands on the box later
+    assert len(ts.errors) == 3 and all(math.isfinite(e) and e > 0 for e in ts.errors)
+    assert 0.8 < ts.slope < 1.2 and "frames 0–" in ts.note  # free fall: first order
+
+
+def test_time_step_error_without_a_contact_free_window_is_empty(tmp_path):
+    from clothsim.accuracy.timestep import time_step_study
+
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        ts = time_step_study(box_factory(gap=0.0), frame_time=1 / 30, frames=2,
+                             time_steps=(1 / 30, 1 / 60, 1 / 120))
+    assert ts.window is None and all(math.isnan(e) for e in ts.errors)
+    assert "no contact-free window" in ts.note and "\n" not in ts.note
