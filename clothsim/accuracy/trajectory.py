@@ -202,7 +202,15 @@ def reference_trajectory(factory: SimulationFactory, *, h: float, frames: int,
 def reference_runs(factory: SimulationFactory, *, h: float, frames: int, frame_time: float,
                    method: str = "newton", tolerance: float = 1e-10, iterations: int = 50
                    ) -> tuple[Trajectory, Trajectory]:
-    """The runs at h and 2h of :func:`reference_trajectory`, with their contact flags."""
+    """The runs at h and 2h of :func:`reference_trajectory`, with their contact flags.
+
+    Parameters are those of :func:`reference_trajectory`.
+
+    Returns
+    -------
+    fine, coarse : Trajectory
+        The runs at h and 2h (``Trajectory.contact`` recorded).
+    """
     return tuple(run_trajectory(factory(method, step, iterations, tolerance), frames=frames,
                                 frame_time=frame_time, record_contact=True)
                  for step in (h, 2.0 * h))
