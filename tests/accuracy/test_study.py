@@ -256,3 +256,21 @@ def test_time_step_error_without_a_contact_free_window_is_empty(tmp_path):
                              time_steps=(1 / 30, 1 / 60, 1 / 120))
     assert ts.window is None and all(math.isnan(e) for e in ts.errors)
     assert "no contact-free window" in ts.note and "\n" not in ts.note
+
+
+def test_run_accuracy_leaves_time_step_error_empty_when_every_frame_has_contact(tmp_path):
+    from clothsim.accuracy import run_accuracy
+
+    lying = {"scene": {"name": "lying", "frames": 2, "fps": 30},
+             "cloth": {"resolution": [4, 4], "plane": "xz", "center": [0.0, 0.5, 0.0]},
+             "springs": {"structural": 800.0, "shear": 800.0, "bending": 80.0},
+             "effects": [{"kind": "gravity", "acceleration": [0.0, -9.81, 0.0]},
+                         {"kind": "box", "min": [-1.0, 0.0, -1.0], "max": [1.0, 0.5, 1.0]}]}
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        text = run_accuracy(Scene.from_dict(lying), tmp_path, methods=("local-global",),
+                            problems=2, repeats=1, budgets=(1,), tolerances=(),
+                            plots=False)
+    assert "no contact-free window" in text
+    row = (tmp_path / "accuracy.csv").read_text().splitlines()[1].split(",")
+    assert row[COLUMNS.index("time_step_error")] == ""
