@@ -6,7 +6,7 @@ import importlib
 import sys
 import time
 
-BENCHMARKS = ("stiffness", "crossover", "paper_timing", "sweep", "stability_figures",
+BENCHMARKS = ("stiffness", "stability_figures",
               "performance", "memory", "accuracy_bench")
 
 

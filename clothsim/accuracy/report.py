@@ -305,12 +305,13 @@ def steps_table(steps: Sequence[StudyStep]) -> str:
         A Markdown table.
     """
     lines = ["| step | t [s] | kind | ‖∇g(y)‖/floor | 1-iteration error | Newton residual "
-             "| λ_min(H)/m_min | uncertainty | g(x₂) − g(x*) |", "|---" * 9 + "|"]
+             "| λ_min(H)/m_min | uncertainty | g(x₂) − g(x*) | rho_local_global |",
+             "|---" * 10 + "|"]
     for s in steps:
         ref = s.reference
-        cert = ("| | | |" if ref is None else
+        cert = ("| | | | |" if ref is None else
                 f"| {ref.residual:.1e} | {ref.min_eigenvalue:.3g} | {ref.uncertainty:.1e} "
-                f"| {ref.objective_difference:.2e} |")
+                f"| {ref.objective_difference:.2e} | {s.rho:.4f} |")
         lines.append(f"| {s.step.index} | {s.step.time:.4g} | {s.kind} | {s.rest_ratio:.2e} "
                      f"| {s.one_iteration_error:.2e} {cert}")
     return "\n".join(lines)

@@ -104,6 +104,7 @@ class StudyStep:
     rest_ratio: float              # ‖∇g(y)‖ / rounding floor
     one_iteration_error: float
     reference: CertifiedReference | None = None
+    rho: float = math.nan          # local/global decay rate (measured / two-minima steps)
 
 
 @dataclass
@@ -154,10 +155,12 @@ def prepare_steps(model: Model, recorded: Sequence[RecordedStep], *,
         kind, ratio, err1 = classify(model, rec.problem, ref.x)
         if kind == "measured" and ref.two_minima:
             kind = "two-minima"
-        out.append(StudyStep(rec, kind, ratio, err1, ref if kind != "at-rest" else None))
+        rho = (estimate_spectral_radius(model, rec.problem, backend=backend)
+               if kind in ("measured", "two-minima") else math.nan)
+        out.append(StudyStep(rec, kind, ratio, err1, ref if kind != "at-rest" else None, rho))
         log.info("step %d: %s (|grad g(y)|/floor %.2e, one-iteration error %.2e, "
-                 "residual %.1e, min eig %.3g, uncertainty %.1e)", rec.index, kind, ratio,
-                 err1, ref.residual, ref.min_eigenvalue, ref.uncertainty)
+                 "residual %.1e, min eig %.3g, uncertainty %.1e, rho %.4f)", rec.index, kind,
+                 ratio, err1, ref.residual, ref.min_eigenvalue, ref.uncertainty, rho)
     return out
 
 
@@ -193,7 +196,8 @@ def default_configurations(methods: Sequence[str], *, budgets: Sequence[int] = B
 
 def chebyshev_rho(model: Model, steps: Sequence[StudyStep], *, backend: str = "auto") -> float:
     """ρ for the chebyshev configurations: the largest estimate over the measured steps
-    (an underestimate diverges; see :mod:`clothsim.solvers.chebyshev`).
+    (an underestimate diverges; see :mod:`clothsim.solvers.chebyshev`). A step's own
+    estimate (``StudyStep.rho``) is reused when it has one.
 
     Parameters
     ----------
@@ -209,7 +213,8 @@ def chebyshev_rho(model: Model, steps: Sequence[StudyStep], *, backend: str = "a
     float
         ρ in [0, 1) (0 when no step is measured).
     """
-    rhos = [estimate_spectral_radius(model, s.step.problem, backend=backend)
+    rhos = [s.rho if math.isfinite(s.rho)
+            else estimate_spectral_radius(model, s.step.problem, backend=backend)
             for s in steps if s.kind == "measured"]
     return max(rhos, default=0.0)
 

@@ -5,7 +5,10 @@ run at a much smaller h (:func:`~.trajectory.reference_trajectory`). The fitted 
 error against h is implicit Euler's order (1) only once ω_max h ≲ 1, ω_max the stiffest
 angular frequency (2 / the explicit stability limit). Far above that, implicit Euler damps
 the stiff modes completely and the error hardly changes with h: :func:`time_step_study`
-then says so instead of fitting a slope.
+then says so instead of fitting a slope. Contact changes the equations (an obstacle or a
+strain limit moves vertices after the solve), so the error is fitted only on the longest
+window of frames in which no run, reference included, had a position correction
+(:func:`contact_free_window`); without such a window there is no time-step error.
 """
 
 from __future__ import annotations
@@ -20,7 +23,7 @@ import numpy as np
 from ..solvers import stable_time_step
 from .trajectory import (
     SimulationFactory,
-    reference_trajectory,
+    reference_runs,
     run_trajectory,
     trajectory_error,
 )
@@ -37,7 +40,8 @@ class TimeStepStudy:
     time_steps : list of float
         h [s], at least three.
     errors : list of float
-        ‖X(h) − X_ref‖ / ‖X_ref − X_0‖ over all frames.
+        ‖X(h) − X_ref‖ / ‖X_ref − X_a‖ over the frames a … b of ``window`` (NaN without a
+        window).
     slope : float
         Log-log slope of error against h (NaN when not fitted).
     omega_max : float
@@ -50,6 +54,10 @@ class TimeStepStudy:
         One line: the slope, or why there is none.
     reference : ndarray, shape (frames + 1, n, 3)
         The reference frames [m].
+    window : tuple of int or None
+        (a, b): the frames a … b fitted (the longest run without contact), or None.
+    contact : ndarray, shape (frames,), bool
+        Frame f → f + 1 had a position correction in some run.
     """
 
     time_steps: list
@@ -60,6 +68,33 @@ class TimeStepStudy:
     reference_error: float
     note: str
     reference: np.ndarray
+    window: tuple | None = None
+    contact: np.ndarray | None = None
+
+
+def contact_free_window(contact: np.ndarray) -> tuple[int, int] | None:
+    """The longest run of frames a … b (b > a) whose transitions f → f + 1, a ≤ f < b, are
+    all free of contact (the earliest among equals); None when every frame has contact.
+
+    Parameters
+    ----------
+    contact : ndarray, shape (frames,), bool
+        Whether a position correction moved a vertex during frame f → f + 1.
+
+    Returns
+    -------
+    tuple of int or None
+        The window (a, b) of frames, or None.
+    """
+    best, start = None, None
+    for f, c in enumerate(list(np.asarray(contact, dtype=bool)) + [True]):
+        if not c and start is None:
+            start = f
+        elif c and start is not None:
+            if best is None or f - start > best[1] - best[0]:
+                best = (start, f)
+            start = None
+    return best
 
 
 def time_step_study(factory: SimulationFactory, *, frame_time: float, frames: int,
@@ -89,14 +124,24 @@ def time_step_study(factory: SimulationFactory, *, frame_time: float, frames: in
     h_ref = hs[0] / 8.0 if reference_h is None else reference_h
     with warnings.catch_warnings():
         warnings.simplefilter("ignore")
-        ref, ref_err = reference_trajectory(factory, h=h_ref, frames=frames,
-                                            frame_time=frame_time, tolerance=1e-10,
-                                            iterations=100)
-        errs = [trajectory_error(run_trajectory(factory(*CONVERGED[:1], h, *CONVERGED[1:]),
-                                                frames=frames, frame_time=frame_time).frames,
-                                 ref) for h in hs]
+        fine, coarse = reference_runs(factory, h=h_ref, frames=frames,
+                                      frame_time=frame_time, tolerance=1e-10, iterations=100)
+        runs = [run_trajectory(factory(*CONVERGED[:1], h, *CONVERGED[1:]), frames=frames,
+                               frame_time=frame_time, record_contact=True) for h in hs]
         sim = factory(*CONVERGED[:1], hs[0], *CONVERGED[1:])
         problem = sim.problem()
+    ref = 2.0 * fine.frames - coarse.frames
+    ref_err = trajectory_error(coarse.frames, fine.frames)
+    contact = np.logical_or.reduce([r.contact for r in (fine, coarse, *runs)])
+    window = contact_free_window(contact)
+    if window is None:
+        return TimeStepStudy(hs, [math.nan] * len(hs), math.nan, math.nan, math.nan, ref_err,
+                             f"no time-step error: every one of the {frames} frames has "
+                             f"contact (a position correction), no contact-free window",
+                             ref, None, contact)
+    a, b = window
+    errs = [trajectory_error(r.frames[a:b + 1], ref[a:b + 1]) for r in runs]
+    where = f"on frames {a}–{b} (the longest window without contact)"
     omega = 2.0 / stable_time_step(sim.model, anchor_vertices=problem.anchor_vertices,
                                    anchor_stiffness=problem.anchor_stiffness)
     h_asym = 1.0 / omega
@@ -105,12 +150,14 @@ def time_step_study(factory: SimulationFactory, *, frame_time: float, frames: in
     if len(ok) >= 3:
         slope = float(np.polyfit(*np.log(np.array(ok)).T, 1)[0])
     if math.isfinite(slope) and slope >= 0.7:
-        note = f"time-step error falls like h^{slope:.2f} (implicit Euler: first order)"
+        note = (f"time-step error falls like h^{slope:.2f} (implicit Euler: first order), "
+                f"{where}")
     else:
         note = (f"time-step error does not fall like h here (slope {slope:.2f}): h ≥ "
                 f"{hs[0]:.3g} s is far above 1/ω_max = {h_asym:.3g} s (ω_max = "
-                f"{omega:.3g} rad/s); the asymptotic regime starts near h ≈ {h_asym:.2g} s")
-    return TimeStepStudy(hs, errs, slope, omega, h_asym, ref_err, note, ref)
+                f"{omega:.3g} rad/s); the asymptotic regime starts near h ≈ {h_asym:.2g} s; "
+                f"{where}")
+    return TimeStepStudy(hs, errs, slope, omega, h_asym, ref_err, note, ref, window, contact)
 
 
 TRAJECTORY_BUDGETS = (1, 5, 10, 20)

@@ -18,6 +18,7 @@ import numpy as np
 
 from .. import energy
 from ..effects import Gravity
+from ..effects.base import overrides
 from ..errors import InputError
 from ..model import Model
 from ..simulation import Simulation
@@ -89,6 +90,7 @@ class Trajectory:
     energy: np.ndarray | None = None         # (f + 1,) [J] mechanical energy, with gravity
     solver_error: float = math.nan
     objective_gap: float = math.nan
+    contact: np.ndarray | None = None        # (f,) bool: frame f → f + 1 had a correction
 
 
 def steps_per_frame(frame_time: float, h: float) -> int:
@@ -140,13 +142,15 @@ def mechanical_energy(sim: Simulation) -> float:
 
 def run_trajectory(sim: Simulation, *, frames: int, frame_time: float,
                    probe_frame: int | None = None, backend: str = "auto",
-                   record_energy: bool = False) -> Trajectory:
+                   record_energy: bool = False, record_contact: bool = False) -> Trajectory:
     """Run ``sim`` for ``frames`` frames, recording positions at each frame.
 
     With ``probe_frame``, the first step of that frame is also solved to convergence by
     Newton and the simulation's solver error on it is recorded (relative error against
     x*, and objective gap). With ``record_energy``, :func:`mechanical_energy` at each
-    frame is recorded in ``Trajectory.energy``.
+    frame is recorded in ``Trajectory.energy``. With ``record_contact``,
+    ``Trajectory.contact[f]`` tells whether any effect's ``correct_positions`` (an obstacle,
+    a strain limit) moved a vertex during frame f → f + 1 (:func:`watch_corrections`).
 
     Parameters
     ----------
@@ -162,6 +166,8 @@ def run_trajectory(sim: Simulation, *, frames: int, frame_time: float,
         Factorization backend of the converged (Newton) solve.
     record_energy : bool, default False
         Record the mechanical energy at each frame.
+    record_contact : bool, default False
+        Record per frame whether a position correction moved a vertex.
 
     Returns
     -------
@@ -169,6 +175,8 @@ def run_trajectory(sim: Simulation, *, frames: int, frame_time: float,
         frames of shape (frames + 1, n, 3) [m]; NaN frames after a blow-up.
     """
     per_frame = steps_per_frame(frame_time, sim.h)
+    touched = watch_corrections(sim) if record_contact else None
+    contact = []
     out = [sim.state.positions.copy()]
     energies = [mechanical_energy(sim)] if record_energy else []
     seconds: list[float] = []
@@ -185,8 +193,11 @@ def run_trajectory(sim: Simulation, *, frames: int, frame_time: float,
                 traj.solver_error = float(np.linalg.norm(x - x_star)) / scale
                 traj.objective_gap = (objective(sim.model, problem, x)
                                       - objective(sim.model, problem, x_star))
+            if touched is not None:
+                touched.clear()
             for _ in range(per_frame):
                 seconds.append(sim.step().seconds)
+            contact.append(bool(touched))
             x = sim.state.positions
             out.append(x.copy())
             if record_energy:
@@ -196,11 +207,46 @@ def run_trajectory(sim: Simulation, *, frames: int, frame_time: float,
                 break
     traj.frames = np.stack(out)
     traj.step_seconds = seconds
+    if record_contact:
+        traj.contact = np.ones(frames, dtype=bool)
+        traj.contact[:len(contact)] = contact
     if record_energy:
         e = np.full(len(out), np.nan)
         e[:len(energies)] = energies
         traj.energy = e
     return traj
+
+
+def watch_corrections(sim: Simulation) -> list:
+    """Record which effects move vertices in ``correct_positions`` from now on.
+
+    Each of ``sim``'s effects with a ``correct_positions`` hook gets an instance-level
+    wrapper that compares the solver's x with the corrected x; the returned list receives
+    the effect's kind each time a correction moved a vertex (clear it to start over).
+
+    Parameters
+    ----------
+    sim : Simulation
+        Its effects are wrapped in place (instance attributes; the classes are untouched).
+
+    Returns
+    -------
+    list of str
+    """
+    touched: list = []
+    for effect in sim.effects:
+        if not overrides(effect, "correct_positions"):
+            continue
+        hook = effect.correct_positions
+
+        def watched(t, state, x, _hook=hook, _kind=effect.kind):
+            corrected = _hook(t, state, x)
+            if corrected is not x and not np.array_equal(corrected, x):
+                touched.append(_kind)
+            return corrected
+
+        effect.correct_positions = watched
+    return touched
 
 
 def _is_implicit(solver: Solver) -> bool:
@@ -264,12 +310,43 @@ def reference_trajectory(factory: SimulationFactory, *, h: float, frames: int,
         ‖X(h) − X(2h)‖ / ‖X(h) − X_0‖, about the relative error of the *unextrapolated*
         X(h) (an upper bound for the extrapolated one when the error is first order).
     """
-    fine = run_trajectory(factory(method, h, iterations, tolerance), frames=frames,
-                          frame_time=frame_time).frames
-    coarse = run_trajectory(factory(method, 2.0 * h, iterations, tolerance), frames=frames,
-                            frame_time=frame_time).frames
+    fine, coarse = (r.frames for r in reference_runs(
+        factory, h=h, frames=frames, frame_time=frame_time, method=method,
+        tolerance=tolerance, iterations=iterations))
     estimate = trajectory_error(coarse, fine)
     return (2.0 * fine - coarse if extrapolate else fine), estimate
+
+
+def reference_runs(factory: SimulationFactory, *, h: float, frames: int, frame_time: float,
+                   method: str = "newton", tolerance: float = 1e-10, iterations: int = 50
+                   ) -> tuple[Trajectory, Trajectory]:
+    """The runs at h and 2h of :func:`reference_trajectory`, with their contact flags.
+
+    Parameters
+    ----------
+    factory : callable
+        ``factory(method, h, iterations, tolerance) -> Simulation``.
+    h : float
+        The fine time step [s]; the coarse run uses 2h.
+    frames : int
+        Frames to run.
+    frame_time : float
+        Time between frames [s].
+    method : str
+        Converged solver of the reference runs.
+    tolerance : float
+        Its relative residual tolerance.
+    iterations : int
+        Its iteration cap per step.
+
+    Returns
+    -------
+    fine, coarse : Trajectory
+        The runs at h and 2h (``Trajectory.contact`` recorded).
+    """
+    return tuple(run_trajectory(factory(method, step, iterations, tolerance), frames=frames,
+                                frame_time=frame_time, record_contact=True)
+                 for step in (h, 2.0 * h))
 
 
 def convergence_slope(rows: Sequence[SweepRow], *, method: str,

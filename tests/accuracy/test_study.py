@@ -177,3 +177,100 @@ def test_cli_accuracy_command(tmp_path, capsys):
     assert code == 0 and "cheapest setting" in out and "Fixed budget" in out
     assert (tmp_path / "out" / "accuracy.csv").exists()
     assert main(["accuracy", str(scene), "--methods", "nope"]) == 2
+
+
+def test_dask_scheduler_gives_the_same_errors_as_serial():
+    distributed = pytest.importorskip(
+        "dask.distributed", reason="dask.distributed is not installed (extra 'cluster')")
+    sim = stiff_settling()
+    steps = prepare_steps(sim.model, record_problems(sim, steps=4, count=2))
+    configs = default_configurations(("local-global", "newton"), budgets=(1, 5),
+                                     tolerances=(1e-6,))
+    serial = measure(sim.model, steps, configs, jobs=1)
+    with distributed.LocalCluster(processes=False, n_workers=1, threads_per_worker=1,
+                                  dashboard_address=None) as cluster:
+        remote = measure(sim.model, steps, configs, scheduler=cluster.scheduler_address)
+    assert [r.config for r in remote] == configs
+    for a, b in zip(serial, remote):
+        np.testing.assert_array_equal(a.errors, b.errors)
+        np.testing.assert_array_equal(a.iterations, b.iterations)
+
+
+def test_rho_per_step_matches_the_decay_of_the_local_global_error():
+    from clothsim.accuracy.report import steps_table
+    from clothsim.solvers import LocalGlobalSolver
+
+    sim = two_minima_simulation()
+    steps = prepare_steps(sim.model, record_problems(sim, steps=2, count=2))
+    for s in steps:
+        assert 0.0 < s.rho < 1.0, s.rho
+    step = steps[0]  # measured: compare with the error decay against the certified x*
+    errors = []
+    for it in LocalGlobalSolver(sim.model, check_conditioning=False).iterates(
+            step.step.problem):
+        errors.append(float(np.linalg.norm(it.x - step.reference.x)))
+        if it.k >= 150:
+            break
+    decay = (errors[150] / errors[100]) ** (1 / 50)
+    assert abs(step.rho - decay) < 0.02, (step.rho, decay)
+    table = steps_table(steps)
+    assert "rho_local_global" in table.splitlines()[0]
+    assert f"{step.rho:.4f}" in table.splitlines()[2]
+
+
+def box_factory(top: float = 0.5, gap: float = 0.1):
+    """``factory(method, h, iterations, tolerance)``: a 4 × 4 sheet ``gap`` above a box."""
+    def factory(method, h, iterations, tolerance):
+        model = gallery.grid_cloth(4, k=800.0, plane="xz", center=(0.0, top + gap, 0.0))
+        return cs.Simulation(model, h=h, solver=method, iterations=iterations,
+                             tolerance=tolerance,
+                             effects=[cs.Gravity(gallery.GRAVITY),
+                                      cs.Box((-0.3, 0.0, -0.3), (0.3, top, 0.3))])
+    return factory
+
+
+def test_time_step_error_is_fitted_only_before_contact():
+    from clothsim.accuracy.timestep import contact_free_window, time_step_study
+
+    assert contact_free_window(np.array([0, 0, 1, 0, 0, 0, 1], bool)) == (3, 6)
+    assert contact_free_window(np.array([1, 1], bool)) is None
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        ts = time_step_study(box_factory(), frame_time=1 / 30, frames=8,
+                             time_steps=(1 / 30, 1 / 60, 1 / 120))
+    a, b = ts.window
+    # free fall of 0.1 m takes 0.143 s = 4.3 frames: the window is frames 0 … 4 at most
+    assert a == 0 and 2 <= b <= 4 and ts.contact[b] and not ts.contact[:b].any()
+    assert ts.reference[: b + 1, :, 1].min() > 0.5  # above the box all along the window
+    assert ts.reference[-1, :, 1].min() < 0.5 + 1e-3  # and it lands on the box later
+    assert len(ts.errors) == 3 and all(math.isfinite(e) and e > 0 for e in ts.errors)
+    assert 0.8 < ts.slope < 1.2 and "frames 0–" in ts.note  # free fall: first order
+
+
+def test_time_step_error_without_a_contact_free_window_is_empty(tmp_path):
+    from clothsim.accuracy.timestep import time_step_study
+
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        ts = time_step_study(box_factory(gap=0.0), frame_time=1 / 30, frames=2,
+                             time_steps=(1 / 30, 1 / 60, 1 / 120))
+    assert ts.window is None and all(math.isnan(e) for e in ts.errors)
+    assert "no contact-free window" in ts.note and "\n" not in ts.note
+
+
+def test_run_accuracy_leaves_time_step_error_empty_when_every_frame_has_contact(tmp_path):
+    from clothsim.accuracy import run_accuracy
+
+    lying = {"scene": {"name": "lying", "frames": 2, "fps": 30},
+             "cloth": {"resolution": [4, 4], "plane": "xz", "center": [0.0, 0.5, 0.0]},
+             "springs": {"structural": 800.0, "shear": 800.0, "bending": 80.0},
+             "effects": [{"kind": "gravity", "acceleration": [0.0, -9.81, 0.0]},
+                         {"kind": "box", "min": [-1.0, 0.0, -1.0], "max": [1.0, 0.5, 1.0]}]}
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        text = run_accuracy(Scene.from_dict(lying), tmp_path, methods=("local-global",),
+                            problems=2, repeats=1, budgets=(1,), tolerances=(),
+                            plots=False)
+    assert "no contact-free window" in text
+    row = (tmp_path / "accuracy.csv").read_text().splitlines()[1].split(",")
+    assert row[COLUMNS.index("time_step_error")] == ""
