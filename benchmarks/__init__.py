@@ -1,8 +1,8 @@
 """Benchmarks: heavy measurements that back the numbers in docs/ (not part of the tests).
 
 Run all with ``make bench`` (``.venv/bin/python -m benchmarks``) or some by name, e.g.
-``.venv/bin/python -m benchmarks performance accuracy_bench``. The machine is shared and noisy, so every
-benchmark prints its figures as RATIOS measured within one run, e.g.
+``.venv/bin/python -m benchmarks performance accuracy_bench``. The machine is shared and
+noisy, so every benchmark prints its figures as RATIOS measured within one run, e.g.
 ``chebyshev/local-global wall-time ratio to 1e-6: 0.31``.
 
 Scenes are built from the core API here, so a benchmark does not depend on scene files.
