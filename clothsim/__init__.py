@@ -14,12 +14,13 @@ imported where they are used.
 
 from .effects import Box, Damping, Effect, Gravity, Impulse, Pin, Plane, Sphere, StrainLimit, Wind
 from .errors import (
-                      ClothsimError,
-                      ClothsimWarning,
-                      ConditioningWarning,
-                      ConvergenceWarning,
-                      InputError,
-                      MeshWarning,
+    ClothsimError,
+    ClothsimWarning,
+    ConditioningWarning,
+    ConvergenceWarning,
+    InputError,
+    MeshWarning,
+    NonFiniteStateError,
 )
 from .io.meshes import load_mesh as load
 from .mesh import Mesh, grid
@@ -45,5 +46,5 @@ __all__ = [
     "NewtonSolver", "SymplecticEulerSolver", "StepProblem", "make_solver", "Effect", "Gravity",
     "Pin", "Plane", "Sphere", "Box", "Impulse", "Wind", "Damping", "StrainLimit",
     "ClothsimError", "ClothsimWarning", "ConvergenceWarning", "ConditioningWarning",
-    "InputError", "MeshWarning", "__version__",
+    "InputError", "MeshWarning", "NonFiniteStateError", "__version__",
 ]

@@ -61,6 +61,11 @@ class FactorizationError(ClothsimError):
     """The system matrix could not be factored (for example, it is not positive definite)."""
 
 
+class NonFiniteStateError(ClothsimError):
+    """A step produced non-finite positions or velocities (a blow-up, not bad input); the
+    simulation keeps its last finite state."""
+
+
 class ClothsimWarning(UserWarning):
     """Base class of clothsim's warnings (the test suite turns them into errors)."""
 

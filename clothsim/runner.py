@@ -43,7 +43,7 @@ from pathlib import Path
 import numpy as np
 
 from .display import OBSTACLES_NAME, write_obstacles
-from .errors import ClothsimError, InputError
+from .errors import InputError, NonFiniteStateError
 from .interrupts import SignalInterrupt, handle_signals, signals_deferred
 from .io.frames import PVD_NAME, FrameWriter, read_frame
 from .io.runfiles import (
@@ -65,10 +65,6 @@ FRAME_PATTERN = re.compile(r"frame_(\d{6})\.vtu")
 RESULT_FILES = ("trajectory.pvd", "trajectory.npz", "preview.gif", "final.png", "run.json")
 #: Files of an earlier run that a fresh run removes (besides its frame files).
 STALE_FILES = RESULT_FILES + (OBSTACLES_NAME,)
-
-
-class NonFiniteStateError(ClothsimError):
-    """The state became non-finite during a frame (a blow-up); nothing of it was written."""
 
 
 @dataclass
@@ -297,33 +293,19 @@ def _run_locked(scene, model, sim, out: Path, frames: int, progress, resume: boo
 
 
 def _advance(sim, substeps: int, k: int) -> list:
-    """The substeps of frame k; a non-finite state raises :class:`NonFiniteStateError`."""
+    """The substeps of frame k; a blow-up raises :class:`NonFiniteStateError` naming frame k."""
     steps = []
     for _ in range(substeps):
         try:
             steps.append(sim.step())
-        except InputError as exc:  # a blow-up surfaces as the check of the step's new state
-            if _finite(sim.state) and not str(exc.field).startswith("state."):
-                raise
-            raise NonFiniteStateError(_blowup_message(sim, k, str(exc))) from None
-        if not _finite(sim.state):
-            raise NonFiniteStateError(_blowup_message(sim, k))
+        except NonFiniteStateError as exc:
+            raise NonFiniteStateError(_blowup_message(k, str(exc))) from None
     return steps
 
 
-def _finite(state) -> bool:
-    return bool(np.isfinite(state.positions).all() and np.isfinite(state.velocities).all())
-
-
-def _blowup_message(sim, k: int, detail: str | None = None) -> str:
-    """One line for a blow-up in frame k; ``detail`` names the first non-finite value when
-    the simulation refused the new state (``sim.state`` is then the last finite one)."""
-    if detail is None:
-        bad = ~(np.isfinite(sim.state.positions).all(1)
-                & np.isfinite(sim.state.velocities).all(1))
-        detail = f"{int(bad.sum())} of {len(bad)} vertices at t = {sim.state.time:.6g} s"
-    else:
-        detail = f"{detail}, in the step from t = {sim.state.time:.6g} s"
+def _blowup_message(k: int, detail: str) -> str:
+    """One line for a blow-up in frame k (``detail``: the simulation's message)."""
+    detail = detail.removeprefix("the state became non-finite at ")
     what = (f"{detail}; a smaller time step, more substeps or softer springs may help; frame "
             f"{k - 1} is the last one kept")
     return f"frame {k}: the state became non-finite ({what})"

@@ -16,7 +16,7 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from .effects.base import HOOKS, Effect, overrides
-from .errors import InputError, check_finite
+from .errors import InputError, NonFiniteStateError, check_finite
 from .model import Model
 from .problem import PinSet
 from .solvers import Solver, StepProblem, StepResult, make_solver
@@ -247,6 +247,12 @@ class Simulation:
         -------
         StepRecord
             What the solver did (iterations, residual, wall seconds, convergence).
+
+        Raises
+        ------
+        NonFiniteStateError
+            When the new positions or velocities are not finite (a blow-up); :attr:`state`
+            stays the last finite one.
         """
         start = _time.perf_counter()
         s, h = self.state, self.h
@@ -259,6 +265,11 @@ class Simulation:
         v = (x - s.positions) / h
         for e in self._hooks["correct_velocities"]:
             v = e.correct_velocities(t1, s, x, v)
+        bad = ~(np.isfinite(x).all(axis=1) & np.isfinite(v).all(axis=1))
+        if bad.any():
+            raise NonFiniteStateError(
+                f"the state became non-finite at {int(bad.sum())} of {len(bad)} vertices "
+                f"(first: {int(np.flatnonzero(bad)[0])}) in the step from t = {s.time:.6g} s")
         self.state = State(x, v, t1, s.step + 1)
         record = StepRecord(result.iterations, result.residual, _time.perf_counter() - start,
                             result.converged, result.residual_history)

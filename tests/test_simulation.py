@@ -7,7 +7,7 @@ import pytest
 
 import clothsim as cs
 from clothsim.effects.base import HOOKS, Effect, overrides
-from clothsim.errors import InputError
+from clothsim.errors import InputError, NonFiniteStateError
 from clothsim.gallery import GRAVITY, grid_cloth, hanging_cloth
 
 
@@ -106,3 +106,19 @@ def test_huge_plane_normal_is_normalized_and_huge_sphere_rejected():
     np.testing.assert_allclose(plane.normal, [2 ** -0.5, 2 ** -0.5, 0.0], rtol=1e-15)
     with pytest.raises(InputError, match="sphere.radius: must be at most"):
         cs.Sphere((0, 0, 0), 1e200)
+
+
+def test_a_blowup_raises_and_keeps_the_last_finite_state():
+    """Explicit Euler far above its stability limit overflows: the step that produces a
+    non-finite state raises NonFiniteStateError (not InputError: the input was fine) and
+    the simulation keeps the state before it."""
+    model = grid_cloth(4, k=1e9, plane="xy")
+    sim = cs.Simulation(model, h=1 / 30, solver="symplectic-euler", check_stability=False,
+                        effects=[cs.Gravity(GRAVITY), cs.Pin([12, 15])])
+    with np.errstate(all="ignore"), pytest.raises(NonFiniteStateError) as info:
+        for _ in range(200):
+            sim.step()
+    assert not isinstance(info.value, InputError)
+    assert str(info.value).startswith("the state became non-finite at ")
+    assert np.isfinite(sim.state.positions).all() and np.isfinite(sim.state.velocities).all()
+    assert sim.state.step < 200
