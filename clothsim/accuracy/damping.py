@@ -70,6 +70,21 @@ def single_spring(*, stiffness: float = 100.0, mass: float = 1.0, rest_length: f
     return model, Pin([0]), state, math.sqrt(stiffness / mass)
 
 
+def _runs(factory: SimulationFactory, *, h: float, frames: int, frame_time: float,
+          settings: Sequence[tuple[str, int | None, float | None]],
+          record_energy: bool = False) -> dict:
+    """One run per (method, iterations, tolerance), keyed by its label
+    (``"local-global, 10 it"`` or ``"newton, tol 1e-10"``); warnings silenced."""
+    out = {}
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        for method, its, tol in settings:
+            label = f"{method}, " + (f"tol {tol:g}" if tol else f"{its} it")
+            out[label] = run_trajectory(factory(method, h, its, tol), frames=frames,
+                                        frame_time=frame_time, record_energy=record_energy)
+    return out
+
+
 def damping_curves(factory: SimulationFactory, *, h: float, frames: int, frame_time: float,
                    settings: Sequence[tuple[str, int | None, float | None]], vertex: int
                    ) -> dict[str, np.ndarray]:
@@ -95,15 +110,8 @@ def damping_curves(factory: SimulationFactory, *, h: float, frames: int, frame_t
     dict of str to ndarray, shape (frames + 1,)
         Label (e.g. ``"local-global, 10 it"``) → y coordinate per frame [m].
     """
-    out = {}
-    with warnings.catch_warnings():
-        warnings.simplefilter("ignore")
-        for method, its, tol in settings:
-            sim = factory(method, h, its, tol)
-            traj = run_trajectory(sim, frames=frames, frame_time=frame_time)
-            label = f"{method}, " + (f"tol {tol:g}" if tol else f"{its} it")
-            out[label] = traj.frames[:, vertex, 1]
-    return out
+    runs = _runs(factory, h=h, frames=frames, frame_time=frame_time, settings=settings)
+    return {label: traj.frames[:, vertex, 1] for label, traj in runs.items()}
 
 
 def energy_curves(factory: SimulationFactory, *, h: float, frames: int, frame_time: float,
@@ -132,14 +140,9 @@ def energy_curves(factory: SimulationFactory, *, h: float, frames: int, frame_ti
     dict of str to ndarray, shape (frames + 1,)
         Label → mechanical energy per frame [J].
     """
-    out = {}
-    with warnings.catch_warnings():
-        warnings.simplefilter("ignore")
-        for method, its, tol in settings:
-            sim = factory(method, h, its, tol)
-            traj = run_trajectory(sim, frames=frames, frame_time=frame_time,
-                                  record_energy=True)
-            out[f"{method}, " + (f"tol {tol:g}" if tol else f"{its} it")] = traj.energy
+    runs = _runs(factory, h=h, frames=frames, frame_time=frame_time, settings=settings,
+                 record_energy=True)
+    out = {label: traj.energy for label, traj in runs.items()}
     if reference is not None:
         out["reference (small h, converged)"] = np.asarray(reference)
     return out
