@@ -124,7 +124,7 @@ class _RecordingSolver(LocalGlobalSolver):
 
     def iterates(self, problem, x0=None):
         for it in super().iterates(problem, x0):
-            self.record.append((it.x.copy(), self._dT.T.copy(), it.gradient_norm))
+            self.record.append((it.x.copy(), it.d.copy(), it.gradient_norm))
             yield it
 
 

@@ -102,7 +102,7 @@ class AndersonSolver(LocalGlobalSolver):
         x = problem.initial_guess() if x0 is None else np.array(x0, dtype=np.float64)
         d = self.local_step(x)
         k = 0
-        yield Iterate(k, x, float(np.linalg.norm(self.gradient(problem, x, d))))
+        yield Iterate(k, x, float(np.linalg.norm(self.gradient(problem, x, d))), d)
         gx = self.global_step(problem, d)
         dF: deque[np.ndarray] = deque(maxlen=self.window)
         dG: deque[np.ndarray] = deque(maxlen=self.window)
@@ -131,5 +131,5 @@ class AndersonSolver(LocalGlobalSolver):
             x = x_new
             d = self.local_step(x)
             k += 1
-            yield Iterate(k, x, float(np.linalg.norm(self.gradient(problem, x, d))))
+            yield Iterate(k, x, float(np.linalg.norm(self.gradient(problem, x, d))), d)
             gx = self.global_step(problem, d)

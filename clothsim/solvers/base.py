@@ -41,11 +41,15 @@ class Iterate:
         The iterate [m]; valid until the generator resumes (copy it to keep it).
     gradient_norm : float
         ‖∇g(x)‖ over the free degrees of freedom [N·s²] (absolute, not relative).
+    d : ndarray, shape (s, 3), or None
+        The local step's spring directions d(x) [m] (local/global solvers; None for the
+        others); valid until the generator resumes, like ``x``.
     """
 
     k: int
     x: np.ndarray
     gradient_norm: float
+    d: np.ndarray | None = None
 
 
 @dataclass

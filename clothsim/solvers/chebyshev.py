@@ -279,7 +279,7 @@ class ChebyshevSolver(LocalGlobalSolver):
         k = 0
         while True:
             d = self.local_step(x)
-            yield Iterate(k, x, float(np.linalg.norm(self.gradient(problem, x, d))))
+            yield Iterate(k, x, float(np.linalg.norm(self.gradient(problem, x, d))), d)
             x_hat = self.global_step(problem, d)
             omega = self.omega(k, omega)
             x_next = omega * (gamma * (x_hat - x) + x - x_prev) + x_prev

@@ -373,9 +373,9 @@ class LocalGlobalSolver(Solver):
         dT = self._directions_from(pT)
         right_hand_side(dT, rhsT)
         if x0 is None:    # δ_F = 0 at x_0, so ∇g(x_0)_F = (A δ)_F − (b − A y)_F = −rhs_F
-            yield Iterate(0, x, norm(rhsT))
+            yield Iterate(0, x, norm(rhsT), dT.T)
         else:
-            yield Iterate(0, x, float(np.linalg.norm(self.gradient(problem, x, dT.T))))
+            yield Iterate(0, x, float(np.linalg.norm(self.gradient(problem, x, dT.T))), dT.T)
         if x_fixed_T is not None:
             xT[:, fixed] = x_fixed_T
         k = 0
@@ -394,5 +394,5 @@ class LocalGlobalSolver(Solver):
             right_hand_side(dT, rhs_nextT)
             np.subtract(rhsT, rhs_nextT, out=gradT)    # ∇g(x_{k+1}) over the free vertices
             k += 1
-            yield Iterate(k, xT.T, norm(gradT))
+            yield Iterate(k, xT.T, norm(gradT), dT.T)
             rhsT, rhs_nextT = rhs_nextT, rhsT

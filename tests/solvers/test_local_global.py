@@ -11,7 +11,7 @@ from hypothesis import strategies as st
 import clothsim as cs
 from clothsim import reference
 from clothsim.factorization import cholmod_available
-from clothsim.gallery import grid_cloth
+from clothsim.gallery import curtain, grid_cloth
 from clothsim.problem import gradient_noise_floor
 from clothsim.solvers import (
     LocalGlobalSolver,
@@ -390,3 +390,17 @@ def test_fast_iteration_paths_equal_the_plain_half_steps(case):
         assert np.all(np.isfinite(x_fast))
         assert np.abs(x_fast - x_ref).max() <= 1e-12 * scale
         np.testing.assert_array_equal(x_fast[fixed], model.mesh.vertices[fixed])
+
+
+def test_iterates_carry_the_local_steps_directions():
+    """Iterate.d is d(x_k) of the local step (what a port is checked against, half step by
+    half step): equal to the plain local step at the same x."""
+    sim = curtain(7, k=800.0)
+    sim.run(5)                       # mid-swing: directions differ from the rest shape
+    problem = sim.problem()
+    solver = LocalGlobalSolver(sim.model)
+    plain = LocalGlobalSolver(sim.model)
+    for it in solver.iterates(problem):
+        np.testing.assert_allclose(it.d, plain.local_step(it.x.copy()), rtol=0, atol=1e-14)
+        if it.k == 4:
+            break
