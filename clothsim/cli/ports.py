@@ -123,14 +123,10 @@ def _cmd_compare(args) -> int:
         return 0 if mres.passed else 1
     kappa = args.kappa
     if kappa is None and args.scene is not None:
-        from ..ports.check import _simulation
-        from ..ports.compare import condition_number
+        from ..ports.check import as_simulation, system_condition_number
         from ..scene import load_scene
 
-        sim = _simulation(load_scene(args.scene))
-        p = sim.problem(sim.state)
-        kappa = condition_number(sim.model, sim.h, anchor_vertices=p.anchor_vertices,
-                                 anchor_stiffness=p.anchor_stiffness)
+        kappa = system_condition_number(as_simulation(load_scene(args.scene)))
     result = compare_trajectories(
         args.trajectory, args.reference, key=args.key or args.field or "positions",
         frames=args.frames, match=args.match_vertices, kappa=kappa, fmt=args.fmt,

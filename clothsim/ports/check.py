@@ -140,8 +140,18 @@ class CheckReport:
         return f"FAIL at {first.line()}{extra}"
 
 
-def _simulation(source):
-    """A fresh Simulation from a Scene, a Simulation factory, or a Simulation."""
+def as_simulation(source):
+    """A fresh Simulation from a Scene, a Simulation factory, or a Simulation.
+
+    Parameters
+    ----------
+    source : Scene, Simulation or callable returning a Simulation
+
+    Returns
+    -------
+    Simulation
+        Built from the scene or the factory; a Simulation is returned as is.
+    """
     if hasattr(source, "build_simulation"):
         return source.build_simulation(source.build_model())
     if callable(source):
@@ -175,11 +185,25 @@ def step_tolerance(sim, x: np.ndarray, precision: str = "float64") -> float:
         raise InputError(f"precision: must be 'float32' or 'float64', got {precision!r}")
     tol = RTOL64 * cloth_size(x)
     if precision == "float32":
-        p = sim.problem(sim.state)
-        kappa = condition_number(sim.model, sim.h, anchor_vertices=p.anchor_vertices,
-                                 anchor_stiffness=p.anchor_stiffness)
-        tol = max(tol, kappa * EPS32 * float(np.abs(x).max()))
+        tol = max(tol, system_condition_number(sim) * EPS32 * float(np.abs(x).max()))
     return tol
+
+
+def system_condition_number(sim) -> float:
+    """κ(M + h²L) of the simulation's next step, with its penalty pins.
+
+    Parameters
+    ----------
+    sim : Simulation
+
+    Returns
+    -------
+    float
+        The 2-norm condition number (:func:`clothsim.ports.compare.condition_number`).
+    """
+    p = sim.problem(sim.state)
+    return condition_number(sim.model, sim.h, anchor_vertices=p.anchor_vertices,
+                            anchor_stiffness=p.anchor_stiffness)
 
 
 def _refine(model, problem, x):
@@ -217,7 +241,7 @@ def check_steps(simulation, positions, velocities=None, *, precision: str = "flo
     -------
     CheckReport
     """
-    sim = _simulation(simulation)
+    sim = as_simulation(simulation)
     xs = np.asarray(positions, np.float64)
     n = sim.model.vertex_count
     if xs.ndim == 2:

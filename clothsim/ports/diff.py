@@ -18,6 +18,7 @@ from pathlib import Path
 import numpy as np
 
 from ..errors import InputError
+from .check import as_simulation
 from .compare import cloth_size, match_vertices
 
 
@@ -134,9 +135,7 @@ def model_tables(source) -> ModelTables:
         from ..scene import load_scene
 
         source = load_scene(source)
-    from .check import _simulation
-
-    return _from_simulation(_simulation(source), str(getattr(source, "source", source)))
+    return _from_simulation(as_simulation(source), str(getattr(source, "source", source)))
 
 
 def _listing(items, limit=6) -> str:

@@ -34,8 +34,7 @@ import scipy.sparse as sp
 
 from .. import io, matrices
 from ..solvers.local_global import LocalGlobalSolver
-from .check import _simulation
-from .compare import condition_number
+from .check import as_simulation, system_condition_number
 
 LAYOUT = ("x in R^{3n} is stacked per vertex (x0 y0 z0 x1 y1 z1 ...): index 3*i + c; "
           "d in R^{3s} per spring likewise; raw files are little-endian float64 in the same "
@@ -181,11 +180,12 @@ def export_port(source, out_dir, *, frames: int = 60, iterate_steps: int = 3) ->
     dict
         The manifest (also ``manifest.json``).
     """
-    sim = _simulation(source)
+    sim = as_simulation(source)
     model, h = sim.model, sim.h
     out = Path(out_dir)
     (out / "iterates").mkdir(parents=True, exist_ok=True)
     p = sim.problem(sim.state)
+    kappa = system_condition_number(sim)  # of the first step's system, pins included
     n = model.vertex_count
     K = sp.csr_matrix((np.bincount(p.anchor_vertices, p.anchor_stiffness, minlength=n),
                        (np.arange(n), np.arange(n))), shape=(n, n))
@@ -234,7 +234,7 @@ def export_port(source, out_dir, *, frames: int = 60, iterate_steps: int = 3) ->
                                        "gradient_norm, y, f_ext of step K -> K+1")
     xs, vs = [None] * (frames + 1), [None] * (frames + 1)
     # the iterate steps already advanced the simulation: replay from the start
-    sim = _simulation(source)
+    sim = as_simulation(source)
     xs[0], vs[0] = sim.state.positions.copy(), sim.state.velocities.copy()
     for f in range(1, frames + 1):
         sim.step()
@@ -259,8 +259,7 @@ def export_port(source, out_dir, *, frames: int = 60, iterate_steps: int = 3) ->
         "pins": [{"vertex": int(r[0]), "method": "penalty" if r[1] else "constraint",
                   "stiffness": float(r[2]) if r[1] else None, "position": r[3:].tolist()}
                  for r in pins],
-        "condition_number": condition_number(model, h, anchor_vertices=p.anchor_vertices,
-                                             anchor_stiffness=p.anchor_stiffness),
+        "condition_number": kappa,
         "iterate_steps": len(steps),
         "files": files,
     }
