@@ -32,17 +32,12 @@ def data_root() -> Path:
     -------
     Path
         ``$CLOTHSIM_DATA`` when set, else ``<repository>/../shared/data`` (the repository
-        being the folder holding the ``clothsim`` package; for a checkout one folder deeper,
-        such as a git worktree, ``<repository>/../../shared/data`` when that exists). It
-        may not exist.
+        being the folder holding the ``clothsim`` package). It may not exist.
     """
     env = os.environ.get("CLOTHSIM_DATA")
     if env:
         return Path(env).expanduser()
-    repo = Path(__file__).resolve().parent.parent.parent
-    first = repo.parent / "shared" / "data"
-    second = repo.parent.parent / "shared" / "data"
-    return second if not first.is_dir() and second.is_dir() else first
+    return Path(__file__).resolve().parents[3] / "shared" / "data"
 
 
 def data_dir() -> Path:

@@ -10,9 +10,9 @@ import pytest
 from clothsim import io
 from clothsim.errors import InputError
 from clothsim.mesh import Mesh, grid
+from clothsim.scene import data_dir
 
-REPO = Path(__file__).resolve().parents[2]
-JACOBSON = REPO.parent / "shared" / "data" / "jacobson-a8"
+JACOBSON = data_dir()  # the coursework data ($CLOTHSIM_DATA or ../shared/data)
 
 
 def pvd_entries(path):

@@ -1,14 +1,13 @@
 """Matrix Market and text vectors: clothsim.io.matrices."""
 
-from pathlib import Path
 
 import numpy as np
 import scipy.sparse
 
 from clothsim import io
+from clothsim.scene import data_dir
 
-REPO = Path(__file__).resolve().parents[2]
-JACOBSON = REPO.parent / "shared" / "data" / "jacobson-a8"
+JACOBSON = data_dir()  # the coursework data ($CLOTHSIM_DATA or ../shared/data)
 
 
 def test_matrix_and_vector_round_trip_exact(tmp_path):

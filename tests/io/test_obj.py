@@ -1,6 +1,5 @@
 """Wavefront OBJ: clothsim's own reader and writer (clothsim.io.obj)."""
 
-from pathlib import Path
 
 import numpy as np
 import pytest
@@ -8,9 +7,9 @@ import pytest
 from clothsim import io, load
 from clothsim.errors import InputError
 from clothsim.mesh import Mesh, grid
+from clothsim.scene import data_dir
 
-REPO = Path(__file__).resolve().parents[2]
-JACOBSON = REPO.parent / "shared" / "data" / "jacobson-a8"
+JACOBSON = data_dir()  # the coursework data ($CLOTHSIM_DATA or ../shared/data)
 
 def test_obj_reader_index_forms_negative_indices_and_lines(tmp_path):
     path = tmp_path / "forms.obj"

@@ -6,7 +6,6 @@ port's own files (no Python glue); the data is read from the data root.
 
 from __future__ import annotations
 
-import os
 import tempfile
 import tomllib
 from pathlib import Path
@@ -16,6 +15,7 @@ import pytest
 
 import clothsim as cs
 from clothsim.scene import Scene
+from clothsim.scene import data_root as scene_data_root
 
 REPO = Path(__file__).resolve().parents[2]
 SCENE = REPO / "examples" / "ports" / "liu13-default.toml"
@@ -23,12 +23,9 @@ H = 0.0333
 
 
 def data_root() -> Path | None:
-    """The shared data folder ($CLOTHSIM_DATA, ../shared/data, /work/shared/data), or None."""
-    for root in (os.environ.get("CLOTHSIM_DATA"), REPO.parent / "shared" / "data",
-                 "/work/shared/data"):
-        if root and (Path(root) / "liu13-port" / "default-scene" / "x0.txt").is_file():
-            return Path(root)
-    return None
+    """The data root scenes' ``data:`` paths use, when it holds the port's data; else None."""
+    root = scene_data_root()
+    return root if (root / "liu13-port" / "default-scene" / "x0.txt").is_file() else None
 
 
 def port_dir() -> Path:
