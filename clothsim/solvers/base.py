@@ -29,11 +29,10 @@ from ..problem import (  # noqa: F401  (re-exported: the solvers' public vocabul
 )
 
 
-@dataclass
 class Iterate:
     """One iterate of a step solver (see :meth:`Solver.iterates`).
 
-    Attributes
+    Parameters
     ----------
     k : int
         Iterations done; 0 is the initial guess.
@@ -41,15 +40,33 @@ class Iterate:
         The iterate [m]; valid until the generator resumes (copy it to keep it).
     gradient_norm : float
         ‖∇g(x)‖ over the free degrees of freedom [N·s²] (absolute, not relative).
-    d : ndarray, shape (s, 3), or None
+    d : ndarray, shape (s, 3), or callable, or None
         The local step's spring directions d(x) [m] (local/global solvers; None for the
-        others); valid until the generator resumes, like ``x``.
+        others), or a function returning them coordinate-major, shape (3, s): then they
+        are built only when :attr:`d` is first read (the fast iteration does not keep d).
+
+    Attributes
+    ----------
+    k, x, gradient_norm
+        As given.
+    d : ndarray, shape (s, 3), or None
+        d(x) [m]; valid until the generator resumes, like ``x``.
     """
 
-    k: int
-    x: np.ndarray
-    gradient_norm: float
-    d: np.ndarray | None = None
+    __slots__ = ("k", "x", "gradient_norm", "_d")
+
+    def __init__(self, k: int, x: np.ndarray, gradient_norm: float, d=None):
+        self.k, self.x, self.gradient_norm, self._d = k, x, gradient_norm, d
+
+    @property
+    def d(self) -> np.ndarray | None:
+        if callable(self._d):
+            self._d = self._d().T
+        return self._d
+
+    def __repr__(self) -> str:
+        return (f"Iterate(k={self.k}, gradient_norm={self.gradient_norm!r}, "
+                f"x=<{self.x.shape}>)")
 
 
 @dataclass

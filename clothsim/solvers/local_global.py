@@ -40,6 +40,7 @@ from .. import matrices
 from ..factorization import single_threaded_blas, spmv_add
 from ..model import Model
 from .base import Iterate, Solver, StepProblem, StepResult
+from .directions import SpringDirections
 from .system import SystemFactor, factor_system
 
 log = logging.getLogger(__name__)
@@ -81,19 +82,15 @@ class LocalGlobalSolver(Solver):
         self._cache: SystemFactor | None = None
         self._Ms = model.vertex_mass
         self._Js = matrices.spring_matrix(model, expand=False)
-        self._rest = model.springs.spring_rest_length
-        # spring ends as contiguous index arrays: p_i = x_{a_i} − x_{b_i} by two np.take
-        self._a, self._b = (np.ascontiguousarray(v, dtype=np.intp)
-                            for v in model.springs.spring_vertices.T)
+        # the local step's arithmetic and carried directions (clothsim.solvers.directions)
+        self._dirs = SpringDirections(*model.springs.spring_vertices.T,
+                                      model.springs.spring_rest_length,
+                                      model.mesh.vertices.T)
+        self._a, self._b = self._dirs.a, self._dirs.b
+        # coordinate-major work buffers: p(y), and x's spring vectors turned into d − p(y)
         s = model.spring_count
-        # coordinate-major work buffers: spring vectors p turned into d in place (current and
-        # previous d, kept where ends coincide: any |d| = r is optimal), p(y) and d − p(y)
-        self._dT = np.zeros((3, s))
-        self._dT_spare = np.empty((3, s))
         self._pyT = np.empty((3, s))
         self._eT = np.empty((3, s))
-        self._length = np.empty(s)
-        self._directions_into(np.ascontiguousarray(model.mesh.vertices.T))
 
     # -- precomputation -------------------------------------------------------------------
     def invalidate(self) -> None:
@@ -129,37 +126,6 @@ class LocalGlobalSolver(Solver):
         return sysf
 
     # -- the two half steps ---------------------------------------------------------------
-    def _spring_vectors_into(self, xT: np.ndarray, pT: np.ndarray) -> None:
-        """p_i = x_{a_i} − x_{b_i} from coordinate-major positions xT (3, n) into pT (3, s)."""
-        a, b, tmp = self._a, self._b, self._length
-        for xc, pc in zip(xT, pT):  # mode="clip": no bounds check (indices valid by construction)
-            xc.take(a, out=pc, mode="clip")
-            xc.take(b, out=tmp, mode="clip")
-            np.subtract(pc, tmp, out=pc)
-
-    def _directions_from(self, pT: np.ndarray) -> np.ndarray:
-        """The local step on spring vectors pT (3, s), in place: pT becomes d = (r / |p|) p.
-
-        pT, the spare buffer, becomes the current one; where |p| = 0 the previous d is kept."""
-        length = self._length
-        np.einsum("ij,ij->j", pT, pT, out=length)            # |p|
-        np.sqrt(length, out=length)
-        coincident = None
-        if len(length) and not length.min() > 0:             # rare: some ends coincide
-            coincident = length == 0
-            length[coincident] = np.inf                      # r / inf = 0, no division by 0
-        np.divide(self._rest, length, out=length)            # d = (r / |p|) p
-        np.multiply(pT, length, out=pT)
-        if coincident is not None:
-            pT[:, coincident] = self._dT[:, coincident]
-        self._dT, self._dT_spare = pT, self._dT
-        return pT
-
-    def _directions_into(self, xT: np.ndarray) -> np.ndarray:
-        """The local step on coordinate-major positions xT (3, n); returns d as (3, s)."""
-        self._spring_vectors_into(xT, self._dT_spare)
-        return self._directions_from(self._dT_spare)
-
     def local_step(self, x: np.ndarray) -> np.ndarray:
         """d_i = r_i (x_a − x_b) / |x_a − x_b| for all springs at once, shape (s, 3).
 
@@ -176,7 +142,7 @@ class LocalGlobalSolver(Solver):
         ndarray, shape (s, 3)
             d [m] (a new array).
         """
-        return self._directions_into(np.ascontiguousarray(np.asarray(x, np.float64).T)).T.copy()
+        return self._dirs.local_step(np.ascontiguousarray(np.asarray(x, np.float64).T)).T.copy()
 
     def right_hand_side(self, problem: StepProblem, d: np.ndarray) -> np.ndarray:
         """The paper's right-hand side b = h² J d + M y + h² f + h² K_anchor q.
@@ -326,7 +292,8 @@ class LocalGlobalSolver(Solver):
             k, x_k (n, 3) [m] and ‖∇g(x_k)‖ [N·s²].
         """
         sysf = self.system(problem)
-        free, fixed, h2 = sysf.free, sysf.fixed, problem.h ** 2
+        free, fixed = sysf.free, sysf.fixed
+        dirs = self._dirs
         x = problem.initial_guess() if x0 is None else np.array(x0, dtype=np.float64)
         xT = np.ascontiguousarray(x.T)
         # per-step constants: y, p(y), c_F = (h² f + h² K_anchor (q − y))_F − A_FP δ_P
@@ -335,14 +302,11 @@ class LocalGlobalSolver(Solver):
         h2J_F, solve_columns = sysf.h2J_F, sysf.A_FF_factor.solve_columns
         rhsT, rhs_nextT, gradT, cT = sysf.work
         pyT, eT = self._pyT, self._eT
-        self._spring_vectors_into(yT, pyT)
-        c = np.zeros_like(y) if problem.f_ext is None else h2 * problem.f_ext
-        problem.anchors.add_rhs(c, h2, origin=y)
-        cT[...] = c[free].T
+        dirs.vectors_into(yT, pyT)
+        self._constant_into(cT, problem, sysf)
         x_fixed_T = None
         if len(fixed):
-            x_pinned = np.array(y)
-            x_pinned[problem.fixed_vertices] = problem.fixed_positions
+            x_pinned = x if x0 is None else problem.initial_guess()
             x_fixed_T = np.ascontiguousarray(x_pinned[fixed].T)
             cT -= (sysf.A_FP @ (x_pinned[fixed] - y[fixed])).T
         # free vertices as runs of consecutive indices: x_F = y_F + δ_F by slices
@@ -350,8 +314,7 @@ class LocalGlobalSolver(Solver):
         yFT = np.ascontiguousarray(yT[:, free]) if runs is None else None
         xFT = np.empty_like(yFT) if runs is None else None
 
-        def right_hand_side(dT, out):   # (b(d) − A y)_F − A_FP δ_P = h² (J (d − p(y)))_F + c_F
-            np.subtract(dT, pyT, out=eT)  # differences only: momentum kept to their rounding
+        def right_hand_side(eT, out):   # (b(d) − A y)_F − A_FP δ_P = h² (J (d − p(y)))_F + c_F
             np.copyto(out, cT)
             for c in range(3):
                 spmv_add(h2J_F, eT[c], out[c])
@@ -362,37 +325,55 @@ class LocalGlobalSolver(Solver):
             return math.sqrt(float(np.dot(flat, flat)))
 
         # local step at x_0; x_0 = y (pins applied) has p(y)'s vectors but at the exact pins
-        pT = self._dT_spare
         if x0 is None:
-            np.copyto(pT, pyT)
+            np.copyto(eT, pyT)
             pinned = sysf.pinned_springs
             if len(pinned):
-                pT[:, pinned] = xT[:, self._a[pinned]] - xT[:, self._b[pinned]]
+                eT[:, pinned] = xT[:, self._a[pinned]] - xT[:, self._b[pinned]]
         else:
-            self._spring_vectors_into(xT, pT)
-        dT = self._directions_from(pT)
-        right_hand_side(dT, rhsT)
+            dirs.vectors_into(xT, eT)
+        right_hand_side(dirs.e_into(xT, eT, pyT), rhsT)
         if x0 is None:    # δ_F = 0 at x_0, so ∇g(x_0)_F = (A δ)_F − (b − A y)_F = −rhs_F
-            yield Iterate(0, x, norm(rhsT), dT.T)
+            yield Iterate(0, x, norm(rhsT), d=dirs.current)
         else:
-            yield Iterate(0, x, float(np.linalg.norm(self.gradient(problem, x, dT.T))), dT.T)
+            g0 = self.gradient(problem, x, dirs.current().T)
+            yield Iterate(0, x, float(np.linalg.norm(g0)), d=dirs.current)
         if x_fixed_T is not None:
             xT[:, fixed] = x_fixed_T
+        # two position buffers in turn: the last local step's x stays intact for the next
+        # one (the carried directions are rebuilt from it, clothsim.solvers.directions)
+        xT_next = xT.copy()
         k = 0
         while True:
             # global step: A_FF δ_F = h² (J (d − p(y)))_F + c_F, x = y + δ
             deltaT = solve_columns(rhsT)
             if runs is None:
                 np.add(yFT, deltaT, out=xFT)
-                xT[:, free] = xFT
+                xT_next[:, free] = xFT
             else:
                 for start, stop, offset in runs:
                     np.add(yT[:, start:stop], deltaT[:, offset:offset + stop - start],
-                           out=xT[:, start:stop])
-            # local step at x_{k+1}, and the next right-hand side
-            dT = self._directions_into(xT)
-            right_hand_side(dT, rhs_nextT)
+                           out=xT_next[:, start:stop])
+            xT, xT_next = xT_next, xT
+            # local step at x_{k+1} (e = d − p(y) over its spring vectors), next right-hand side
+            dirs.vectors_into(xT, eT)
+            right_hand_side(dirs.e_into(xT, eT, pyT), rhs_nextT)
             np.subtract(rhsT, rhs_nextT, out=gradT)    # ∇g(x_{k+1}) over the free vertices
             k += 1
-            yield Iterate(k, xT.T, norm(gradT), dT.T)
+            yield Iterate(k, xT.T, norm(gradT), d=dirs.current)
             rhsT, rhs_nextT = rhs_nextT, rhsT
+
+    @staticmethod
+    def _constant_into(cT: np.ndarray, problem: StepProblem, sysf: SystemFactor) -> None:
+        """cT = (h² f + h² K_anchor (q − y))_F, coordinate-major (3, f)."""
+        h2, f_ext, runs = problem.h ** 2, problem.f_ext, sysf.free_runs
+        if runs is not None and not len(problem.anchors):
+            for start, stop, offset in runs:   # by slices: no (n, 3) temporaries
+                if f_ext is None:
+                    cT[:, offset:offset + stop - start] = 0.0
+                else:
+                    np.multiply(f_ext[start:stop].T, h2, out=cT[:, offset:offset + stop - start])
+            return
+        c = np.zeros_like(problem.y) if f_ext is None else h2 * f_ext
+        problem.anchors.add_rhs(c, h2, origin=problem.y)
+        cT[...] = c[sysf.free].T

@@ -345,51 +345,69 @@ def test_fast_iteration_equals_the_plain_half_steps(pins):
     assert res.x.flags.c_contiguous and np.abs(res.x - xs[-1]).max() <= 1e-12 * scale
 
 
-def plain_iterates(model, problem, x, count):
-    """x_0 .. x_count from the plain half steps (local_step, global_step), from x."""
+def plain_iterates(model, problem, x, count, *, directions=False):
+    """x_0 .. x_count from the plain half steps (local_step, global_step), from x (and
+    d(x_0) .. d(x_{count−1}) with ``directions``)."""
     plain = LocalGlobalSolver(model)
-    xs = [x]
+    xs, ds = [x], []
     for _ in range(count):
-        x = plain.global_step(problem, plain.local_step(x))
+        ds.append(plain.local_step(x))
+        x = plain.global_step(problem, ds[-1])
         xs.append(x)
-    return xs
+    return (xs, ds) if directions else xs
 
 
-@pytest.mark.parametrize("case", ["x0 given", "coincident ends", "pinned spring ends"])
+@pytest.mark.parametrize("case", ["x0 given", "coincident ends", "pinned spring ends",
+                                  "ends pinned together"])
 def test_fast_iteration_paths_equal_the_plain_half_steps(case):
     """The iteration's other paths: a given x_0 (spring vectors gathered, not taken from
-    p(y)), springs whose ends coincide in y (previous direction kept), and springs between
-    two exactly pinned vertices; with gravity, exact and penalty pins."""
+    p(y)), springs whose ends coincide in y (previous direction kept), springs between
+    two exactly pinned vertices, and two exact pins at one point (their spring's ends
+    coincide at every iterate: the carried direction is carried again); with gravity,
+    exact and penalty pins."""
     model = hanging(n=6, k=400.0)
     rng = np.random.default_rng(5)
     x = model.mesh.vertices + rng.normal(scale=0.02, size=model.mesh.vertices.shape)
     v = rng.normal(scale=0.3, size=x.shape)
-    fixed = [30, 35] if case != "pinned spring ends" else [30, 31, 35]
+    fixed = [30, 35] if case in ("x0 given", "coincident ends") else [30, 31, 35]
+    targets = model.mesh.vertices[[30, 30, 35] if case == "ends pinned together" else fixed]
     if case == "coincident ends":     # vertex 1 lands exactly on vertex 0 in y = x + h v
         a, b = model.springs.spring_vertices[0]
         v[b] = v[a]
         x[b] = x[a]
     problem = StepProblem(1 / 30, x, v, f_ext=model.vertex_mass[:, None] * G,
-                          fixed_vertices=fixed, fixed_positions=model.mesh.vertices[fixed],
+                          fixed_vertices=fixed, fixed_positions=targets,
                           anchor_vertices=[0], anchor_positions=x[[0]] + 0.01,
                           anchor_stiffness=[50.0])
     x0 = problem.initial_guess()
     if case == "x0 given":
         x0 = x0 + rng.normal(scale=0.01, size=x0.shape)
-    xs = plain_iterates(model, problem, x0, 6)
+    xs, ds = plain_iterates(model, problem, x0, 6, directions=True)
     fast = LocalGlobalSolver(model)
     with warnings.catch_warnings():
         warnings.simplefilter("error")  # no divide-by-zero RuntimeWarning
         its = fast.iterates(problem, x0 if case == "x0 given" else None)
-        got = [next(its).x.copy() for _ in range(7)]
+        got = [(it.x.copy(), it.d.copy()) for it, _ in zip(its, range(7))]
+        # not reading d: the carried directions come from the kept positions instead
+        its = LocalGlobalSolver(model).iterates(problem, x0 if case == "x0 given" else None)
+        unread = [it.x.copy() for it, _ in zip(its, range(7))]
+    for (x_fast, _), x_unread in zip(got, unread):
+        np.testing.assert_array_equal(x_unread, x_fast)
     scale = np.abs(xs[0]).max()
-    for k, (x_fast, x_ref) in enumerate(zip(got, xs)):
+    for k, ((x_fast, d_fast), x_ref) in enumerate(zip(got, xs)):
+        if k < len(ds):
+            np.testing.assert_allclose(d_fast, ds[k], rtol=0, atol=1e-14)
         if k == 0 and case == "x0 given":
             np.testing.assert_array_equal(x_fast, x0)
             continue
         assert np.all(np.isfinite(x_fast))
         assert np.abs(x_fast - x_ref).max() <= 1e-12 * scale
-        np.testing.assert_array_equal(x_fast[fixed], model.mesh.vertices[fixed])
+        np.testing.assert_array_equal(x_fast[fixed], targets)
+    if case == "ends pinned together":   # the rest direction, carried at every iterate
+        (spring,) = np.flatnonzero((model.springs.spring_vertices == [30, 31]).all(axis=1))
+        rest_d = model.mesh.vertices[30] - model.mesh.vertices[31]
+        for _, d_fast in got:
+            np.testing.assert_array_equal(d_fast[spring], rest_d)
 
 
 def test_iterates_carry_the_local_steps_directions():
