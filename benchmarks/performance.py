@@ -15,7 +15,10 @@ every repeat (the machine is shared, so only figures measured side by side are c
 - the paper's 81 × 81 frame at 10 iterations, CPU time (``time.process_time``), next to
   the paper's 50 ms.
 
-BLAS is limited to one thread (threadpoolctl) for every measurement. Results go to
+Every thread pool — BLAS, and the OpenMP runtime CHOLMOD loads — is limited to one thread
+(threadpoolctl) for every measurement, so a CPU time is one thread's work (OpenMP workers
+left spinning by an earlier call otherwise add their CPU time to whatever is measured next;
+the solver itself limits BLAS, see docs/performance.md). Results go to
 docs/data/performance.csv and docs/img/performance.png; docs/performance.md explains them.
 """
 
@@ -31,6 +34,7 @@ from threadpoolctl import threadpool_limits
 
 import clothsim as cs
 from clothsim.gallery import GRAVITY, grid_cloth, top_corners
+from clothsim.factorization import spmv_add
 from clothsim.solvers import LocalGlobalSolver
 
 from . import DOCS_IMG, ROOT
@@ -68,9 +72,10 @@ class Case:
         rng = np.random.default_rng(n)
         self.rhs = np.asfortranarray(rng.normal(size=(A_FF.shape[0], 3)))
         self.inner = max(1, int(40_000 / n ** 2))   # repeat tiny solves to time them
+        self.parts_solver = None
         self.times = {k: [] for k in ("iteration", "simplicial", "supernodal", "setup",
                                       "condition", "iteration_cpu", "simplicial_cpu",
-                                      "supernodal_cpu")}
+                                      "supernodal_cpu", "parts")}
 
     def _timed(self, key: str, fn, count: int) -> None:
         """Wall and CPU time of ``fn`` per unit (``count`` units per call)."""
@@ -91,6 +96,50 @@ class Case:
                 F(b)
 
         self._timed(mode, solves, self.inner)
+
+    def measure_parts(self, repeats: int = 5) -> None:
+        """The iteration's NumPy work, each part timed alone and repeated (its data in cache).
+
+        Their sum is what an iteration costs besides its solve when nothing else competes
+        for the cache and no per-step work is shared out: a floor for the ratio."""
+        if self.parts_solver is None:   # its own buffers (the measured solver's stay as they are)
+            self.parts_solver = LocalGlobalSolver(self.model, check_conditioning=False)
+        solver = self.parts_solver
+        sysf, dirs = solver.system(self.problem), solver._dirs
+        xT = np.ascontiguousarray(self.problem.y.T)
+        pyT, eT = solver._pyT, solver._eT
+        rhsT, rhs_nextT, cT = sysf.work
+        runs = sysf.free_runs
+        dirs.vectors_into(xT, pyT)
+        dirs.vectors_into(xT, eT)
+
+        def update():    # x = y + δ over the free runs, then the residual and its norm
+            for start, stop, offset in runs:
+                np.add(xT[:, start:stop], rhsT[:, offset:offset + stop - start],
+                       out=xT[:, start:stop])
+            np.subtract(rhsT, rhs_nextT, out=rhs_nextT)
+            float(np.dot(rhs_nextT.reshape(-1), rhs_nextT.reshape(-1)))
+
+        def rhs():
+            np.copyto(rhs_nextT, cT)
+            for c in range(3):
+                spmv_add(sysf.h2J_F, eT[c], rhs_nextT[c])
+
+        def local():     # spring vectors, then e = d − p(y) in place
+            dirs.vectors_into(xT, eT)
+            dirs.e_into(xT, eT, pyT)
+
+        rhsT.fill(0.0)                  # δ = 0: x stays y, so every repeat does the same work
+        total = 0.0
+        for fn in (update, rhs, local):
+            fn()                        # warm: this part's data in cache
+            times = []
+            for _ in range(repeats):
+                t0 = time.process_time()
+                fn()
+                times.append(time.process_time() - t0)
+            total += float(np.median(times))
+        self.times["parts"].append(total)
 
     def measure_setup(self) -> None:
         t0 = time.perf_counter()
@@ -135,6 +184,7 @@ def run(sizes=SIZES, *, repeats: int = 15, setup_repeats: int = 3) -> dict:
                         case.measure_bare(what)
                 if r < setup_repeats:
                     case.measure_setup()
+                    case.measure_parts()
         frame = frame_cpu_seconds(repeats)
     rows = []
     for case in cases:
@@ -150,7 +200,9 @@ def run(sizes=SIZES, *, repeats: int = 15, setup_repeats: int = 3) -> dict:
                      "simplicial_cpu_ms": med["simplicial_cpu"],
                      "supernodal_cpu_ms": med["supernodal_cpu"],
                      "ratio_cpu": med["iteration_cpu"][0] / fastest_cpu,
-                     "setup_s": med["setup"], "condition_s": med["condition"]})
+                     "setup_s": med["setup"], "condition_s": med["condition"],
+                     "parts_ms": med["parts"],
+                     "floor": 1 + med["parts"][0] / fastest_cpu})
     verts = np.array([r["vertices"] for r in rows], float)
     setup = np.array([r["setup_s"][0] for r in rows])
     exponent = float(np.polyfit(np.log(verts), np.log(setup), 1)[0]) if len(rows) > 1 else 0.0
@@ -164,7 +216,7 @@ def write_csv(result: dict) -> None:
         w.writerow(["grid", "vertices", "springs", "iteration_ms", "iteration_q25_ms",
                     "iteration_q75_ms", "simplicial_ms", "supernodal_ms", "ratio",
                     "iteration_cpu_ms", "simplicial_cpu_ms", "supernodal_cpu_ms",
-                    "ratio_cpu", "setup_s", "condition_s"])
+                    "ratio_cpu", "numpy_parts_cpu_ms", "floor", "setup_s", "condition_s"])
         for r in result["rows"]:
             w.writerow([f"{r['n']}x{r['n']}", r["vertices"], r["springs"],
                         *(f"{1e3 * v:.4f}" for v in r["iteration_ms"]),
@@ -173,6 +225,7 @@ def write_csv(result: dict) -> None:
                         f"{1e3 * r['iteration_cpu_ms'][0]:.4f}",
                         f"{1e3 * r['simplicial_cpu_ms'][0]:.4f}",
                         f"{1e3 * r['supernodal_cpu_ms'][0]:.4f}", f"{r['ratio_cpu']:.3f}",
+                        f"{1e3 * r['parts_ms'][0]:.4f}", f"{r['floor']:.3f}",
                         f"{r['setup_s'][0]:.4f}", f"{r['condition_s'][0]:.4f}"])
 
 
@@ -205,7 +258,7 @@ def plot(result: dict) -> None:
 def report(result: dict) -> None:
     print("wall time (CPU time in brackets), ms; ratio = iteration / fastest bare solve")
     print(f"{'grid':>8} {'springs':>8} {'iteration (IQR)':>26} {'simplicial':>16} "
-          f"{'supernodal':>16} {'ratio':>11} {'setup s':>8} {'cond s':>7}")
+          f"{'supernodal':>16} {'ratio':>11} {'floor':>6} {'setup s':>8} {'cond s':>7}")
     for r in result["rows"]:
         it = r["iteration_ms"]
         print(f"{r['n']:>4}x{r['n']:<3} {r['springs']:>8} "
@@ -213,7 +266,7 @@ def report(result: dict) -> None:
               f"[{1e3 * r['iteration_cpu_ms'][0]:.3f}] "
               f"{1e3 * r['simplicial_ms'][0]:>7.3f} [{1e3 * r['simplicial_cpu_ms'][0]:.3f}] "
               f"{1e3 * r['supernodal_ms'][0]:>7.3f} [{1e3 * r['supernodal_cpu_ms'][0]:.3f}] "
-              f"{r['ratio']:>5.2f} [{r['ratio_cpu']:.2f}] "
+              f"{r['ratio']:>5.2f} [{r['ratio_cpu']:.2f}] {r['floor']:>6.2f} "
               f"{r['setup_s'][0]:>8.3f} {r['condition_s'][0]:>7.3f}")
     print(f"setup grows as vertices^{result['setup_exponent']:.2f}")
     f = result["frame_s"]
@@ -224,7 +277,9 @@ def report(result: dict) -> None:
 def main(argv: list[str] | None = None) -> None:
     argv = sys.argv[1:] if argv is None else argv
     sizes = SIZES[:-1] if "--quick" in argv else SIZES
-    with threadpool_limits(1, user_api="blas"):
+    import sksparse.cholmod  # noqa: F401  (load CHOLMOD's OpenMP and BLAS: limited too)
+
+    with threadpool_limits(1):                      # BLAS and OpenMP
         result = run(sizes)
     report(result)
     write_csv(result)

@@ -22,8 +22,8 @@ faster than supernodal on the cloth grids measured in docs/performance.md, so
 :class:`~clothsim.solvers.LocalGlobalSolver` asks for it explicitly.
 
 Two helpers of the iterations that run around a factor: :func:`spmv_add` (a sparse product
-accumulated in place, no temporary) and :func:`single_threaded_blas` (BLAS limited to one
-thread with threadpoolctl; see docs/performance.md).
+accumulated in place, no temporary) and :func:`single_threaded` (BLAS and OpenMP limited to
+one thread with threadpoolctl; see docs/performance.md).
 """
 
 from __future__ import annotations
@@ -254,30 +254,36 @@ def spmv_add(A: sp.csr_matrix, v: np.ndarray, out: np.ndarray) -> None:
         _csr_matvec(A.shape[0], A.shape[1], A.indptr, A.indices, A.data, v, out)
 
 
-_blas_controller = None
+_controller = None
 
 
-def single_threaded_blas():
-    """A context limiting BLAS to one thread (threadpoolctl), or a no-op without it.
+def single_threaded():
+    """A context limiting BLAS and OpenMP to one thread (threadpoolctl), or a no-op without it.
 
     An iteration's vector operations are small (microseconds to a millisecond); on a shared
     machine, BLAS worker threads that spin or wait for a busy core can stall them for far
-    longer than they take. :class:`~clothsim.solvers.LocalGlobalSolver` therefore runs each
-    step with one BLAS thread.
+    longer than they take. CHOLMOD's OpenMP workers gain nothing on the simplicial factor's
+    three-column solves, and when left spinning they slow the main thread's memory-bound
+    work (docs/performance.md). :class:`~clothsim.solvers.LocalGlobalSolver` therefore runs
+    each step, its factorization included, with one thread.
+
+    The thread pools are looked up once, after CHOLMOD's libraries (its OpenMP runtime and
+    BLAS) are loaded, so they are limited too.
 
     Returns
     -------
     contextlib.AbstractContextManager
-        ``with single_threaded_blas(): ...`` runs its body with one BLAS thread.
+        ``with single_threaded(): ...`` runs its body with one BLAS and one OpenMP thread.
     """
-    global _blas_controller
-    if _blas_controller is None:
+    global _controller
+    if _controller is None:
         try:
             from threadpoolctl import ThreadpoolController
         except ImportError:  # pragma: no cover
-            _blas_controller = False
+            _controller = False
         else:
-            _blas_controller = ThreadpoolController()
-    if _blas_controller is False:  # pragma: no cover
+            cholmod_available()       # load CHOLMOD's libraries first: their pools count
+            _controller = ThreadpoolController()
+    if _controller is False:  # pragma: no cover
         return contextlib.nullcontext()
-    return _blas_controller.limit(limits=1, user_api="blas")
+    return _controller.limit(limits=1, user_api=None)

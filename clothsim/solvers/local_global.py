@@ -37,7 +37,7 @@ import math
 import numpy as np
 
 from .. import matrices
-from ..factorization import single_threaded_blas, spmv_add
+from ..factorization import single_threaded, spmv_add
 from ..model import Model
 from .base import Iterate, Solver, StepProblem, StepResult
 from .directions import SpringDirections
@@ -118,9 +118,10 @@ class LocalGlobalSolver(Solver):
         return self._cache
 
     def _factor(self, problem: StepProblem) -> SystemFactor:
-        sysf = factor_system(self.model, problem, self._Js, self._a, self._b,
-                             backend=self.backend_requested,
-                             check_conditioning=self.check_conditioning)
+        with single_threaded():   # CHOLMOD's OpenMP threads: gain nothing here (see solve)
+            sysf = factor_system(self.model, problem, self._Js, self._a, self._b,
+                                 backend=self.backend_requested,
+                                 check_conditioning=self.check_conditioning)
         self.factor_count += 1
         self.backend = sysf.A_FF_factor.backend
         return sysf
@@ -255,7 +256,10 @@ class LocalGlobalSolver(Solver):
 
     # -- the iteration --------------------------------------------------------------------
     def solve(self, problem: StepProblem, x0: np.ndarray | None = None) -> StepResult:
-        """:meth:`Solver.solve` with BLAS limited to one thread (:func:`single_threaded_blas`).
+        """:meth:`Solver.solve` with BLAS and OpenMP limited to one thread.
+
+        (:func:`~clothsim.factorization.single_threaded`; a new factorization, done on the
+        first step and when h or the pins change, runs inside the limit too.)
 
         Parameters
         ----------
@@ -268,7 +272,7 @@ class LocalGlobalSolver(Solver):
         -------
         StepResult
         """
-        with single_threaded_blas():
+        with single_threaded():
             return super().solve(problem, x0)
 
     def iterates(self, problem: StepProblem, x0: np.ndarray | None = None):
@@ -300,7 +304,7 @@ class LocalGlobalSolver(Solver):
         y = problem.y
         yT = np.ascontiguousarray(y.T)
         h2J_F, solve_columns = sysf.h2J_F, sysf.A_FF_factor.solve_columns
-        rhsT, rhs_nextT, gradT, cT = sysf.work
+        rhsT, rhs_nextT, cT = sysf.work
         pyT, eT = self._pyT, self._eT
         dirs.vectors_into(yT, pyT)
         self._constant_into(cT, problem, sysf)
@@ -358,9 +362,9 @@ class LocalGlobalSolver(Solver):
             # local step at x_{k+1} (e = d − p(y) over its spring vectors), next right-hand side
             dirs.vectors_into(xT, eT)
             right_hand_side(dirs.e_into(xT, eT, pyT), rhs_nextT)
-            np.subtract(rhsT, rhs_nextT, out=gradT)    # ∇g(x_{k+1}) over the free vertices
+            np.subtract(rhsT, rhs_nextT, out=rhsT)     # ∇g(x_{k+1}) over the free vertices
             k += 1
-            yield Iterate(k, xT.T, norm(gradT), d=dirs.current)
+            yield Iterate(k, xT.T, norm(rhsT), d=dirs.current)
             rhsT, rhs_nextT = rhs_nextT, rhsT
 
     @staticmethod

@@ -44,8 +44,9 @@ class SystemFactor:
         Free vertices as runs (vertices start..stop−1 are unknowns offset..), or None.
     pinned_springs : ndarray, shape (q,), int
         Springs with an end at an exact pin (their vectors differ between y and x_0).
-    work : ndarray, shape (4, 3, f)
-        Coordinate-major buffers: two consecutive right-hand sides, ∇g and the constant c_F.
+    work : ndarray, shape (3, 3, f)
+        Coordinate-major buffers: two consecutive right-hand sides (the older one turned into
+        ∇g once the newer is formed) and the constant c_F.
     """
 
     A: sp.csc_matrix
@@ -106,4 +107,4 @@ def factor_system(model: Model, problem: StepProblem, Js: sp.csr_matrix, a: np.n
                 if j > i]
     pinned_springs = np.flatnonzero(np.isin(a, fixed) | np.isin(b, fixed))
     return SystemFactor(A, free, fixed, factor, A_FP.tocsr(), h2J_F, runs, pinned_springs,
-                        np.empty((4, 3, len(free))))
+                        np.empty((3, 3, len(free))))
