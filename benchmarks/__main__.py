@@ -8,7 +8,7 @@ import sys
 import time
 
 BENCHMARKS = ("stiffness", "stability_figures", "performance", "accuracy_bench")
-#: run only when named: the 257² × 500-frame memory run takes about an hour on 2 cores
+#: run only when named: the 257² × 500-frame memory run takes about 6 minutes
 LONG = ("memory",)
 
 

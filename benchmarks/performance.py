@@ -33,8 +33,8 @@ import numpy as np
 from threadpoolctl import threadpool_limits
 
 import clothsim as cs
-from clothsim.gallery import GRAVITY, grid_cloth, top_corners
 from clothsim.factorization import spmv_add
+from clothsim.gallery import GRAVITY, grid_cloth, top_corners
 from clothsim.solvers import LocalGlobalSolver
 
 from . import DOCS_IMG, ROOT

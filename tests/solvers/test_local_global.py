@@ -14,6 +14,7 @@ from clothsim.factorization import cholmod_available
 from clothsim.gallery import curtain, grid_cloth
 from clothsim.problem import gradient_noise_floor
 from clothsim.solvers import (
+    Iterate,
     LocalGlobalSolver,
     NewtonSolver,
     StepProblem,
@@ -422,3 +423,27 @@ def test_iterates_carry_the_local_steps_directions():
         np.testing.assert_allclose(it.d, plain.local_step(it.x.copy()), rtol=0, atol=1e-14)
         if it.k == 4:
             break
+
+
+def test_iterate_d_is_built_only_when_read(monkeypatch):
+    """The fast iteration keeps no d: Iterate.d rebuilds it on first read, once."""
+    from clothsim.solvers import directions
+
+    calls = []
+    current = directions.SpringDirections.current
+    monkeypatch.setattr(directions.SpringDirections, "current",
+                        lambda self: calls.append(1) or current(self))
+    sim = curtain(7, k=800.0)
+    sim.run(2)
+    problem = sim.problem()
+    solver = LocalGlobalSolver(sim.model, iterations=5)
+    solver.solve(problem)
+    assert calls == []                      # a plain solve never builds d
+    it = next(solver.iterates(problem))
+    first = it.d
+    assert it.d is first and len(calls) == 1
+    assert first.shape == (sim.model.spring_count, 3)
+    np.testing.assert_allclose(first, LocalGlobalSolver(sim.model).local_step(it.x.copy()),
+                               rtol=0, atol=1e-14)
+    plain = Iterate(0, it.x, 0.0, first)    # an array is kept as given
+    assert plain.d is first and Iterate(0, it.x, 0.0).d is None
