@@ -44,11 +44,11 @@ class SpringDirections:
         self.b = np.ascontiguousarray(b, dtype=np.intp)
         self.rest = np.ascontiguousarray(rest, dtype=np.float64)
         self._length = np.empty(len(self.a))
-        # the last local step: a materialized d (3, s), or the positions it was computed at
-        # with its carried springs and their d
-        self._d = np.zeros((3, len(self.a)))
+        # the last local step: a materialized d (3, s), or (when _d is None) the positions
+        # _xT it was computed at with its carried springs and their d
         self._xT = None
         self._carried = (_NONE, np.zeros((3, 0)))
+        self._d = np.zeros((3, len(self.a)))   # zero-length rest springs: d = 0 to start
         self._d = self.local_step(np.ascontiguousarray(rest_positions_T, dtype=np.float64))
 
     # -- the arithmetic ---------------------------------------------------------------------

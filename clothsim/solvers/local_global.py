@@ -342,11 +342,12 @@ class LocalGlobalSolver(Solver):
         else:
             g0 = self.gradient(problem, x, dirs.current().T)
             yield Iterate(0, x, float(np.linalg.norm(g0)), d=dirs.current)
-        if x_fixed_T is not None:
-            xT[:, fixed] = x_fixed_T
         # two position buffers in turn: the last local step's x stays intact for the next
-        # one (the carried directions are rebuilt from it, clothsim.solvers.directions)
+        # one (the carried directions are rebuilt from it, clothsim.solvers.directions);
+        # the global step writes only free vertices, so both hold the pins' targets
         xT_next = xT.copy()
+        if x_fixed_T is not None:
+            xT_next[:, fixed] = x_fixed_T
         k = 0
         while True:
             # global step: A_FF δ_F = h² (J (d − p(y)))_F + c_F, x = y + δ
@@ -363,6 +364,8 @@ class LocalGlobalSolver(Solver):
             dirs.vectors_into(xT, eT)
             right_hand_side(dirs.e_into(xT, eT, pyT), rhs_nextT)
             np.subtract(rhsT, rhs_nextT, out=rhsT)     # ∇g(x_{k+1}) over the free vertices
+            if k == 0 and x_fixed_T is not None:      # x_0's buffer: written next for x_2
+                xT_next[:, fixed] = x_fixed_T
             k += 1
             yield Iterate(k, xT.T, norm(rhsT), d=dirs.current)
             rhsT, rhs_nextT = rhs_nextT, rhsT

@@ -359,19 +359,21 @@ def plain_iterates(model, problem, x, count, *, directions=False):
 
 
 @pytest.mark.parametrize("case", ["x0 given", "coincident ends", "pinned spring ends",
-                                  "ends pinned together"])
+                                  "ends pinned together", "x0 given, ends pinned together"])
 def test_fast_iteration_paths_equal_the_plain_half_steps(case):
     """The iteration's other paths: a given x_0 (spring vectors gathered, not taken from
     p(y)), springs whose ends coincide in y (previous direction kept), springs between
     two exactly pinned vertices, and two exact pins at one point (their spring's ends
-    coincide at every iterate: the carried direction is carried again); with gravity,
-    exact and penalty pins."""
+    coincide at every iterate: the carried direction is carried again, from x_0's own
+    direction when x_0 is given with the pins elsewhere); with gravity, exact and penalty
+    pins."""
     model = hanging(n=6, k=400.0)
     rng = np.random.default_rng(5)
     x = model.mesh.vertices + rng.normal(scale=0.02, size=model.mesh.vertices.shape)
     v = rng.normal(scale=0.3, size=x.shape)
+    given = case.startswith("x0 given")
     fixed = [30, 35] if case in ("x0 given", "coincident ends") else [30, 31, 35]
-    targets = model.mesh.vertices[[30, 30, 35] if case == "ends pinned together" else fixed]
+    targets = model.mesh.vertices[[30, 30, 35] if "together" in case else fixed]
     if case == "coincident ends":     # vertex 1 lands exactly on vertex 0 in y = x + h v
         a, b = model.springs.spring_vertices[0]
         v[b] = v[a]
@@ -381,16 +383,16 @@ def test_fast_iteration_paths_equal_the_plain_half_steps(case):
                           anchor_vertices=[0], anchor_positions=x[[0]] + 0.01,
                           anchor_stiffness=[50.0])
     x0 = problem.initial_guess()
-    if case == "x0 given":
+    if given:     # the pins too start away from their targets
         x0 = x0 + rng.normal(scale=0.01, size=x0.shape)
     xs, ds = plain_iterates(model, problem, x0, 6, directions=True)
     fast = LocalGlobalSolver(model)
     with warnings.catch_warnings():
         warnings.simplefilter("error")  # no divide-by-zero RuntimeWarning
-        its = fast.iterates(problem, x0 if case == "x0 given" else None)
+        its = fast.iterates(problem, x0 if given else None)
         got = [(it.x.copy(), it.d.copy()) for it, _ in zip(its, range(7))]
         # not reading d: the carried directions come from the kept positions instead
-        its = LocalGlobalSolver(model).iterates(problem, x0 if case == "x0 given" else None)
+        its = LocalGlobalSolver(model).iterates(problem, x0 if given else None)
         unread = [it.x.copy() for it, _ in zip(its, range(7))]
     for (x_fast, _), x_unread in zip(got, unread):
         np.testing.assert_array_equal(x_unread, x_fast)
@@ -398,17 +400,18 @@ def test_fast_iteration_paths_equal_the_plain_half_steps(case):
     for k, ((x_fast, d_fast), x_ref) in enumerate(zip(got, xs)):
         if k < len(ds):
             np.testing.assert_allclose(d_fast, ds[k], rtol=0, atol=1e-14)
-        if k == 0 and case == "x0 given":
+        if k == 0 and given:
             np.testing.assert_array_equal(x_fast, x0)
             continue
         assert np.all(np.isfinite(x_fast))
         assert np.abs(x_fast - x_ref).max() <= 1e-12 * scale
         np.testing.assert_array_equal(x_fast[fixed], targets)
-    if case == "ends pinned together":   # the rest direction, carried at every iterate
+    if "together" in case:   # one direction (the rest mesh's, or x_0's), carried throughout
         (spring,) = np.flatnonzero((model.springs.spring_vertices == [30, 31]).all(axis=1))
-        rest_d = model.mesh.vertices[30] - model.mesh.vertices[31]
+        first = x0[30] - x0[31] if given else model.mesh.vertices[30] - model.mesh.vertices[31]
+        expected = first * (model.springs.spring_rest_length[spring] / np.linalg.norm(first))
         for _, d_fast in got:
-            np.testing.assert_array_equal(d_fast[spring], rest_d)
+            np.testing.assert_allclose(d_fast[spring], expected, rtol=0, atol=1e-15)
 
 
 def test_iterates_carry_the_local_steps_directions():
