@@ -307,7 +307,10 @@ class LocalGlobalSolver(Solver):
         rhsT, rhs_nextT, cT = sysf.work
         pyT, eT = self._pyT, self._eT
         dirs.vectors_into(yT, pyT)
-        self._constant_into(cT, problem, sysf)
+        h2 = problem.h ** 2
+        c = np.zeros_like(y) if problem.f_ext is None else h2 * problem.f_ext
+        problem.anchors.add_rhs(c, h2, origin=y)
+        cT[...] = c[free].T
         x_fixed_T = None
         if len(fixed):
             x_pinned = x if x0 is None else problem.initial_guess()
@@ -369,18 +372,3 @@ class LocalGlobalSolver(Solver):
             k += 1
             yield Iterate(k, xT.T, norm(rhsT), d=dirs.current)
             rhsT, rhs_nextT = rhs_nextT, rhsT
-
-    @staticmethod
-    def _constant_into(cT: np.ndarray, problem: StepProblem, sysf: SystemFactor) -> None:
-        """cT = (h² f + h² K_anchor (q − y))_F, coordinate-major (3, f)."""
-        h2, f_ext, runs = problem.h ** 2, problem.f_ext, sysf.free_runs
-        if runs is not None and not len(problem.anchors):
-            for start, stop, offset in runs:   # by slices: no (n, 3) temporaries
-                if f_ext is None:
-                    cT[:, offset:offset + stop - start] = 0.0
-                else:
-                    np.multiply(f_ext[start:stop].T, h2, out=cT[:, offset:offset + stop - start])
-            return
-        c = np.zeros_like(problem.y) if f_ext is None else h2 * f_ext
-        problem.anchors.add_rhs(c, h2, origin=problem.y)
-        cT[...] = c[sysf.free].T
