@@ -2,7 +2,7 @@
 # make test : set up (first time only) and run the test suite
 # make bench: run the benchmarks (heavy measurements, not part of the tests)
 # make docs : build the documentation site into docs/_build/html (runs every gallery lesson;
-#             warnings are errors; a few minutes)
+#             warnings are errors)
 VENV := .venv
 PY := $(VENV)/bin/python
 

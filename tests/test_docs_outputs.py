@@ -1,0 +1,134 @@
+"""Every command output a page shows is what the command prints, to the digits shown.
+
+A ``console`` block (or any block with ``$ `` prompts) of README.md or docs/**/*.md that shows
+output lines under its commands is run: its commands, in order, with ``bash`` in a fresh
+working folder that looks like the repository root (``.venv``, ``examples``, ``docs`` and
+``clothsim`` linked in, ``../shared`` beside it), and each output line of the page must
+match one line the commands printed. Text must match exactly; each number must equal the
+printed number rounded to the digits the page shows (``4.837e-11`` matches 4.8372e-11, not
+4.8421e-11). A block preceded by ``<!-- not-run: reason -->`` is skipped with the reason.
+"""
+
+from __future__ import annotations
+
+import os
+import re
+import subprocess
+from pathlib import Path
+
+import pytest
+
+from clothsim.scene.files import data_root
+
+from .test_docs_pages import ALL, ROOT, Block
+
+NUMBER = re.compile(r"[-+]?(?:\d+\.\d*|\.\d+|\d+)(?:[eE][-+]?\d+)?")
+LINKED = (".venv", "examples", "docs", "clothsim", "pyproject.toml")
+
+
+def shown_outputs(block: Block) -> list[tuple[list[str], list[str]]]:
+    """(commands, output lines) of each prompted command of a block that shows output."""
+    out, cmds, lines = [], [], []
+    for s in block.code.splitlines():
+        if s.startswith("$ "):
+            if lines:
+                out.append((cmds, lines))
+                cmds, lines = [], []
+            cmds.append(re.sub(r"\s+#.*$", "", s[2:]).strip())
+        elif s.strip() and cmds:
+            lines.append(s.rstrip())
+    if cmds:
+        out.append((cmds, lines))
+    return out
+
+
+def with_output(block: Block) -> bool:
+    return any(lines for _, lines in shown_outputs(block))
+
+
+def _pattern(shown: str) -> tuple[re.Pattern, list[str]]:
+    """A regex matching ``shown`` with every number free, and the numbers shown."""
+    parts, numbers, last = [], [], 0
+    for m in NUMBER.finditer(shown):
+        parts.append(re.escape(shown[last:m.start()]))
+        parts.append(f"({NUMBER.pattern})")
+        numbers.append(m.group())
+        last = m.end()
+    parts.append(re.escape(shown[last:]))
+    return re.compile("^" + "".join(parts).strip() + "$"), numbers
+
+
+def _same_to_digits(shown: str, printed: str) -> bool:
+    """``printed`` rounded as ``shown`` is written gives ``shown``."""
+    if "e" in shown.lower():
+        mantissa = shown.lower().split("e")[0]
+        decimals = len(mantissa.split(".")[1]) if "." in mantissa else 0
+        return f"{float(printed):.{decimals}e}" == f"{float(shown):.{decimals}e}"
+    decimals = len(shown.split(".")[1]) if "." in shown else 0
+    return f"{float(printed):.{decimals}f}" == f"{float(shown):.{decimals}f}"
+
+
+def line_matches(shown: str, printed: str) -> bool:
+    """Does a printed line say what the page shows, to the digits shown?
+
+    Parameters
+    ----------
+    shown, printed : str
+        The page's output line and one line the command printed.
+
+    Returns
+    -------
+    bool
+    """
+    pattern, numbers = _pattern(shown.strip())
+    m = pattern.match(printed.strip())
+    return bool(m) and all(_same_to_digits(a, b) for a, b in zip(numbers, m.groups()))
+
+
+def test_line_matching_can_fail():
+    shown = "PASS: positions, 61 frames, max error 4.837e-11 m"
+    assert line_matches(shown, "PASS: positions, 61 frames, max error 4.83712e-11 m")
+    assert not line_matches(shown, "PASS: positions, 61 frames, max error 4.842e-11 m")
+    assert not line_matches(shown, "FAIL: positions, 61 frames, max error 4.837e-11 m")
+    assert line_matches("hanging: 30 frames written to out/hang",
+                        "hanging: 30 frames written to out/hang")
+    assert line_matches("took 0.50 s", "took 0.5049 s")
+    assert not line_matches("took 0.51 s", "took 0.5049 s")
+
+
+def _workspace(tmp_path: Path) -> Path:
+    work = tmp_path / "repo"
+    work.mkdir()
+    for name in LINKED:
+        (work / name).symlink_to(ROOT / name)
+    if data_root().is_dir():
+        (tmp_path / "shared").mkdir()
+        (tmp_path / "shared" / "data").symlink_to(data_root())
+    return work
+
+
+OUTPUT_BLOCKS = [b for b in ALL if with_output(b)]
+
+
+@pytest.mark.parametrize("block", [pytest.param(b, id=b.name) for b in OUTPUT_BLOCKS])
+def test_shown_output_is_printed(block, tmp_path):
+    if block.not_run:
+        pytest.skip(block.not_run)
+    if not (ROOT / ".venv" / "bin" / "clothsim").exists():
+        pytest.skip("no .venv at the repository root (make setup builds it)")
+    if "../shared/data" in block.code and not data_root().is_dir():
+        pytest.skip(f"needs the shared data ({data_root()})")
+    work = _workspace(tmp_path)
+    env = {k: v for k, v in os.environ.items() if not k.startswith(("PYTHON", "CLOTHSIM"))}
+    env["CLOTHSIM_DATA"] = str(data_root())
+    missing = []
+    for cmds, shown in shown_outputs(block):
+        printed = []
+        for cmd in cmds:
+            r = subprocess.run(["bash", "-c", cmd], cwd=work, env=env, capture_output=True,
+                               text=True, timeout=300)
+            printed += (r.stdout + r.stderr).splitlines()
+        missing += [f"{cmds[-1]!r} shows {s!r}" for s in shown
+                    if not any(line_matches(s, p) for p in printed)]
+    assert not missing, (f"{block.name}: output the commands no longer print "
+                         f"(regenerate the page):\n" + "\n".join(missing))
