@@ -3,10 +3,12 @@
 matplotlib is imported inside the functions, never at ``import clothsim``. Figures are
 made with :class:`matplotlib.figure.Figure` and the Agg canvas, so nothing touches pyplot's
 global state or needs a display. The cloth is drawn in 2-D through an orthographic
-:class:`View` (y up) with depth-sorted, shaded triangles (much faster than mplot3d),
-together with the obstacles (plane, sphere, box; :mod:`clothsim.display`) and the pinned
-vertices (red dots). The picture is framed on the cloth and its obstacles, and its axes are
-the screen axes of the view, in metres.
+:class:`~clothsim.camera.View` (y up) with depth-sorted, shaded triangles (much faster
+than mplot3d; layers and shading: :mod:`clothsim.camera`), together with the obstacles
+(plane, sphere, box; :mod:`clothsim.display`) and the pinned vertices (red dots). A cloth
+of more than :data:`MAX_TRIANGLES` triangles is drawn decimated, and the title says so.
+The picture is framed on the cloth and its obstacles, and its axes are the screen axes of
+the view, in metres.
 
 Functions
 ---------
@@ -26,12 +28,18 @@ from pathlib import Path
 
 import numpy as np
 
-from .display import OBSTACLE_COLORS, PIN_COLOR, obstacle_surfaces, pinned_points
+from .camera import View, hidden_triangles, shade
+from .display import OBSTACLE_COLORS, PIN_COLOR, decimate, obstacle_surfaces, pinned_points
 
 log = logging.getLogger(__name__)
 
 #: Triangles drawn over the whole preview at most (frames × triangles), to bound its time.
 PREVIEW_TRIANGLE_BUDGET = 250_000
+#: Triangles of the cloth drawn in one picture at most; a larger cloth is drawn decimated
+#: (:func:`clothsim.display.decimate`) and the title says so.
+MAX_TRIANGLES = 20_000
+#: Cloths with fewer triangles are drawn with their edges (above, shading alone).
+EDGE_LIMIT = 3000
 FACE_COLOR = (0.35, 0.55, 0.85)
 EDGE_COLOR = (0.15, 0.25, 0.45)
 
@@ -46,76 +54,11 @@ def _matplotlib():
     return Figure, FigureCanvasAgg
 
 
-class View:
-    """Orthographic camera, y up: azimuth about y and elevation above the xz plane [deg].
-
-    Parameters
-    ----------
-    azimuth, elevation : float
-        Camera direction [deg].
-
-    Notes
-    -----
-    ``project(x)`` maps points (…, 3) to screen coordinates u (right), v (up) and a depth
-    that grows toward the camera. Drawing in 2-D with a depth sort (painter's algorithm)
-    is much faster than mplot3d and looks the same for a cloth.
-    """
-
-    def __init__(self, azimuth: float = 35.0, elevation: float = 25.0):
-        a, e = np.radians(azimuth), np.radians(elevation)
-        self.azimuth, self.elevation = float(azimuth), float(elevation)
-        self.toward = np.array([np.cos(e) * np.sin(a), np.sin(e), np.cos(e) * np.cos(a)])
-        self.right = np.array([np.cos(a), 0.0, -np.sin(a)])
-        self.up = np.cross(self.toward, self.right)
-        self.light = self.toward + 0.5 * self.up
-        self.light /= np.linalg.norm(self.light)
-
-    def project(self, x: np.ndarray) -> np.ndarray:
-        """Project points.
-
-        Parameters
-        ----------
-        x : ndarray, shape (..., 3)
-            Points [m].
-
-        Returns
-        -------
-        ndarray, shape (..., 3)
-            Screen coordinates u, v [m] and depth [m] (larger is nearer the camera).
-        """
-        return x @ np.stack([self.right, self.up, self.toward], axis=1)
-
-
-def _behind(surface, view: View, c: np.ndarray, eps: float) -> np.ndarray:
-    """Mask of points c (k, 3) hidden by a convex obstacle: the ray toward the camera from
-    c meets the solid (sphere: exactly; box: c is inside every camera-facing face plane)."""
-    if surface.kind == "sphere":
-        center = surface.vertices.mean(axis=0)
-        r = np.linalg.norm(surface.vertices - center, axis=1).max()
-        w = c - center
-        b = w @ view.toward
-        disc = b * b - (np.einsum("ij,ij->i", w, w) - r * r)
-        return (disc > 0) & (-b + np.sqrt(np.maximum(disc, 0)) > eps)
-    tri = surface.vertices[surface.triangles]
-    n = np.cross(tri[:, 1] - tri[:, 0], tri[:, 2] - tri[:, 0])
-    mid = tri.mean(axis=1)
-    n *= np.sign(np.einsum("ij,ij->i", n, mid - surface.vertices.mean(axis=0)))[:, None]
-    front = n @ view.toward > 0
-    n, mid = n[front] / np.linalg.norm(n[front], axis=1, keepdims=True), mid[front]
-    return np.all(c @ n.T - np.einsum("ij,ij->i", n, mid) < -eps, axis=1)
-
-
-def _shade(view: View, tri_xyz: np.ndarray) -> np.ndarray:
-    n = np.cross(tri_xyz[:, 1] - tri_xyz[:, 0], tri_xyz[:, 2] - tri_xyz[:, 0])
-    n /= np.maximum(np.linalg.norm(n, axis=1, keepdims=True), 1e-300)
-    return 0.35 + 0.65 * np.abs(n @ view.light)  # two-sided Lambert
-
-
 class _Artist:
     """Cloth triangles (shaded, depth-sorted with the obstacles), strands and pins."""
 
     def __init__(self, ax, mesh, view: View, x: np.ndarray, edges: bool, surfaces=(),
-                 effects=()):
+                 effects=(), shading: bool = True):
         from matplotlib.collections import LineCollection, PolyCollection
 
         self.view = view
@@ -123,6 +66,7 @@ class _Artist:
         self.strands = np.asarray(mesh.strands)
         self.effects = list(effects)
         self.edges = edges
+        self.shading = shading
         self.poly = self.lines = self.points = self.pins = None
         # static obstacles: planes drawn first (the ground is behind everything above it);
         # of the convex ones only the camera-facing faces, drawn between the cloth they hide
@@ -131,7 +75,9 @@ class _Artist:
         self.convex = [x for x in surfaces if x.kind != "plane"]
         for surf in surfaces:
             tri = surf.vertices[surf.triangles]
-            color = _shade(view, tri)[:, None] * np.asarray(OBSTACLE_COLORS[surf.kind])
+            color = np.asarray(OBSTACLE_COLORS[surf.kind]) * (
+                shade(view, surf.vertices, surf.triangles, smooth=surf.kind == "sphere")[:, None]
+                if shading else np.ones((len(tri), 1)))
             if surf.kind == "plane":
                 ax.add_collection(PolyCollection(view.project(tri)[..., :2], facecolors=color,
                                                  edgecolors="face", linewidths=0.3,
@@ -165,17 +111,14 @@ class _Artist:
             t3 = self.tris
             # layers: cloth hidden by an obstacle, obstacles' front faces, the rest of the
             # cloth; each layer depth-sorted far to near (painter's algorithm)
-            hidden = np.zeros(len(t3), bool)
-            centroid = x[t3].mean(axis=1) if len(t3) else np.zeros((0, 3))
-            for surf in self.convex:
-                hidden |= _behind(surf, self.view, centroid, self.eps)
+            hidden = hidden_triangles(self.convex, self.view, x, t3, self.eps)
             layer = np.concatenate([np.ones(len(self.solid)), np.where(hidden, 0.0, 2.0)])
             depth = np.concatenate([self.solid[..., 2].mean(axis=1),
                                     p[t3][..., 2].mean(axis=1)])
             order = np.lexsort((depth, layer))
             verts = np.concatenate([self.solid[..., :2], p[t3][..., :2]])
-            face = np.concatenate([self.solid_color,
-                                   _shade(self.view, x[t3])[:, None] * np.asarray(FACE_COLOR)])
+            light = shade(self.view, x, t3) if self.shading else np.ones(len(t3))
+            face = np.concatenate([self.solid_color, light[:, None] * np.asarray(FACE_COLOR)])
             cloth = np.concatenate([np.zeros(len(self.solid), bool), np.ones(len(t3), bool)])
             fc = face[order]
             ec = np.where(cloth[order, None], np.asarray(EDGE_COLOR), fc) if self.edges else fc
@@ -208,7 +151,8 @@ def _frame(ax, view: View, X: np.ndarray, surfaces=()) -> None:
 
 
 def draw(ax, mesh, positions, *, effects=(), view: View | None = None, t: float = 0.0,
-         frame_on=None, edges: bool | None = None):
+         frame_on=None, edges: bool | None = None, shading: bool = True,
+         max_triangles: int = MAX_TRIANGLES):
     """Draw a cloth, its obstacles and its pinned vertices into a matplotlib Axes.
 
     Parameters
@@ -229,12 +173,24 @@ def draw(ax, mesh, positions, *, effects=(), view: View | None = None, t: float 
     frame_on : ndarray, shape (..., 3), optional
         Points to frame the picture on (default: ``positions`` and the obstacles).
     edges : bool, optional
-        Draw triangle edges (default: when the mesh has fewer than 3000 triangles).
+        Draw triangle edges (default: when the mesh has fewer than ``EDGE_LIMIT`` = 3000
+        triangles).
+    shading : bool
+        Shade the cloth and the obstacles (light from the camera's side); False draws
+        each in one flat colour (``FACE_COLOR``, ``OBSTACLE_COLORS``).
+    max_triangles : int
+        A cloth with more triangles is drawn decimated (:func:`clothsim.display.decimate`).
 
     Returns
     -------
     matplotlib.axes.Axes
         ``ax``.
+
+    Notes
+    -----
+    The cloth an obstacle hides from the camera is drawn under the obstacle's front faces,
+    the rest over them; cloth lying on an obstacle is drawn on it
+    (:func:`clothsim.camera.hidden_triangles`).
 
     Examples
     --------
@@ -245,14 +201,22 @@ def draw(ax, mesh, positions, *, effects=(), view: View | None = None, t: float 
     >>> ax is draw(ax, mesh, mesh.vertices, effects=[cs.Box([-.2, -.5, -.2], [.2, -.1, .2])])
     True
     """
+    _draw(ax, mesh, positions, effects, view, t, frame_on, edges, shading, max_triangles)
+    return ax
+
+
+def _draw(ax, mesh, positions, effects, view, t, frame_on, edges, shading,
+          max_triangles) -> str:
+    """:func:`draw`; returns the decimation note ("" when the whole cloth is drawn)."""
     x = np.asarray(positions, dtype=np.float64)
     view = view or View()
     X = x if frame_on is None else np.asarray(frame_on, dtype=np.float64)
     surfaces = obstacle_surfaces(effects, X)
     _frame(ax, view, X, surfaces)
-    _Artist(ax, mesh, view, x, len(mesh.triangles) < 3000 if edges is None else edges,
-            surfaces, effects).update(x, t)
-    return ax
+    edges = mesh.triangle_count < EDGE_LIMIT if edges is None else edges
+    drawn, note = decimate(mesh, max_triangles)
+    _Artist(ax, drawn, view, x, edges, surfaces, effects, shading).update(x, t)
+    return note
 
 
 def preview_frame_indices(frame_count: int, triangle_count: int, *,
@@ -289,6 +253,9 @@ def write_preview(path, positions, mesh, *, times=None, effects=(), max_frames: 
                   size: float = 6.4, dpi: int = 80) -> Path:
     """Write an animated GIF of a trajectory, with its obstacles and pins.
 
+    A cloth of more than ``MAX_TRIANGLES`` triangles is drawn decimated, and the title
+    says so.
+
     Parameters
     ----------
     path : str or Path
@@ -315,19 +282,21 @@ def write_preview(path, positions, mesh, *, times=None, effects=(), max_frames: 
 
     path = Path(path)
     X = np.asarray(positions, dtype=np.float64)
-    idx = preview_frame_indices(len(X), len(mesh.triangles), max_frames=max_frames)
+    drawn, note = decimate(mesh, MAX_TRIANGLES)
+    idx = preview_frame_indices(len(X), drawn.triangle_count, max_frames=max_frames)
     fig, ax = _figure(size, dpi)
     view = View()
     surfaces = obstacle_surfaces(effects, X[idx])
     _frame(ax, view, X[idx], surfaces)
-    art = _Artist(ax, mesh, view, X[idx[0]], len(mesh.triangles) < 3000, surfaces, effects)
-    title = fig.suptitle("", fontsize=9)
+    art = _Artist(ax, drawn, view, X[idx[0]], mesh.triangle_count < EDGE_LIMIT, surfaces,
+                  effects)
+    title = fig.suptitle(note, fontsize=9)
 
     def frame(j):
         t = float(times[idx[j]]) if times is not None else 0.0
         art.update(X[idx[j]], t)
         if times is not None:
-            title.set_text(f"t = {t:.2f} s")
+            title.set_text(f"t = {t:.2f} s" + (f" ({note})" if note else ""))
 
     span = float(times[idx[-1]] - times[idx[0]]) if times is not None and len(idx) > 1 else 0
     fps = max(1.0, min(30.0, (len(idx) - 1) / span)) if span > 0 else 10.0
@@ -345,6 +314,9 @@ def write_preview(path, positions, mesh, *, times=None, effects=(), max_frames: 
 def write_final_image(path, positions, mesh, *, title: str = "", effects=(), t: float = 0.0,
                       size: float = 6.0, dpi: int = 100) -> Path:
     """Write one frame of ``mesh`` with its obstacles and pins as a PNG image.
+
+    A cloth of more than ``MAX_TRIANGLES`` triangles is drawn decimated, and the title
+    says so.
 
     Parameters
     ----------
@@ -370,13 +342,14 @@ def write_final_image(path, positions, mesh, *, title: str = "", effects=(), t: 
     """
     path = Path(path)
     fig, ax = _figure(size, dpi)
-    draw(ax, mesh, positions, effects=effects, t=t)
-    if title:
-        fig.suptitle(title, fontsize=10)
+    note = _draw(ax, mesh, positions, effects, None, t, None, None, True, MAX_TRIANGLES)
+    if title or note:
+        fig.suptitle(", ".join(x for x in (title, note) if x), fontsize=10)
     tmp = path.with_name(f".{path.stem}.tmp.png")
     fig.savefig(tmp, format="png")
     tmp.replace(path)
     return path
 
 
-__all__ = ["draw", "View", "write_preview", "write_final_image", "preview_frame_indices"]
+__all__ = ["draw", "write_preview", "write_final_image", "preview_frame_indices",
+           "MAX_TRIANGLES", "EDGE_LIMIT", "PREVIEW_TRIANGLE_BUDGET"]
