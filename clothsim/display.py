@@ -162,6 +162,33 @@ def pinned_points(effects, positions=None, t: float = 0.0) -> np.ndarray:
     return np.vstack(pts)
 
 
+def pinned_mask(effects, vertex_count: int, t: float = 0.0) -> np.ndarray:
+    """Which vertices a bound, active pin holds at time ``t``.
+
+    Parameters
+    ----------
+    effects : iterable of Effect
+        Effects of a bound simulation (exact and penalty pins alike).
+    vertex_count : int
+        n, the cloth's vertices.
+    t : float
+        Time [s] (a pin with a ``release`` time holds nothing after it).
+
+    Returns
+    -------
+    ndarray, shape (n,), bool
+        True for the pinned vertices.
+    """
+    mask = np.zeros(int(vertex_count), bool)
+    for e in effects:
+        if getattr(e, "kind", "") != "pin" or getattr(e, "model", None) is None:
+            continue
+        if hasattr(e, "active") and not e.active(t):
+            continue
+        mask[np.asarray(e.vertices, dtype=np.int64)] = True
+    return mask
+
+
 def surfaces_mesh(surfaces):
     """Merge surfaces into one vertex array, triangle array and per-vertex obstacle index.
 
@@ -310,6 +337,7 @@ def write_obstacles(path, effects, positions) -> object | None:
     return path
 
 
-__all__ = ["Surface", "obstacle_surfaces", "decimate", "pinned_points", "surfaces_mesh",
+__all__ = ["Surface", "obstacle_surfaces", "decimate", "pinned_points", "pinned_mask",
+           "surfaces_mesh",
            "write_obstacles", "OBSTACLES_NAME",
            "OBSTACLE_COLORS", "PIN_COLOR"]
