@@ -16,7 +16,8 @@ draw
     Draw a cloth (and its obstacles and pins) into a given matplotlib Axes (notebooks).
 write_preview
     ``preview.gif``: at most ``max_frames`` evenly spaced frames (fewer for big meshes, so
-    it stays quick), 512 × 512 px, written with :class:`matplotlib.animation.PillowWriter`.
+    it stays quick), 512 × 512 px; the still parts drawn once, the cloth per frame
+    (blitting), saved with Pillow.
 write_final_image
     ``final.png``: one frame, 600 × 600 px.
 """
@@ -104,6 +105,10 @@ class _Artist:
         if any(getattr(e, "kind", "") == "pin" for e in self.effects):
             self.pins = ax.plot([], [], "o", ms=4, color=PIN_COLOR, zorder=4)[0]
         self.update(x)
+
+    def moving(self) -> list:
+        """The artists :meth:`update` changes (the rest of the figure stays as drawn)."""
+        return [a for a in (self.poly, self.lines, self.points, self.pins) if a is not None]
 
     def update(self, x: np.ndarray, t: float = 0.0):
         p = self.view.project(x)
@@ -278,8 +283,6 @@ def write_preview(path, positions, mesh, *, times=None, effects=(), max_frames: 
     Path
         ``path``.
     """
-    from matplotlib.animation import PillowWriter
-
     path = Path(path)
     X = np.asarray(positions, dtype=np.float64)
     drawn, note = decimate(mesh, MAX_TRIANGLES)
@@ -301,14 +304,34 @@ def write_preview(path, positions, mesh, *, times=None, effects=(), max_frames: 
     span = float(times[idx[-1]] - times[idx[0]]) if times is not None and len(idx) > 1 else 0
     fps = max(1.0, min(30.0, (len(idx) - 1) / span)) if span > 0 else 10.0
     tmp = path.with_name(f".{path.stem}.tmp.gif")
-    writer = PillowWriter(fps=fps)
-    with writer.saving(fig, tmp, dpi):  # one draw per frame (FuncAnimation draws twice)
-        for j in range(len(idx)):
-            frame(j)
-            writer.grab_frame()
+    _save_gif(fig, art.moving() + [title], frame, len(idx), tmp, fps)
     tmp.replace(path)
     log.info("wrote %s (%d frames)", path, len(idx))
     return path
+
+
+def _save_gif(fig, moving: list, frame, count: int, path: Path, fps: float) -> None:
+    """Draw the figure's still parts (axes, ticks, planes) once, then for each frame only
+    the ``moving`` artists over a copy of them (blitting), and save the frames as a looping
+    GIF (Pillow, as :class:`matplotlib.animation.PillowWriter` does)."""
+    from PIL import Image
+
+    canvas = fig.canvas
+    for a in moving:
+        a.set_animated(True)
+    canvas.draw()
+    still = canvas.copy_from_bbox(fig.bbox)
+    size = canvas.get_width_height()
+    images = []
+    for j in range(count):
+        frame(j)
+        canvas.restore_region(still)
+        for a in sorted(moving, key=lambda a: a.get_zorder()):
+            fig.draw_artist(a)
+        rgba = Image.frombuffer("RGBA", size, canvas.buffer_rgba(), "raw", "RGBA", 0, 1)
+        images.append(rgba.convert("RGB"))  # a copy, GIF-friendly
+    images[0].save(path, format="GIF", save_all=True, append_images=images[1:],
+                   duration=int(1000 / fps), loop=0)
 
 
 def write_final_image(path, positions, mesh, *, title: str = "", effects=(), t: float = 0.0,
