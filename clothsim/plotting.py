@@ -38,7 +38,7 @@ log = logging.getLogger(__name__)
 PREVIEW_TRIANGLE_BUDGET = 250_000
 #: Triangles of the cloth drawn in one picture at most; a larger cloth is drawn decimated
 #: (:func:`clothsim.display.decimate`) and the title says so.
-MAX_TRIANGLES = 20_000
+MAX_TRIANGLES = 10_000
 #: Cloths with fewer triangles are drawn with their edges (above, shading alone).
 EDGE_LIMIT = 3000
 FACE_COLOR = (0.35, 0.55, 0.85)
@@ -104,7 +104,6 @@ class _Artist:
                 self.points = ax.plot([], [], "o", ms=3, color="C3", zorder=3)[0]
         if any(getattr(e, "kind", "") == "pin" for e in self.effects):
             self.pins = ax.plot([], [], "o", ms=4, color=PIN_COLOR, zorder=4)[0]
-        self.update(x)
 
     def moving(self) -> list:
         """The artists :meth:`update` changes (the rest of the figure stays as drawn)."""

@@ -187,14 +187,27 @@ def test_decimated_mesh_keeps_the_outline_within_one_step():
     assert decimate(mesh, 10**6) == (mesh, "")
 
 
-def test_final_image_of_a_large_cloth_says_it_is_decimated(tmp_path, caplog):
-    from clothsim.plotting import write_final_image
+def test_pictures_of_a_large_cloth_say_they_are_decimated(tmp_path, monkeypatch):
+    from matplotlib.figure import Figure
 
-    mesh = cs.grid(120, 120)
-    path = write_final_image(tmp_path / "f.png", mesh.vertices, mesh, title="big")
-    assert path.stat().st_size > 0
-    _, note = decimate(mesh, 20_000)
-    assert note == "every 2nd row and column drawn"
+    from clothsim.plotting import MAX_TRIANGLES, write_final_image, write_preview
+
+    titles = []
+    suptitle = Figure.suptitle
+
+    def spy(self, text, **kw):
+        titles.append(text)
+        return suptitle(self, text, **kw)
+
+    monkeypatch.setattr(Figure, "suptitle", spy)
+    mesh = cs.grid(90, 90)  # 15 842 triangles
+    assert mesh.triangle_count > MAX_TRIANGLES
+    write_final_image(tmp_path / "f.png", mesh.vertices, mesh, title="big")
+    write_preview(tmp_path / "p.gif", np.stack([mesh.vertices] * 2), mesh)
+    small = cs.grid(20, 20)
+    write_final_image(tmp_path / "s.png", small.vertices, small, title="small")
+    assert titles == ["big, every 2nd row and column drawn", "every 2nd row and column drawn",
+                      "small"]
 
 
 def test_shading_shows_a_fold_that_flat_shading_would_show_only_by_its_edges():
