@@ -18,7 +18,9 @@ Which triangles a solid hides (:func:`hidden_triangles`)
 Shading (:func:`shade`)
     Two-sided Lambert with the light from the camera's side, from per-vertex normals (the
     area-weighted mean of the adjacent triangles' normals) averaged over each triangle, so
-    folds and curvature show without edges; obstacles keep their flat faces.
+    folds and curvature show without edges; obstacles keep their flat faces. The cloth is
+    also darkened with its distance from the camera (:func:`depth_cue`, up to 30 % at the
+    far end of the picture), so that a flat sheet shows its tilt.
 """
 
 from __future__ import annotations
@@ -234,4 +236,27 @@ def shade(view: View, x: np.ndarray, triangles: np.ndarray, *, smooth: bool = Tr
     return 0.3 + 0.7 * np.abs(n @ view.light)
 
 
-__all__ = ["View", "hidden_triangles", "solid_depth", "vertex_normals", "shade"]
+def depth_cue(depth: np.ndarray, near: float, far: float, strength: float = 0.3
+              ) -> np.ndarray:
+    """Brightness factor that darkens what lies farther from the camera (aerial
+    perspective), so even a flat sheet shows which way it is tilted.
+
+    Parameters
+    ----------
+    depth : ndarray, shape (m,)
+        Depths [m] (:meth:`View.project`'s third coordinate, larger is nearer).
+    near, far : float
+        Depths [m] of the nearest and farthest points of the picture.
+    strength : float
+        Darkening at ``far``, in [0, 1).
+
+    Returns
+    -------
+    ndarray, shape (m,)
+        1 at ``near`` down to ``1 - strength`` at ``far`` (clipped outside).
+    """
+    span = max(float(near - far), 1e-12)
+    return 1.0 - strength * np.clip((near - np.asarray(depth)) / span, 0.0, 1.0)
+
+
+__all__ = ["View", "hidden_triangles", "solid_depth", "vertex_normals", "shade", "depth_cue"]

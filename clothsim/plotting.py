@@ -29,7 +29,7 @@ from pathlib import Path
 
 import numpy as np
 
-from .camera import View, hidden_triangles, shade
+from .camera import View, depth_cue, hidden_triangles, shade
 from .display import OBSTACLE_COLORS, PIN_COLOR, decimate, obstacle_surfaces, pinned_points
 
 log = logging.getLogger(__name__)
@@ -59,7 +59,7 @@ class _Artist:
     """Cloth triangles (shaded, depth-sorted with the obstacles), strands and pins."""
 
     def __init__(self, ax, mesh, view: View, x: np.ndarray, edges: bool, surfaces=(),
-                 effects=(), shading: bool = True):
+                 effects=(), shading: bool = True, depth_range=None):
         from matplotlib.collections import LineCollection, PolyCollection
 
         self.view = view
@@ -68,6 +68,10 @@ class _Artist:
         self.effects = list(effects)
         self.edges = edges
         self.shading = shading
+        if depth_range is None:  # the cloth and the obstacles, as framed
+            d = view.project(np.vstack([x.reshape(-1, 3)] + [s.vertices for s in surfaces]))
+            depth_range = (float(d[:, 2].max()), float(d[:, 2].min()))
+        self.depth_range = depth_range
         self.poly = self.lines = self.points = self.pins = None
         # static obstacles: planes drawn first (the ground is behind everything above it);
         # of the convex ones only the camera-facing faces, drawn between the cloth they hide
@@ -121,7 +125,11 @@ class _Artist:
                                     p[t3][..., 2].mean(axis=1)])
             order = np.lexsort((depth, layer))
             verts = np.concatenate([self.solid[..., :2], p[t3][..., :2]])
-            light = shade(self.view, x, t3) if self.shading else np.ones(len(t3))
+            light = np.ones(len(t3))
+            if self.shading:
+                near, far = self.depth_range
+                light = shade(self.view, x, t3) * depth_cue(p[t3][..., 2].mean(axis=1), near,
+                                                            far)
             face = np.concatenate([self.solid_color, light[:, None] * np.asarray(FACE_COLOR)])
             cloth = np.concatenate([np.zeros(len(self.solid), bool), np.ones(len(t3), bool)])
             fc = face[order]
@@ -138,8 +146,9 @@ class _Artist:
             self.pins.set_data(q[:, 0], q[:, 1])
 
 
-def _frame(ax, view: View, X: np.ndarray, surfaces=()) -> None:
-    """Frame ``ax`` on the points X (…, 3) and the obstacle surfaces, equal scale, in m."""
+def _frame(ax, view: View, X: np.ndarray, surfaces=()) -> tuple[float, float]:
+    """Frame ``ax`` on the points X (…, 3) and the obstacle surfaces, equal scale, in m;
+    return the depths [m] of the nearest and the farthest of them."""
     pts = [X.reshape(-1, 3)] + [s.vertices for s in surfaces if s.kind != "plane"]
     pts += [s.vertices[s.triangles].mean(axis=1) for s in surfaces if s.kind == "plane"]
     p = view.project(np.vstack(pts))
@@ -152,6 +161,7 @@ def _frame(ax, view: View, X: np.ndarray, surfaces=()) -> None:
     ax.set_xlabel(f"screen x [m] (view azimuth {view.azimuth:g}°)", fontsize=7)
     ax.set_ylabel(f"screen y [m] (elevation {view.elevation:g}°)", fontsize=7)
     ax.tick_params(labelsize=6)
+    return float(hi[2]), float(lo[2])
 
 
 def draw(ax, mesh, positions, *, effects=(), view: View | None = None, t: float = 0.0,
@@ -216,10 +226,10 @@ def _draw(ax, mesh, positions, effects, view, t, frame_on, edges, shading,
     view = view or View()
     X = x if frame_on is None else np.asarray(frame_on, dtype=np.float64)
     surfaces = obstacle_surfaces(effects, X)
-    _frame(ax, view, X, surfaces)
+    depth_range = _frame(ax, view, X, surfaces)
     edges = mesh.triangle_count < EDGE_LIMIT if edges is None else edges
     drawn, note = decimate(mesh, max_triangles)
-    _Artist(ax, drawn, view, x, edges, surfaces, effects, shading).update(x, t)
+    _Artist(ax, drawn, view, x, edges, surfaces, effects, shading, depth_range).update(x, t)
     return note
 
 
@@ -289,9 +299,9 @@ def write_preview(path, positions, mesh, *, times=None, effects=(), max_frames: 
     fig, ax = _figure(size, dpi)
     view = View()
     surfaces = obstacle_surfaces(effects, X[idx])
-    _frame(ax, view, X[idx], surfaces)
+    depth_range = _frame(ax, view, X[idx], surfaces)
     art = _Artist(ax, drawn, view, X[idx[0]], mesh.triangle_count < EDGE_LIMIT, surfaces,
-                  effects)
+                  effects, True, depth_range)
     title = fig.suptitle(note, fontsize=9)
 
     def frame(j):

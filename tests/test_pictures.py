@@ -225,3 +225,31 @@ def test_shading_shows_a_fold_that_flat_shading_would_show_only_by_its_edges():
     # face normals would make them
     faceted = shade(view, x, mesh.triangles, smooth=False)
     assert np.abs(np.diff(lit[::2])).max() < np.abs(np.diff(faceted[::2])).max()
+
+
+def test_a_large_flat_sheet_shows_its_tilt_without_edges():
+    """Above the edge limit a flat sheet is not one flat colour: it darkens with distance
+    from the camera (and no triangle edges are drawn)."""
+    from matplotlib.backends.backend_agg import FigureCanvasAgg
+    from matplotlib.figure import Figure
+
+    from clothsim.plotting import EDGE_COLOR, EDGE_LIMIT
+
+    mesh = cs.grid(60, 60, size=(1.0, 1.0))  # lies flat: every normal the same
+    assert mesh.triangle_count > EDGE_LIMIT
+    view = View()
+    fig = Figure(figsize=(6, 6), dpi=100)
+    canvas = FigureCanvasAgg(fig)
+    ax = fig.add_axes((0, 0, 1, 1))
+    draw(ax, mesh, mesh.vertices, view=view)
+    canvas.draw()
+    rgb = np.asarray(canvas.buffer_rgba())[..., :3] / 255.0
+    depth = view.project(mesh.vertices)[:, 2]
+    inner = interior(mesh)
+    near = np.flatnonzero(inner)[np.argmax(depth[inner])]
+    far = np.flatnonzero(inner)[np.argmin(depth[inner])]
+    xy = ax.transData.transform(view.project(mesh.vertices[[near, far]])[:, :2])
+    rows = (rgb.shape[0] - 1 - np.floor(xy[:, 1])).astype(int)
+    near_rgb, far_rgb = rgb[rows, np.floor(xy[:, 0]).astype(int)]
+    assert far_rgb.sum() < 0.8 * near_rgb.sum()
+    assert not is_colour(rgb, EDGE_COLOR).any()
