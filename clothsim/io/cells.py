@@ -44,6 +44,75 @@ def cell_blocks(mesh: Mesh, springs=None) -> list[tuple[str, np.ndarray]]:
     return blocks
 
 
+class FrameFields:
+    """The fields of a cloth's frames that depend on its rest state, prepared once:
+    ``stretch`` per vertex and ``area_ratio`` per cell (see :func:`vertex_stretch`,
+    :func:`cell_area_ratio`).
+
+    Parameters
+    ----------
+    rest : ndarray, shape (n, 3)
+        Rest positions [m] (the areas at rest).
+    blocks : list of (str, ndarray)
+        Cell blocks as :func:`cell_blocks` returns them.
+    spring_vertices : ndarray, shape (s, 2), int
+        The two vertices of each spring.
+    spring_rest_length : ndarray, shape (s,)
+        Rest length r of each spring [m] (springs of rest length 0 are left out).
+    """
+
+    def __init__(self, rest, blocks, spring_vertices, spring_rest_length):
+        ij = np.asarray(spring_vertices, dtype=np.int64).reshape(-1, 2)
+        r = np.asarray(spring_rest_length, dtype=np.float64)
+        self.n = len(rest)
+        self.ij, self.inv_rest = ij[r > 0], 1.0 / r[r > 0]
+        self.flat = self.ij.T.ravel()  # first ends, then second ends
+        self.count = np.maximum(np.bincount(self.flat, minlength=self.n), 1)
+        self.blocks = blocks
+        self.rest_area = [_areas(np.asarray(rest, float), c) if k == "triangle" else None
+                          for k, c in blocks]
+
+    def stretch(self, x: np.ndarray) -> np.ndarray:
+        """Mean |ℓ/r − 1| of each vertex's springs, shape (n,) (0 without springs).
+
+        Parameters
+        ----------
+        x : ndarray, shape (n, 3)
+            Positions [m].
+
+        Returns
+        -------
+        ndarray, shape (n,), float64
+            Dimensionless.
+        """
+        d = x[self.ij[:, 0]] - x[self.ij[:, 1]]
+        strain = np.abs(np.sqrt(np.einsum("ij,ij->i", d, d)) * self.inv_rest - 1.0)
+        return np.bincount(self.flat, np.tile(strain, 2), minlength=self.n) / self.count
+
+    def area_ratio(self, x: np.ndarray) -> list[np.ndarray]:
+        """Area over rest area per cell of each block (NaN for lines, vertices and triangles
+        of zero rest area).
+
+        Parameters
+        ----------
+        x : ndarray, shape (n, 3)
+            Positions [m].
+
+        Returns
+        -------
+        list of ndarray
+            One array per block.
+        """
+        out = []
+        for (_, cells), a0 in zip(self.blocks, self.rest_area):
+            if a0 is None:
+                out.append(np.full(len(cells), np.nan))
+            else:
+                with np.errstate(divide="ignore", invalid="ignore"):
+                    out.append(np.where(a0 > 0, _areas(x, cells) / a0, np.nan))
+        return out
+
+
 def vertex_stretch(x: np.ndarray, spring_vertices: np.ndarray,
                    spring_rest_length: np.ndarray) -> np.ndarray:
     """Mean relative stretch of each vertex's springs: mean over them of |ℓ/r − 1|.
@@ -63,20 +132,13 @@ def vertex_stretch(x: np.ndarray, spring_vertices: np.ndarray,
         Dimensionless; 0 for a vertex without springs and everywhere at rest.
     """
     x = np.asarray(x, dtype=np.float64)
-    ij = np.asarray(spring_vertices, dtype=np.int64).reshape(-1, 2)
-    r = np.asarray(spring_rest_length, dtype=np.float64)
-    ok = r > 0
-    ij, r = ij[ok], r[ok]
-    strain = np.abs(np.linalg.norm(x[ij[:, 0]] - x[ij[:, 1]], axis=1) / r - 1.0)
-    n = len(x)
-    total = np.bincount(ij.ravel(), np.repeat(strain, 2), minlength=n)
-    count = np.bincount(ij.ravel(), minlength=n)
-    return total / np.maximum(count, 1)
+    return FrameFields(x, [], spring_vertices, spring_rest_length).stretch(x)
 
 
 def _areas(x: np.ndarray, triangles: np.ndarray) -> np.ndarray:
     t = x[triangles]
-    return 0.5 * np.linalg.norm(np.cross(t[:, 1] - t[:, 0], t[:, 2] - t[:, 0]), axis=1)
+    c = np.cross(t[:, 1] - t[:, 0], t[:, 2] - t[:, 0])
+    return 0.5 * np.sqrt(np.einsum("ij,ij->i", c, c))
 
 
 def cell_area_ratio(blocks, rest: np.ndarray, x: np.ndarray) -> list[np.ndarray]:
@@ -95,15 +157,8 @@ def cell_area_ratio(blocks, rest: np.ndarray, x: np.ndarray) -> list[np.ndarray]
         One array per block: the ratio for ``triangle`` blocks (NaN for a triangle of zero
         rest area), NaN for line and vertex cells (they have no area).
     """
-    out = []
-    for kind, cells in blocks:
-        if kind == "triangle":
-            a0 = _areas(rest, cells)
-            with np.errstate(divide="ignore", invalid="ignore"):
-                out.append(np.where(a0 > 0, _areas(x, cells) / a0, np.nan))
-        else:
-            out.append(np.full(len(cells), np.nan))
-    return out
+    return FrameFields(rest, blocks, np.zeros((0, 2), np.int64), np.zeros(0)).area_ratio(
+        np.asarray(x, dtype=np.float64))
 
 
-__all__ = ["cell_blocks", "vertex_stretch", "cell_area_ratio"]
+__all__ = ["cell_blocks", "FrameFields", "vertex_stretch", "cell_area_ratio"]

@@ -18,7 +18,7 @@ import numpy as np
 
 from ..errors import InputError
 from ..mesh import Mesh
-from .cells import cell_area_ratio, cell_blocks, vertex_stretch
+from .cells import FrameFields, cell_blocks
 from .common import MeshioFailure, atomic_path, load_meshio, one_line, quietly
 
 logger = logging.getLogger(__name__)
@@ -89,6 +89,8 @@ class FrameWriter:
         self.pinned = pinned
         self._static: list[str] = []
         self._cells = cell_blocks(mesh, None if springs is None else springs.spring_vertices)
+        self._fields_of = None if springs is None else FrameFields(
+            mesh.vertices, self._cells, springs.spring_vertices, springs.spring_rest_length)
 
     def filename(self, index: int) -> str:
         """File name of frame ``index``, e.g. ``frame_000012.vtu``.
@@ -158,11 +160,10 @@ class FrameWriter:
         if self.pinned is not None:
             mask = self.pinned(time) if callable(self.pinned) else self.pinned
             point_data["pinned"] = np.asarray(mask, dtype=bool).astype(np.uint8)
-        if self.springs is not None:
-            point_data["stretch"] = vertex_stretch(x, self.springs.spring_vertices,
-                                                   self.springs.spring_rest_length)
+        if self._fields_of is not None:
+            point_data["stretch"] = self._fields_of.stretch(x)
             if self.mesh.triangle_count:
-                cell_data["area_ratio"] = cell_area_ratio(self._cells, self.mesh.vertices, x)
+                cell_data["area_ratio"] = self._fields_of.area_ratio(x)
         return point_data, cell_data
 
     def add_static(self, name: str) -> None:
