@@ -167,6 +167,9 @@ def hidden_triangles(surfaces, view: View, x: np.ndarray, triangles: np.ndarray,
     hidden = np.zeros(len(triangles), bool)
     if not len(triangles):
         return hidden
+    # only the vertices drawn (a decimated cloth uses few of them)
+    used, local = np.unique(triangles, return_inverse=True)
+    x, triangles = np.asarray(x)[used], local.reshape(-1, 3)
     c = x[triangles].mean(axis=1)
     for surf in surfaces:
         if surf.kind == "plane":
