@@ -4,7 +4,8 @@ matplotlib is imported inside the functions, never at ``import clothsim``. Figur
 made with :class:`matplotlib.figure.Figure` and the Agg canvas, so nothing touches pyplot's
 global state or needs a display. The cloth is drawn in 2-D through an orthographic
 :class:`~clothsim.camera.View` (y up) with depth-sorted, shaded triangles (much faster
-than mplot3d; layers and shading: :mod:`clothsim.camera`), together with the obstacles
+than mplot3d; the artists: :mod:`clothsim.painter`, layers and shading:
+:mod:`clothsim.camera`), together with the obstacles
 (plane, sphere, box; :mod:`clothsim.display`) and the pinned vertices (red dots). A cloth
 of more than :data:`MAX_TRIANGLES` triangles is drawn decimated, and the title says so.
 The picture is framed on the cloth and its obstacles, and its axes are the screen axes of
@@ -29,8 +30,9 @@ from pathlib import Path
 
 import numpy as np
 
-from .camera import View, depth_cue, hidden_triangles, shade
-from .display import OBSTACLE_COLORS, PIN_COLOR, decimate, obstacle_surfaces, pinned_points
+from .camera import View
+from .display import decimate, obstacle_surfaces
+from .painter import SceneArtist, frame_axes
 
 log = logging.getLogger(__name__)
 
@@ -41,8 +43,6 @@ PREVIEW_TRIANGLE_BUDGET = 250_000
 MAX_TRIANGLES = 10_000
 #: Cloths with fewer triangles are drawn with their edges (above, shading alone).
 EDGE_LIMIT = 3000
-FACE_COLOR = (0.35, 0.55, 0.85)
-EDGE_COLOR = (0.15, 0.25, 0.45)
 
 
 def _matplotlib():
@@ -53,115 +53,6 @@ def _matplotlib():
         raise ImportError("clothsim needs matplotlib for pictures: pip install matplotlib") \
             from exc
     return Figure, FigureCanvasAgg
-
-
-class _Artist:
-    """Cloth triangles (shaded, depth-sorted with the obstacles), strands and pins."""
-
-    def __init__(self, ax, mesh, view: View, x: np.ndarray, edges: bool, surfaces=(),
-                 effects=(), shading: bool = True, depth_range=None):
-        from matplotlib.collections import LineCollection, PolyCollection
-
-        self.view = view
-        self.tris = np.asarray(mesh.triangles)
-        self.strands = np.asarray(mesh.strands)
-        self.effects = list(effects)
-        self.edges = edges
-        self.shading = shading
-        if depth_range is None:  # the cloth and the obstacles, as framed
-            d = view.project(np.vstack([x.reshape(-1, 3)] + [s.vertices for s in surfaces]))
-            depth_range = (float(d[:, 2].max()), float(d[:, 2].min()))
-        self.depth_range = depth_range
-        self.poly = self.lines = self.points = self.pins = None
-        # static obstacles: planes drawn first (the ground is behind everything above it);
-        # of the convex ones only the camera-facing faces, drawn between the cloth they hide
-        # and the rest of the cloth (see update)
-        solid, scol = [], []
-        self.convex = [x for x in surfaces if x.kind != "plane"]
-        for surf in surfaces:
-            tri = surf.vertices[surf.triangles]
-            color = np.asarray(OBSTACLE_COLORS[surf.kind]) * (
-                shade(view, surf.vertices, surf.triangles, smooth=surf.kind == "sphere")[:, None]
-                if shading else np.ones((len(tri), 1)))
-            if surf.kind == "plane":
-                ax.add_collection(PolyCollection(view.project(tri)[..., :2], facecolors=color,
-                                                 edgecolors="face", linewidths=0.3,
-                                                 zorder=0.5))
-                continue
-            n = np.cross(tri[:, 1] - tri[:, 0], tri[:, 2] - tri[:, 0])
-            out = np.einsum("ij,ij->i", n, tri.mean(axis=1) - surf.vertices.mean(axis=0))
-            front = (n @ view.toward) * np.sign(out) > 0  # camera-facing faces only
-            solid.append(view.project(tri[front]))
-            scol.append(color[front])
-        self.solid = np.concatenate(solid) if solid else np.zeros((0, 3, 3))
-        self.solid_color = np.concatenate(scol) if scol else np.zeros((0, 3))
-        size = np.ptp(x.reshape(-1, 3), axis=0).max() if x.size else 1.0
-        self.eps = 1e-3 * max(float(size), 1e-3)
-        if len(self.tris) or len(self.solid):
-            self.poly = PolyCollection([], linewidths=0.15 if edges else 0.3,
-                                       antialiased=False, zorder=1)
-            ax.add_collection(self.poly)
-        if len(self.strands):
-            self.lines = LineCollection([], colors="k", linewidths=1.0, zorder=2)
-            ax.add_collection(self.lines)
-            if not len(self.tris):  # a spring network: show the masses too
-                self.points = ax.plot([], [], "o", ms=3, color="C3", zorder=3)[0]
-        if any(getattr(e, "kind", "") == "pin" for e in self.effects):
-            self.pins = ax.plot([], [], "o", ms=4, color=PIN_COLOR, zorder=4)[0]
-
-    def moving(self) -> list:
-        """The artists :meth:`update` changes (the rest of the figure stays as drawn)."""
-        return [a for a in (self.poly, self.lines, self.points, self.pins) if a is not None]
-
-    def update(self, x: np.ndarray, t: float = 0.0):
-        p = self.view.project(x)
-        if self.poly is not None:
-            t3 = self.tris
-            # layers: cloth hidden by an obstacle, obstacles' front faces, the rest of the
-            # cloth; each layer depth-sorted far to near (painter's algorithm)
-            hidden = hidden_triangles(self.convex, self.view, x, t3, self.eps)
-            layer = np.concatenate([np.ones(len(self.solid)), np.where(hidden, 0.0, 2.0)])
-            depth = np.concatenate([self.solid[..., 2].mean(axis=1),
-                                    p[t3][..., 2].mean(axis=1)])
-            order = np.lexsort((depth, layer))
-            verts = np.concatenate([self.solid[..., :2], p[t3][..., :2]])
-            light = np.ones(len(t3))
-            if self.shading:
-                near, far = self.depth_range
-                light = shade(self.view, x, t3) * depth_cue(p[t3][..., 2].mean(axis=1), near,
-                                                            far)
-            face = np.concatenate([self.solid_color, light[:, None] * np.asarray(FACE_COLOR)])
-            cloth = np.concatenate([np.zeros(len(self.solid), bool), np.ones(len(t3), bool)])
-            fc = face[order]
-            ec = np.where(cloth[order, None], np.asarray(EDGE_COLOR), fc) if self.edges else fc
-            self.poly.set_verts(verts[order])
-            self.poly.set_facecolor(fc)
-            self.poly.set_edgecolor(ec)
-        if self.lines is not None:
-            self.lines.set_segments(p[self.strands][..., :2])
-        if self.points is not None:
-            self.points.set_data(p[:, 0], p[:, 1])
-        if self.pins is not None:
-            q = self.view.project(pinned_points(self.effects, x, t))
-            self.pins.set_data(q[:, 0], q[:, 1])
-
-
-def _frame(ax, view: View, X: np.ndarray, surfaces=()) -> tuple[float, float]:
-    """Frame ``ax`` on the points X (…, 3) and the obstacle surfaces, equal scale, in m;
-    return the depths [m] of the nearest and the farthest of them."""
-    pts = [X.reshape(-1, 3)] + [s.vertices for s in surfaces if s.kind != "plane"]
-    pts += [s.vertices[s.triangles].mean(axis=1) for s in surfaces if s.kind == "plane"]
-    p = view.project(np.vstack(pts))
-    lo, hi = p.min(axis=0), p.max(axis=0)
-    mid = (lo + hi) / 2
-    half = max(float(np.max((hi - lo)[:2])) / 2, 1e-6) * 1.1
-    ax.set_xlim(mid[0] - half, mid[0] + half)
-    ax.set_ylim(mid[1] - half, mid[1] + half)
-    ax.set_aspect("equal")
-    ax.set_xlabel(f"screen x [m] (view azimuth {view.azimuth:g}°)", fontsize=7)
-    ax.set_ylabel(f"screen y [m] (elevation {view.elevation:g}°)", fontsize=7)
-    ax.tick_params(labelsize=6)
-    return float(hi[2]), float(lo[2])
 
 
 def draw(ax, mesh, positions, *, effects=(), view: View | None = None, t: float = 0.0,
@@ -191,7 +82,8 @@ def draw(ax, mesh, positions, *, effects=(), view: View | None = None, t: float 
         triangles).
     shading : bool
         Shade the cloth and the obstacles (light from the camera's side); False draws
-        each in one flat colour (``FACE_COLOR``, ``OBSTACLE_COLORS``).
+        each in one flat colour (:data:`clothsim.painter.FACE_COLOR`,
+        :data:`clothsim.display.OBSTACLE_COLORS`).
     max_triangles : int
         A cloth with more triangles is drawn decimated (:func:`clothsim.display.decimate`).
 
@@ -226,10 +118,10 @@ def _draw(ax, mesh, positions, effects, view, t, frame_on, edges, shading,
     view = view or View()
     X = x if frame_on is None else np.asarray(frame_on, dtype=np.float64)
     surfaces = obstacle_surfaces(effects, X)
-    depth_range = _frame(ax, view, X, surfaces)
+    depth_range = frame_axes(ax, view, X, surfaces)
     edges = mesh.triangle_count < EDGE_LIMIT if edges is None else edges
     drawn, note = decimate(mesh, max_triangles)
-    _Artist(ax, drawn, view, x, edges, surfaces, effects, shading, depth_range).update(x, t)
+    SceneArtist(ax, drawn, view, x, edges, surfaces, effects, shading, depth_range).update(x, t)
     return note
 
 
@@ -299,8 +191,8 @@ def write_preview(path, positions, mesh, *, times=None, effects=(), max_frames: 
     fig, ax = _figure(size, dpi)
     view = View()
     surfaces = obstacle_surfaces(effects, X[idx])
-    depth_range = _frame(ax, view, X[idx], surfaces)
-    art = _Artist(ax, drawn, view, X[idx[0]], mesh.triangle_count < EDGE_LIMIT, surfaces,
+    depth_range = frame_axes(ax, view, X[idx], surfaces)
+    art = SceneArtist(ax, drawn, view, X[idx[0]], mesh.triangle_count < EDGE_LIMIT, surfaces,
                   effects, True, depth_range)
     title = fig.suptitle(note, fontsize=9)
 

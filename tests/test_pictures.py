@@ -8,7 +8,8 @@ import pytest
 import clothsim as cs
 from clothsim.camera import View, hidden_triangles, shade, solid_depth
 from clothsim.display import OBSTACLE_COLORS, decimate, obstacle_surfaces
-from clothsim.plotting import FACE_COLOR, draw
+from clothsim.painter import FACE_COLOR
+from clothsim.plotting import draw
 from clothsim.scene import load_scene
 
 pytest.importorskip("matplotlib")
@@ -233,7 +234,8 @@ def test_a_large_flat_sheet_shows_its_tilt_without_edges():
     from matplotlib.backends.backend_agg import FigureCanvasAgg
     from matplotlib.figure import Figure
 
-    from clothsim.plotting import EDGE_COLOR, EDGE_LIMIT
+    from clothsim.painter import EDGE_COLOR
+    from clothsim.plotting import EDGE_LIMIT
 
     mesh = cs.grid(60, 60, size=(1.0, 1.0))  # lies flat: every normal the same
     assert mesh.triangle_count > EDGE_LIMIT
