@@ -32,10 +32,11 @@ class FrameWriter:
     Each frame file holds the positions as points, the triangles and the strands (line
     cells) of ``mesh``, and float64 point data ``"velocity"`` [m/s]. A mesh with neither
     triangles nor strands gets its springs as line cells, or one vertex cell per vertex,
-    so every frame reads back. Given ``springs``, frames also carry point data
-    ``"stretch"`` (mean |ℓ/r − 1| of the vertex's springs) and, for triangles, cell data
-    ``"area_ratio"`` (area over rest area, the rest shape being ``mesh.vertices``; NaN for
-    line and vertex cells); given ``pinned``, point data ``"pinned"`` (1 pinned, 0 free).
+    so every frame reads back. Given ``springs``, frames also carry float32 point data
+    ``"stretch"`` (mean |ℓ/r − 1| of the vertex's springs) and, for triangles, float32 cell
+    data ``"area_ratio"`` (area over rest area, the rest shape being ``mesh.vertices``; NaN
+    for line and vertex cells); given ``pinned``, uint8 point data ``"pinned"`` (1 pinned,
+    0 free).
     ``trajectory.pvd`` (a ParaView collection) lists every frame written so far with its
     time [s] (``part="0"``), and with each frame every static part added by
     :meth:`add_static` (``part="1"``, …: ParaView shows them together as one multiblock);
@@ -160,10 +161,11 @@ class FrameWriter:
         if self.pinned is not None:
             mask = self.pinned(time) if callable(self.pinned) else self.pinned
             point_data["pinned"] = np.asarray(mask, dtype=bool).astype(np.uint8)
-        if self._fields_of is not None:
-            point_data["stretch"] = self._fields_of.stretch(x)
+        if self._fields_of is not None:  # for colouring: float32 keeps the files small
+            point_data["stretch"] = self._fields_of.stretch(x).astype(np.float32)
             if self.mesh.triangle_count:
-                cell_data["area_ratio"] = self._fields_of.area_ratio(x)
+                cell_data["area_ratio"] = [a.astype(np.float32)
+                                           for a in self._fields_of.area_ratio(x)]
         return point_data, cell_data
 
     def add_static(self, name: str) -> None:

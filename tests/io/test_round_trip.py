@@ -133,7 +133,7 @@ def test_frames_carry_pinned_stretch_and_area_ratio(runs):
     rest = meshio.read(out / "frame_000000.vtu")
     assert rest.point_data["pinned"].tolist() == [1] + [0] * 11
     np.testing.assert_array_equal(rest.point_data["stretch"], 0.0)
-    np.testing.assert_allclose(rest.cell_data["area_ratio"][0], 1.0, rtol=1e-12)
+    np.testing.assert_allclose(rest.cell_data["area_ratio"][0], 1.0, rtol=1e-6)
     m = meshio.read(out / "frame_000004.vtu")
     x = m.points
     ij, r = model.springs.spring_vertices, model.springs.spring_rest_length
@@ -144,12 +144,13 @@ def test_frames_carry_pinned_stretch_and_area_ratio(runs):
         s = abs(np.linalg.norm(x[a] - x[b]) / r0 - 1.0)
         direct[[a, b]] += s
         count[[a, b]] += 1
-    np.testing.assert_allclose(m.point_data["stretch"], direct / count, rtol=1e-9, atol=1e-15)
+    assert m.point_data["stretch"].dtype == np.float32  # for colouring: small files
+    np.testing.assert_allclose(m.point_data["stretch"], direct / count, rtol=1e-6, atol=1e-12)
     t = model.mesh.triangles
     area = lambda p: 0.5 * np.linalg.norm(np.cross(p[t[:, 1]] - p[t[:, 0]],  # noqa: E731
                                                    p[t[:, 2]] - p[t[:, 0]]), axis=1)
     np.testing.assert_allclose(m.cell_data["area_ratio"][0], area(x) / area(model.mesh.vertices),
-                               rtol=1e-12)
+                               rtol=1e-6)
     assert np.ptp(m.cell_data["area_ratio"][0]) > 1e-4  # not a constant
 
 
