@@ -92,6 +92,14 @@ def test_cloth_resting_on_an_obstacle_is_drawn_on_it(name, kind, at_least):
     assert is_colour(rgb, OBSTACLE_COLORS[kind]).sum() > 1000
 
 
+def test_cloth_lying_on_the_floor_is_drawn_on_it():
+    mesh = cs.grid(11, 11, size=(1.0, 1.0))  # at y = 0, on the plane's surface
+    floor = cs.Plane([0.0, 0.0, 0.0], [0.0, 1.0, 0.0])
+    rgb, pixel = render(mesh, np.array(mesh.vertices), [floor], View())
+    assert is_colour(colour_of(rgb, pixel[interior(mesh)]), FACE_COLOR).all()
+    assert is_colour(rgb, OBSTACLE_COLORS["plane"]).sum() > 1000  # the floor around it
+
+
 def test_cloth_draped_on_a_sphere_seen_from_below_is_hidden_by_it():
     """The same frame, camera under the sphere: the cloth on its top is behind it."""
     sim = last_frame("drape-sphere")
