@@ -7,7 +7,9 @@ pictures and ParaView do. Everything is read from the effects' public attributes
   quad (two triangles) centred under the cloth, sized to frame it;
 * :class:`~clothsim.effects.Sphere` (``center``, ``radius``): a triangulated UV sphere;
 * :class:`~clothsim.effects.Box` (``min``, ``max``): 8 corners, 12 triangles;
-* :class:`~clothsim.effects.Pin` (``vertices`` once bound, ``targets(t)``): points.
+* :class:`~clothsim.effects.Pin` (``vertices`` once bound, ``targets(t)``): points;
+* a large cloth's preview: :func:`decimate` keeps at most a budget of triangles (every k-th
+  row and column of a grid, a vertex subset of any other mesh).
 
 Only numpy is imported here.
 """
@@ -160,6 +162,33 @@ def pinned_points(effects, positions=None, t: float = 0.0) -> np.ndarray:
     return np.vstack(pts)
 
 
+def pinned_mask(effects, vertex_count: int, t: float = 0.0) -> np.ndarray:
+    """Which vertices a bound, active pin holds at time ``t``.
+
+    Parameters
+    ----------
+    effects : iterable of Effect
+        Effects of a bound simulation (exact and penalty pins alike).
+    vertex_count : int
+        n, the cloth's vertices.
+    t : float
+        Time [s] (a pin with a ``release`` time holds nothing after it).
+
+    Returns
+    -------
+    ndarray, shape (n,), bool
+        True for the pinned vertices.
+    """
+    mask = np.zeros(int(vertex_count), bool)
+    for e in effects:
+        if getattr(e, "kind", "") != "pin" or getattr(e, "model", None) is None:
+            continue
+        if hasattr(e, "active") and not e.active(t):
+            continue
+        mask[np.asarray(e.vertices, dtype=np.int64)] = True
+    return mask
+
+
 def surfaces_mesh(surfaces):
     """Merge surfaces into one vertex array, triangle array and per-vertex obstacle index.
 
@@ -183,6 +212,98 @@ def surfaces_mesh(surfaces):
         base += len(s.vertices)
     obstacle = np.concatenate(ids) if ids else np.zeros(0, np.int64)
     return np.vstack(vs), np.vstack(ts), obstacle
+
+
+def _grid_triangles(ny: int, nx: int, rows: np.ndarray, cols: np.ndarray) -> np.ndarray:
+    """Triangles of the sub-grid on ``rows`` × ``cols`` of an ny × nx grid, with the grid's
+    split and orientation (:func:`clothsim.mesh.grid`), indexing the full grid's vertices."""
+    i, j = np.meshgrid(rows[:-1], cols[:-1], indexing="ij")
+    i2, j2 = np.meshgrid(rows[1:], cols[1:], indexing="ij")
+    a, b = (i * nx + j).ravel(), (i * nx + j2).ravel()
+    c, d = (i2 * nx + j).ravel(), (i2 * nx + j2).ravel()
+    return np.concatenate([np.stack([a, b, d], 1), np.stack([a, d, c], 1)])
+
+
+def _cluster_triangles(mesh: Mesh, budget: int) -> np.ndarray:
+    """Vertex clustering on the rest shape: cubes of side s, one vertex of each cube kept
+    (a boundary vertex where there is one, so the outline stays), triangles whose three
+    corners fall in three different cubes kept, mapped to the kept vertices."""
+    v, t = mesh.vertices, mesh.triangles
+    n = len(v)
+    e = np.sort(np.concatenate([t[:, [0, 1]], t[:, [1, 2]], t[:, [2, 0]]]), axis=1)
+    key, count = np.unique(e[:, 0] * n + e[:, 1], return_counts=True)
+    boundary = np.zeros(n, bool)
+    boundary[key[count == 1] // n] = boundary[key[count == 1] % n] = True
+    area = 0.5 * np.linalg.norm(np.cross(v[t[:, 1]] - v[t[:, 0]], v[t[:, 2]] - v[t[:, 0]]),
+                                axis=1).sum()
+    s = np.sqrt(2.0 * area / budget)
+    while True:
+        cell = np.floor((v - v.min(axis=0)) / s).astype(np.int64)
+        span = cell.max(axis=0) + 1
+        _, cluster = np.unique((cell[:, 0] * span[1] + cell[:, 1]) * span[2] + cell[:, 2],
+                               return_inverse=True)
+        order = np.lexsort((~boundary, cluster))  # per cluster: boundary vertices first
+        first = np.ones(n, bool)
+        first[1:] = cluster[order][1:] != cluster[order][:-1]
+        rep = np.empty(cluster.max() + 1, np.int64)
+        rep[cluster[order][first]] = order[first]
+        c = cluster[t]
+        keep = (c[:, 0] != c[:, 1]) & (c[:, 1] != c[:, 2]) & (c[:, 0] != c[:, 2])
+        c = c[keep]
+        k = np.int64(len(rep))
+        sc = np.sort(c, axis=1)
+        _, first_of = np.unique((sc[:, 0] * k + sc[:, 1]) * k + sc[:, 2], return_index=True)
+        if len(first_of) <= budget:
+            return rep[c[np.sort(first_of)]]
+        s *= 1.25
+
+
+def decimate(mesh: Mesh, budget: int) -> tuple[Mesh, str]:
+    """A mesh of at most ``budget`` triangles that keeps the cloth's shape, for pictures.
+
+    Parameters
+    ----------
+    mesh : Mesh
+        The cloth.
+    budget : int
+        Triangles allowed, >= 2.
+
+    Returns
+    -------
+    mesh : Mesh
+        ``mesh`` itself when it has at most ``budget`` triangles. Otherwise a mesh on the
+        same vertex array (the positions of every frame index it unchanged) whose triangles
+        use a vertex subset: for a :func:`clothsim.mesh.grid`, every k-th row and column
+        (the last row and column always kept); for any other mesh, one vertex per cube of
+        the rest shape (vertex clustering, boundary vertices preferred). Strands are kept.
+    note : str
+        ``""``, or what was drawn, e.g. ``"every 6th row and column drawn"`` (for a title).
+
+    Examples
+    --------
+    >>> import clothsim as cs
+    >>> small, note = decimate(cs.grid(101, 101), 5000)
+    >>> small.triangle_count <= 5000, note
+    (True, 'every 2nd row and column drawn')
+    """
+    m = mesh.triangle_count
+    if m <= budget:
+        return mesh, ""
+    if mesh.grid_shape is not None:
+        ny, nx = mesh.grid_shape
+        k = 2
+        while 2 * (-(-(ny - 1) // k)) * (-(-(nx - 1) // k)) > budget:
+            k += 1
+        rows = np.unique(np.append(np.arange(0, ny, k), ny - 1))
+        cols = np.unique(np.append(np.arange(0, nx, k), nx - 1))
+        tris = _grid_triangles(ny, nx, rows, cols)
+        suffix = {1: "st", 2: "nd", 3: "rd"}.get(k % 10 if k % 100 not in (11, 12, 13) else 0,
+                                               "th")
+        note = f"every {k}{suffix} row and column drawn"
+    else:
+        tris = _cluster_triangles(mesh, budget)
+        note = f"{len(tris):,} of {m:,} triangles drawn"
+    return Mesh(mesh.vertices, tris, mesh.strands), note
 
 
 #: File name of the obstacle surfaces in a run folder (beside ``trajectory.pvd``).
@@ -216,6 +337,7 @@ def write_obstacles(path, effects, positions) -> object | None:
     return path
 
 
-__all__ = ["Surface", "obstacle_surfaces", "pinned_points", "surfaces_mesh", "write_obstacles",
-           "OBSTACLES_NAME",
+__all__ = ["Surface", "obstacle_surfaces", "decimate", "pinned_points", "pinned_mask",
+           "surfaces_mesh",
+           "write_obstacles", "OBSTACLES_NAME",
            "OBSTACLE_COLORS", "PIN_COLOR"]

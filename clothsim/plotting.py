@@ -3,10 +3,13 @@
 matplotlib is imported inside the functions, never at ``import clothsim``. Figures are
 made with :class:`matplotlib.figure.Figure` and the Agg canvas, so nothing touches pyplot's
 global state or needs a display. The cloth is drawn in 2-D through an orthographic
-:class:`View` (y up) with depth-sorted, shaded triangles (much faster than mplot3d),
-together with the obstacles (plane, sphere, box; :mod:`clothsim.display`) and the pinned
-vertices (red dots). The picture is framed on the cloth and its obstacles, and its axes are
-the screen axes of the view, in metres.
+:class:`~clothsim.camera.View` (y up) with depth-sorted, shaded triangles (much faster
+than mplot3d; the artists: :mod:`clothsim.painter`, layers and shading:
+:mod:`clothsim.camera`), together with the obstacles
+(plane, sphere, box; :mod:`clothsim.display`) and the pinned vertices (red dots). A cloth
+of more than :data:`MAX_TRIANGLES` triangles is drawn decimated, and the title says so.
+The picture is framed on the cloth and its obstacles, and its axes are the screen axes of
+the view, in metres.
 
 Functions
 ---------
@@ -14,7 +17,8 @@ draw
     Draw a cloth (and its obstacles and pins) into a given matplotlib Axes (notebooks).
 write_preview
     ``preview.gif``: at most ``max_frames`` evenly spaced frames (fewer for big meshes, so
-    it stays quick), 512 × 512 px, written with :class:`matplotlib.animation.PillowWriter`.
+    it stays quick), 512 × 512 px; the still parts drawn once, the cloth per frame
+    (blitting), saved with Pillow.
 write_final_image
     ``final.png``: one frame, 600 × 600 px.
 """
@@ -26,14 +30,19 @@ from pathlib import Path
 
 import numpy as np
 
-from .display import OBSTACLE_COLORS, PIN_COLOR, obstacle_surfaces, pinned_points
+from .camera import View
+from .display import decimate, obstacle_surfaces
+from .painter import SceneArtist, frame_axes
 
 log = logging.getLogger(__name__)
 
 #: Triangles drawn over the whole preview at most (frames × triangles), to bound its time.
 PREVIEW_TRIANGLE_BUDGET = 250_000
-FACE_COLOR = (0.35, 0.55, 0.85)
-EDGE_COLOR = (0.15, 0.25, 0.45)
+#: Triangles of the cloth drawn in one picture at most; a larger cloth is drawn decimated
+#: (:func:`clothsim.display.decimate`) and the title says so.
+MAX_TRIANGLES = 10_000
+#: Cloths with fewer triangles are drawn with their edges (above, shading alone).
+EDGE_LIMIT = 3000
 
 
 def _matplotlib():
@@ -46,169 +55,9 @@ def _matplotlib():
     return Figure, FigureCanvasAgg
 
 
-class View:
-    """Orthographic camera, y up: azimuth about y and elevation above the xz plane [deg].
-
-    Parameters
-    ----------
-    azimuth, elevation : float
-        Camera direction [deg].
-
-    Notes
-    -----
-    ``project(x)`` maps points (…, 3) to screen coordinates u (right), v (up) and a depth
-    that grows toward the camera. Drawing in 2-D with a depth sort (painter's algorithm)
-    is much faster than mplot3d and looks the same for a cloth.
-    """
-
-    def __init__(self, azimuth: float = 35.0, elevation: float = 25.0):
-        a, e = np.radians(azimuth), np.radians(elevation)
-        self.azimuth, self.elevation = float(azimuth), float(elevation)
-        self.toward = np.array([np.cos(e) * np.sin(a), np.sin(e), np.cos(e) * np.cos(a)])
-        self.right = np.array([np.cos(a), 0.0, -np.sin(a)])
-        self.up = np.cross(self.toward, self.right)
-        self.light = self.toward + 0.5 * self.up
-        self.light /= np.linalg.norm(self.light)
-
-    def project(self, x: np.ndarray) -> np.ndarray:
-        """Project points.
-
-        Parameters
-        ----------
-        x : ndarray, shape (..., 3)
-            Points [m].
-
-        Returns
-        -------
-        ndarray, shape (..., 3)
-            Screen coordinates u, v [m] and depth [m] (larger is nearer the camera).
-        """
-        return x @ np.stack([self.right, self.up, self.toward], axis=1)
-
-
-def _behind(surface, view: View, c: np.ndarray, eps: float) -> np.ndarray:
-    """Mask of points c (k, 3) hidden by a convex obstacle: the ray toward the camera from
-    c meets the solid (sphere: exactly; box: c is inside every camera-facing face plane)."""
-    if surface.kind == "sphere":
-        center = surface.vertices.mean(axis=0)
-        r = np.linalg.norm(surface.vertices - center, axis=1).max()
-        w = c - center
-        b = w @ view.toward
-        disc = b * b - (np.einsum("ij,ij->i", w, w) - r * r)
-        return (disc > 0) & (-b + np.sqrt(np.maximum(disc, 0)) > eps)
-    tri = surface.vertices[surface.triangles]
-    n = np.cross(tri[:, 1] - tri[:, 0], tri[:, 2] - tri[:, 0])
-    mid = tri.mean(axis=1)
-    n *= np.sign(np.einsum("ij,ij->i", n, mid - surface.vertices.mean(axis=0)))[:, None]
-    front = n @ view.toward > 0
-    n, mid = n[front] / np.linalg.norm(n[front], axis=1, keepdims=True), mid[front]
-    return np.all(c @ n.T - np.einsum("ij,ij->i", n, mid) < -eps, axis=1)
-
-
-def _shade(view: View, tri_xyz: np.ndarray) -> np.ndarray:
-    n = np.cross(tri_xyz[:, 1] - tri_xyz[:, 0], tri_xyz[:, 2] - tri_xyz[:, 0])
-    n /= np.maximum(np.linalg.norm(n, axis=1, keepdims=True), 1e-300)
-    return 0.35 + 0.65 * np.abs(n @ view.light)  # two-sided Lambert
-
-
-class _Artist:
-    """Cloth triangles (shaded, depth-sorted with the obstacles), strands and pins."""
-
-    def __init__(self, ax, mesh, view: View, x: np.ndarray, edges: bool, surfaces=(),
-                 effects=()):
-        from matplotlib.collections import LineCollection, PolyCollection
-
-        self.view = view
-        self.tris = np.asarray(mesh.triangles)
-        self.strands = np.asarray(mesh.strands)
-        self.effects = list(effects)
-        self.edges = edges
-        self.poly = self.lines = self.points = self.pins = None
-        # static obstacles: planes drawn first (the ground is behind everything above it);
-        # of the convex ones only the camera-facing faces, drawn between the cloth they hide
-        # and the rest of the cloth (see update)
-        solid, scol = [], []
-        self.convex = [x for x in surfaces if x.kind != "plane"]
-        for surf in surfaces:
-            tri = surf.vertices[surf.triangles]
-            color = _shade(view, tri)[:, None] * np.asarray(OBSTACLE_COLORS[surf.kind])
-            if surf.kind == "plane":
-                ax.add_collection(PolyCollection(view.project(tri)[..., :2], facecolors=color,
-                                                 edgecolors="face", linewidths=0.3,
-                                                 zorder=0.5))
-                continue
-            n = np.cross(tri[:, 1] - tri[:, 0], tri[:, 2] - tri[:, 0])
-            out = np.einsum("ij,ij->i", n, tri.mean(axis=1) - surf.vertices.mean(axis=0))
-            front = (n @ view.toward) * np.sign(out) > 0  # camera-facing faces only
-            solid.append(view.project(tri[front]))
-            scol.append(color[front])
-        self.solid = np.concatenate(solid) if solid else np.zeros((0, 3, 3))
-        self.solid_color = np.concatenate(scol) if scol else np.zeros((0, 3))
-        size = np.ptp(x.reshape(-1, 3), axis=0).max() if x.size else 1.0
-        self.eps = 1e-3 * max(float(size), 1e-3)
-        if len(self.tris) or len(self.solid):
-            self.poly = PolyCollection([], linewidths=0.15 if edges else 0.3,
-                                       antialiased=False, zorder=1)
-            ax.add_collection(self.poly)
-        if len(self.strands):
-            self.lines = LineCollection([], colors="k", linewidths=1.0, zorder=2)
-            ax.add_collection(self.lines)
-            if not len(self.tris):  # a spring network: show the masses too
-                self.points = ax.plot([], [], "o", ms=3, color="C3", zorder=3)[0]
-        if any(getattr(e, "kind", "") == "pin" for e in self.effects):
-            self.pins = ax.plot([], [], "o", ms=4, color=PIN_COLOR, zorder=4)[0]
-        self.update(x)
-
-    def update(self, x: np.ndarray, t: float = 0.0):
-        p = self.view.project(x)
-        if self.poly is not None:
-            t3 = self.tris
-            # layers: cloth hidden by an obstacle, obstacles' front faces, the rest of the
-            # cloth; each layer depth-sorted far to near (painter's algorithm)
-            hidden = np.zeros(len(t3), bool)
-            centroid = x[t3].mean(axis=1) if len(t3) else np.zeros((0, 3))
-            for surf in self.convex:
-                hidden |= _behind(surf, self.view, centroid, self.eps)
-            layer = np.concatenate([np.ones(len(self.solid)), np.where(hidden, 0.0, 2.0)])
-            depth = np.concatenate([self.solid[..., 2].mean(axis=1),
-                                    p[t3][..., 2].mean(axis=1)])
-            order = np.lexsort((depth, layer))
-            verts = np.concatenate([self.solid[..., :2], p[t3][..., :2]])
-            face = np.concatenate([self.solid_color,
-                                   _shade(self.view, x[t3])[:, None] * np.asarray(FACE_COLOR)])
-            cloth = np.concatenate([np.zeros(len(self.solid), bool), np.ones(len(t3), bool)])
-            fc = face[order]
-            ec = np.where(cloth[order, None], np.asarray(EDGE_COLOR), fc) if self.edges else fc
-            self.poly.set_verts(verts[order])
-            self.poly.set_facecolor(fc)
-            self.poly.set_edgecolor(ec)
-        if self.lines is not None:
-            self.lines.set_segments(p[self.strands][..., :2])
-        if self.points is not None:
-            self.points.set_data(p[:, 0], p[:, 1])
-        if self.pins is not None:
-            q = self.view.project(pinned_points(self.effects, x, t))
-            self.pins.set_data(q[:, 0], q[:, 1])
-
-
-def _frame(ax, view: View, X: np.ndarray, surfaces=()) -> None:
-    """Frame ``ax`` on the points X (…, 3) and the obstacle surfaces, equal scale, in m."""
-    pts = [X.reshape(-1, 3)] + [s.vertices for s in surfaces if s.kind != "plane"]
-    pts += [s.vertices[s.triangles].mean(axis=1) for s in surfaces if s.kind == "plane"]
-    p = view.project(np.vstack(pts))
-    lo, hi = p.min(axis=0), p.max(axis=0)
-    mid = (lo + hi) / 2
-    half = max(float(np.max((hi - lo)[:2])) / 2, 1e-6) * 1.1
-    ax.set_xlim(mid[0] - half, mid[0] + half)
-    ax.set_ylim(mid[1] - half, mid[1] + half)
-    ax.set_aspect("equal")
-    ax.set_xlabel(f"screen x [m] (view azimuth {view.azimuth:g}°)", fontsize=7)
-    ax.set_ylabel(f"screen y [m] (elevation {view.elevation:g}°)", fontsize=7)
-    ax.tick_params(labelsize=6)
-
-
 def draw(ax, mesh, positions, *, effects=(), view: View | None = None, t: float = 0.0,
-         frame_on=None, edges: bool | None = None):
+         frame_on=None, edges: bool | None = None, shading: bool = True,
+         max_triangles: int = MAX_TRIANGLES):
     """Draw a cloth, its obstacles and its pinned vertices into a matplotlib Axes.
 
     Parameters
@@ -229,12 +78,25 @@ def draw(ax, mesh, positions, *, effects=(), view: View | None = None, t: float 
     frame_on : ndarray, shape (..., 3), optional
         Points to frame the picture on (default: ``positions`` and the obstacles).
     edges : bool, optional
-        Draw triangle edges (default: when the mesh has fewer than 3000 triangles).
+        Draw triangle edges (default: when the mesh has fewer than ``EDGE_LIMIT`` = 3000
+        triangles).
+    shading : bool
+        Shade the cloth and the obstacles (light from the camera's side); False draws
+        each in one flat colour (:data:`clothsim.painter.FACE_COLOR`,
+        :data:`clothsim.display.OBSTACLE_COLORS`).
+    max_triangles : int
+        A cloth with more triangles is drawn decimated (:func:`clothsim.display.decimate`).
 
     Returns
     -------
     matplotlib.axes.Axes
         ``ax``.
+
+    Notes
+    -----
+    The cloth an obstacle hides from the camera is drawn under the obstacle's front faces,
+    the rest over them; cloth lying on an obstacle is drawn on it
+    (:func:`clothsim.camera.hidden_triangles`).
 
     Examples
     --------
@@ -245,14 +107,22 @@ def draw(ax, mesh, positions, *, effects=(), view: View | None = None, t: float 
     >>> ax is draw(ax, mesh, mesh.vertices, effects=[cs.Box([-.2, -.5, -.2], [.2, -.1, .2])])
     True
     """
+    _draw(ax, mesh, positions, effects, view, t, frame_on, edges, shading, max_triangles)
+    return ax
+
+
+def _draw(ax, mesh, positions, effects, view, t, frame_on, edges, shading,
+          max_triangles) -> str:
+    """:func:`draw`; returns the decimation note ("" when the whole cloth is drawn)."""
     x = np.asarray(positions, dtype=np.float64)
     view = view or View()
     X = x if frame_on is None else np.asarray(frame_on, dtype=np.float64)
     surfaces = obstacle_surfaces(effects, X)
-    _frame(ax, view, X, surfaces)
-    _Artist(ax, mesh, view, x, len(mesh.triangles) < 3000 if edges is None else edges,
-            surfaces, effects).update(x, t)
-    return ax
+    depth_range = frame_axes(ax, view, X, surfaces)
+    edges = mesh.triangle_count < EDGE_LIMIT if edges is None else edges
+    drawn, note = decimate(mesh, max_triangles)
+    SceneArtist(ax, drawn, view, x, edges, surfaces, effects, shading, depth_range).update(x, t)
+    return note
 
 
 def preview_frame_indices(frame_count: int, triangle_count: int, *,
@@ -289,6 +159,9 @@ def write_preview(path, positions, mesh, *, times=None, effects=(), max_frames: 
                   size: float = 6.4, dpi: int = 80) -> Path:
     """Write an animated GIF of a trajectory, with its obstacles and pins.
 
+    A cloth of more than ``MAX_TRIANGLES`` triangles is drawn decimated, and the title
+    says so.
+
     Parameters
     ----------
     path : str or Path
@@ -311,40 +184,63 @@ def write_preview(path, positions, mesh, *, times=None, effects=(), max_frames: 
     Path
         ``path``.
     """
-    from matplotlib.animation import PillowWriter
-
     path = Path(path)
     X = np.asarray(positions, dtype=np.float64)
-    idx = preview_frame_indices(len(X), len(mesh.triangles), max_frames=max_frames)
+    drawn, note = decimate(mesh, MAX_TRIANGLES)
+    idx = preview_frame_indices(len(X), drawn.triangle_count, max_frames=max_frames)
     fig, ax = _figure(size, dpi)
     view = View()
     surfaces = obstacle_surfaces(effects, X[idx])
-    _frame(ax, view, X[idx], surfaces)
-    art = _Artist(ax, mesh, view, X[idx[0]], len(mesh.triangles) < 3000, surfaces, effects)
-    title = fig.suptitle("", fontsize=9)
+    depth_range = frame_axes(ax, view, X[idx], surfaces)
+    art = SceneArtist(ax, drawn, view, X[idx[0]], mesh.triangle_count < EDGE_LIMIT, surfaces,
+                  effects, True, depth_range)
+    title = fig.suptitle(note, fontsize=9)
 
     def frame(j):
         t = float(times[idx[j]]) if times is not None else 0.0
         art.update(X[idx[j]], t)
         if times is not None:
-            title.set_text(f"t = {t:.2f} s")
+            title.set_text(f"t = {t:.2f} s" + (f" ({note})" if note else ""))
 
     span = float(times[idx[-1]] - times[idx[0]]) if times is not None and len(idx) > 1 else 0
     fps = max(1.0, min(30.0, (len(idx) - 1) / span)) if span > 0 else 10.0
     tmp = path.with_name(f".{path.stem}.tmp.gif")
-    writer = PillowWriter(fps=fps)
-    with writer.saving(fig, tmp, dpi):  # one draw per frame (FuncAnimation draws twice)
-        for j in range(len(idx)):
-            frame(j)
-            writer.grab_frame()
+    _save_gif(fig, art.moving() + [title], frame, len(idx), tmp, fps)
     tmp.replace(path)
     log.info("wrote %s (%d frames)", path, len(idx))
     return path
 
 
+def _save_gif(fig, moving: list, frame, count: int, path: Path, fps: float) -> None:
+    """Draw the figure's still parts (axes, ticks, planes) once, then for each frame only
+    the ``moving`` artists over a copy of them (blitting), and save the frames as a looping
+    GIF (Pillow, as :class:`matplotlib.animation.PillowWriter` does)."""
+    from PIL import Image
+
+    canvas = fig.canvas
+    for a in moving:
+        a.set_animated(True)
+    canvas.draw()
+    still = canvas.copy_from_bbox(fig.bbox)
+    size = canvas.get_width_height()
+    images = []
+    for j in range(count):
+        frame(j)
+        canvas.restore_region(still)
+        for a in sorted(moving, key=lambda a: a.get_zorder()):
+            fig.draw_artist(a)
+        rgba = Image.frombuffer("RGBA", size, canvas.buffer_rgba(), "raw", "RGBA", 0, 1)
+        images.append(rgba.convert("RGB"))  # a copy, GIF-friendly
+    images[0].save(path, format="GIF", save_all=True, append_images=images[1:],
+                   duration=int(1000 / fps), loop=0)
+
+
 def write_final_image(path, positions, mesh, *, title: str = "", effects=(), t: float = 0.0,
                       size: float = 6.0, dpi: int = 100) -> Path:
     """Write one frame of ``mesh`` with its obstacles and pins as a PNG image.
+
+    A cloth of more than ``MAX_TRIANGLES`` triangles is drawn decimated, and the title
+    says so.
 
     Parameters
     ----------
@@ -370,13 +266,14 @@ def write_final_image(path, positions, mesh, *, title: str = "", effects=(), t: 
     """
     path = Path(path)
     fig, ax = _figure(size, dpi)
-    draw(ax, mesh, positions, effects=effects, t=t)
-    if title:
-        fig.suptitle(title, fontsize=10)
+    note = _draw(ax, mesh, positions, effects, None, t, None, None, True, MAX_TRIANGLES)
+    if title or note:
+        fig.suptitle(", ".join(x for x in (title, note) if x), fontsize=10)
     tmp = path.with_name(f".{path.stem}.tmp.png")
     fig.savefig(tmp, format="png")
     tmp.replace(path)
     return path
 
 
-__all__ = ["draw", "View", "write_preview", "write_final_image", "preview_frame_indices"]
+__all__ = ["draw", "write_preview", "write_final_image", "preview_frame_indices",
+           "MAX_TRIANGLES", "EDGE_LIMIT", "PREVIEW_TRIANGLE_BUDGET"]

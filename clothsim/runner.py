@@ -42,7 +42,7 @@ from pathlib import Path
 
 import numpy as np
 
-from .display import OBSTACLES_NAME, write_obstacles
+from .display import OBSTACLES_NAME, pinned_mask, write_obstacles
 from .errors import InputError, NonFiniteStateError
 from .interrupts import SignalInterrupt, handle_signals, signals_deferred
 from .io.frames import PVD_NAME, FrameWriter, read_frame
@@ -229,7 +229,8 @@ def _run_locked(scene, model, sim, out: Path, frames: int, progress, resume: boo
     run = RunRecord(out, info, _time.perf_counter())
     store = TrajectoryStore(out, n)
     try:
-        writer = FrameWriter(out, model.mesh)
+        writer = FrameWriter(out, model.mesh, springs=model.springs,
+                             pinned=lambda t: pinned_mask(sim.effects, n, t))
         if resuming:
             for j in range(start + 1):
                 x, v = read_frame(out / writer.filename(j))
@@ -247,6 +248,8 @@ def _run_locked(scene, model, sim, out: Path, frames: int, progress, resume: boo
             writer.write(0, 0.0, x, v)
             store.append(x, v)
         obstacles = write_obstacles(out / OBSTACLES_NAME, sim.effects, model.mesh.vertices)
+        if obstacles is not None:
+            writer.add_static(OBSTACLES_NAME)  # trajectory.pvd shows the whole scene
         run.done = start
         run.info["solver_state"] = get_state()
         run.save_npz(store, model, fps, force=True)

@@ -99,7 +99,8 @@ API_PAGES = {
     "scenes-and-runs": ("Scenes, runs and files", [
         "clothsim.scene", "clothsim.runner", "clothsim.interrupts", "clothsim.io",
         "clothsim.cli"]),
-    "pictures": ("Pictures", ["clothsim.plotting", "clothsim.display"]),
+    "pictures": ("Pictures", ["clothsim.plotting", "clothsim.painter", "clothsim.camera",
+                              "clothsim.display"]),
     "analysis": ("Matrices, energy, accuracy, ports", [
         "clothsim.matrices", "clothsim.reference", "clothsim.energy", "clothsim.accuracy",
         "clothsim.ports"]),

@@ -30,7 +30,7 @@ STAGES = [
     {"gallery"},
     {"io"},
     {"scene"},
-    {"display", "plotting"},
+    {"display", "camera", "painter", "plotting"},
     {"runner", "interrupts"},
     {"accuracy", "ports"},
     {"cli", "__main__", "__init__"},

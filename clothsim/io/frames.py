@@ -1,5 +1,6 @@
 """Frames of a run: one VTK ``.vtu`` file per frame and the ParaView collection
-``trajectory.pvd`` listing them.
+``trajectory.pvd`` listing them (and, beside each frame, the scene's static parts such as
+``obstacles.vtu``, so that opening the one file shows the scene).
 
 :class:`FrameWriter` writes them (each file to a temporary name, then :func:`os.replace`,
 so an interrupted run leaves only complete files); :func:`read_frame` reads a frame back bit
@@ -17,7 +18,7 @@ import numpy as np
 
 from ..errors import InputError
 from ..mesh import Mesh
-from .cells import cell_blocks
+from .cells import FrameFields, cell_blocks
 from .common import MeshioFailure, atomic_path, load_meshio, one_line, quietly
 
 logger = logging.getLogger(__name__)
@@ -29,10 +30,18 @@ class FrameWriter:
     """Write a simulation frame by frame: ``<basename>_%06d.vtu`` + ``trajectory.pvd``.
 
     Each frame file holds the positions as points, the triangles and the strands (line
-    cells) of ``mesh``, and the velocities [m/s] as float64 point data ``"velocity"``.
+    cells) of ``mesh``, and float64 point data ``"velocity"`` [m/s]. A mesh with neither
+    triangles nor strands gets its springs as line cells, or one vertex cell per vertex,
+    so every frame reads back. Given ``springs``, frames also carry float32 point data
+    ``"stretch"`` (mean |ℓ/r − 1| of the vertex's springs) and, for triangles, float32 cell
+    data ``"area_ratio"`` (area over rest area, the rest shape being ``mesh.vertices``; NaN
+    for line and vertex cells); given ``pinned``, uint8 point data ``"pinned"`` (1 pinned,
+    0 free).
     ``trajectory.pvd`` (a ParaView collection) lists every frame written so far with its
-    time [s] and is rewritten after each frame. Both are written to a temporary file and
-    then :func:`os.replace` d, so after an interruption every listed file is complete.
+    time [s] (``part="0"``), and with each frame every static part added by
+    :meth:`add_static` (``part="1"``, …: ParaView shows them together as one multiblock);
+    it is rewritten after each frame. Both are written to a temporary file and then
+    :func:`os.replace` d, so after an interruption every listed file is complete.
 
     Resuming: the first :meth:`write` at index k > 0 keeps the entries of an existing
     ``trajectory.pvd`` with index < k (files already on disk) and drops those >= k; a
@@ -46,6 +55,12 @@ class FrameWriter:
         Connectivity written into every frame.
     basename : str
         Frame file prefix.
+    springs : clothsim.springs.Springs, optional
+        The cloth's springs (``spring_vertices``, ``spring_rest_length``), for ``stretch``
+        and as line cells of a cloth without triangles and strands.
+    pinned : ndarray (n,) of bool, or callable, optional
+        The pinned vertices, or a function of the frame's time [s] returning them (pins
+        released in time).
 
     Examples
     --------
@@ -58,7 +73,8 @@ class FrameWriter:
     ['frame_000000.vtu']
     """
 
-    def __init__(self, out_dir, mesh: Mesh, *, basename: str = "frame"):
+    def __init__(self, out_dir, mesh: Mesh, *, basename: str = "frame", springs=None,
+                 pinned=None):
         if not re.fullmatch(r"[A-Za-z0-9_.-]+", basename):
             raise InputError(f"basename: only letters, digits, '_', '.', '-' allowed, got "
                              f"{basename!r}")
@@ -70,7 +86,12 @@ class FrameWriter:
         self._pattern = re.compile(re.escape(basename) + r"_(\d+)\.vtu")
         self._entries: dict[int, float] = {}
         self._started = False
-        self._cells = cell_blocks(mesh)
+        self.springs = springs
+        self.pinned = pinned
+        self._static: list[str] = []
+        self._cells = cell_blocks(mesh, None if springs is None else springs.spring_vertices)
+        self._fields_of = None if springs is None else FrameFields(
+            mesh.vertices, self._cells, springs.spring_vertices, springs.spring_rest_length)
 
     def filename(self, index: int) -> str:
         """File name of frame ``index``, e.g. ``frame_000012.vtu``.
@@ -124,13 +145,42 @@ class FrameWriter:
                 self._entries = {i: t for i, t in self._read_pvd().items() if i < index}
         meshio = load_meshio()
         path = self.out_dir / self.filename(index)
+        point_data, cell_data = self._fields(x, v, float(time))
         with atomic_path(path) as tmp:
-            meshio.write(tmp, meshio.Mesh(x, self._cells, point_data={"velocity": v}),
-                         file_format="vtu")
+            meshio.write(tmp, meshio.Mesh(x, self._cells, point_data=point_data,
+                                          cell_data=cell_data), file_format="vtu")
         self._entries[index] = float(time)
         self._write_pvd()
         logger.debug("wrote %s (t = %g s)", path, time)
         return path
+
+    def _fields(self, x: np.ndarray, v: np.ndarray, time: float) -> tuple[dict, dict]:
+        """Point and cell data of one frame (see the class's description)."""
+        point_data = {"velocity": v}
+        cell_data = {}
+        if self.pinned is not None:
+            mask = self.pinned(time) if callable(self.pinned) else self.pinned
+            point_data["pinned"] = np.asarray(mask, dtype=bool).astype(np.uint8)
+        if self._fields_of is not None:  # for colouring: float32 keeps the files small
+            point_data["stretch"] = self._fields_of.stretch(x).astype(np.float32)
+            if self.mesh.triangle_count:
+                cell_data["area_ratio"] = [a.astype(np.float32)
+                                           for a in self._fields_of.area_ratio(x)]
+        return point_data, cell_data
+
+    def add_static(self, name: str) -> None:
+        """List the file ``name`` (in the output folder, e.g. ``obstacles.vtu``) beside every
+        frame of ``trajectory.pvd`` as a further part, and rewrite the collection.
+
+        Parameters
+        ----------
+        name : str
+            File name of a static part (written by the caller; it does not move).
+        """
+        if name not in self._static:
+            self._static.append(name)
+        if self._started:
+            self._write_pvd()
 
     def adopt(self, entries: dict[int, float]) -> None:
         """Make the collection exactly ``entries`` (index → time [s], frame files already on
@@ -178,14 +228,17 @@ class FrameWriter:
         collection = ET.SubElement(root, "Collection")
         for i, t in sorted(self._entries.items()):
             ET.SubElement(collection, "DataSet", timestep=repr(t), group="", part="0",
-                          file=self.filename(i))
+                          file=self.filename(i), name="cloth")
+            for part, name in enumerate(self._static, start=1):
+                ET.SubElement(collection, "DataSet", timestep=repr(t), group="",
+                              part=str(part), file=name, name=Path(name).stem)
         ET.indent(root)
         with atomic_path(self.pvd_path) as tmp:
             ET.ElementTree(root).write(tmp, encoding="utf-8", xml_declaration=True)
 
 
 def read_pvd(path) -> list[tuple[float, Path]]:
-    """(time [s], frame path) of each DataSet in a ParaView collection, in file order.
+    """(time [s], frame path) of each DataSet of the first part in a ParaView collection.
 
     Parameters
     ----------
@@ -196,7 +249,9 @@ def read_pvd(path) -> list[tuple[float, Path]]:
     -------
     list of (float, pathlib.Path)
         Time [s] and frame file (relative names resolved against the collection's
-        folder) of each ``DataSet``.
+        folder) of each ``DataSet`` whose ``part`` is that of the first one, in file order
+        (the cloth's frames; a run's ``obstacles.vtu``, listed as a further part, is left
+        out).
 
     Raises
     ------
@@ -208,8 +263,10 @@ def read_pvd(path) -> list[tuple[float, Path]]:
         root = ET.parse(path).getroot()
     except (OSError, ET.ParseError) as exc:
         raise InputError(f"{path}: cannot read collection ({one_line(exc)})") from None
+    datasets = list(root.iter("DataSet"))
+    first = datasets[0].get("part", "0") if datasets else "0"
     return [(float(ds.get("timestep")), path.parent / ds.get("file"))
-            for ds in root.iter("DataSet")]
+            for ds in datasets if ds.get("part", "0") == first]
 
 
 def read_frame(path) -> tuple[np.ndarray, np.ndarray]:
