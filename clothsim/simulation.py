@@ -18,7 +18,7 @@ import numpy as np
 from .effects.base import HOOKS, Effect, overrides
 from .errors import InputError, NonFiniteStateError, check_finite
 from .model import Model
-from .problem import PinSet
+from .problem import PinSet, check_initial_guess
 from .solvers import Solver, StepProblem, StepResult, make_solver
 
 log = logging.getLogger(__name__)
@@ -104,6 +104,10 @@ class Simulation:
         A solver instance, or a method name for :func:`clothsim.solvers.make_solver`.
     iterations, tolerance, backend
         Passed to the solver when ``solver`` is a name.
+    initial_guess : {"y", "x_n"}, default "y"
+        Where each step's iteration starts: the inertial target y = x_n + h v_n (the paper)
+        or the previous positions x_n (most ports; the assignment's ``main.cpp``). With a
+        fixed iteration count the answer depends on it; a converged step does not.
     state : State, optional
         Initial state; default: the model's positions at rest, zero velocity, t = 0.
 
@@ -121,8 +125,9 @@ class Simulation:
 
     def __init__(self, model: Model, *, h: float, effects=(), solver="local-global",
                  iterations: int = 10, tolerance: float | None = None, backend: str = "auto",
-                 state: State | None = None, **solver_options):
+                 state: State | None = None, initial_guess: str = "y", **solver_options):
         self.model = model
+        self.initial_guess = check_initial_guess(initial_guess)
         self.h = float(check_finite("h", h))
         if self.h <= 0:
             raise InputError(f"h: the time step must be positive, got {self.h!r}")
@@ -206,7 +211,8 @@ class Simulation:
         """The implicit Euler problem of the next step from ``state``.
 
         Calls the effects' ``add_force``, ``adjust_target`` and ``pins`` hooks: f_ext is
-        the sum of the forces, y = x_n + h v_n as adjusted, pins at t + h.
+        the sum of the forces, y = x_n + h v_n as adjusted, pins at t + h; the problem
+        starts its iteration from :attr:`initial_guess`.
 
         Parameters
         ----------
@@ -234,7 +240,7 @@ class Simulation:
             pins = PinSet.merge([e.pins(t + h) for e in self._hooks["pins"]])
         return StepProblem(h, s.positions, s.velocities, y, f, pins.fixed_vertices,
                            pins.fixed_positions, pins.anchor_vertices, pins.anchor_positions,
-                           pins.anchor_stiffness)
+                           pins.anchor_stiffness, start=self.initial_guess)
 
     def step(self) -> StepRecord:
         """Advance one time step h.

@@ -93,7 +93,7 @@ API_PAGES = {
         "clothsim.mesh", "clothsim.polygon", "clothsim.mesh_checks",
         "clothsim.springs", "clothsim.model", "clothsim.gallery"]),
     "solvers": ("Solvers and the time step", [
-        "clothsim.simulation", "clothsim.problem", "clothsim.solvers",
+        "clothsim.simulation", "clothsim.problem", "clothsim.objective", "clothsim.solvers",
         "clothsim.factorization"]),
     "effects": ("Effects", ["clothsim.effects"]),
     "scenes-and-runs": ("Scenes, runs and files", [

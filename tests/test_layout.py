@@ -23,7 +23,7 @@ STAGES = [
     {"springs"},
     {"model"},
     {"matrices", "reference", "energy", "factorization"},
-    {"problem"},
+    {"problem", "objective"},
     {"solvers"},
     {"effects"},
     {"simulation"},

@@ -295,7 +295,7 @@ class Scene:
             solver = validate_solver(so["method"] if method is None else method,
                                      so["iterations"] if iterations is None else iterations,
                                      so["tolerance"] if tolerance is None else tolerance,
-                                     so["backend"])
+                                     so["backend"], so["initial_guess"])
             if substeps is not None:
                 substeps = integer(substeps, "scene.substeps", minimum=1, maximum=MAX_SUBSTEPS)
         except Invalid as exc:
@@ -312,7 +312,8 @@ class Scene:
         try:
             return Simulation(model, h=h, effects=effects, solver=solver["method"],
                               iterations=solver["iterations"], tolerance=solver["tolerance"],
-                              backend=solver["backend"])
+                              backend=solver["backend"],
+                              initial_guess=solver["initial_guess"])
         except InputError as exc:
             raise self._locate(exc, model, h) from None
 

@@ -177,6 +177,10 @@ KEYS: tuple[Key, ...] = (
     Key("solver", "backend", "string", "auto", "",
         "Sparse factorization: `\"auto\"` (CHOLMOD if installed, else SuperLU), "
         "`\"cholmod\"`, `\"splu\"`."),
+    Key("solver", "initial_guess", "string", "y", "",
+        "Where each step's iteration starts: `\"y\"`, the inertial target x_n + h v_n (the "
+        "paper), or `\"x_n\"`, the previous positions (most ports, the assignment's "
+        "`main.cpp`). With a fixed iteration count the answer depends on it."),
 )
 
 

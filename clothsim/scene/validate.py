@@ -15,6 +15,7 @@ from typing import Any
 from ..factorization import BACKENDS
 from ..mesh import PLANES
 from ..model import MASS_LUMPINGS
+from ..problem import INITIAL_GUESSES
 from ..solvers import SOLVERS
 from ..springs import BENDING_PATTERNS
 from . import schema
@@ -239,7 +240,7 @@ def _springs(raw: dict, shape: str, base_dir: Path) -> dict:
     return springs
 
 
-def validate_solver(method, iterations, tolerance, backend) -> dict:
+def validate_solver(method, iterations, tolerance, backend, initial_guess="y") -> dict:
     """Check the ``[solver]`` values (also used for overrides).
 
     Parameters
@@ -252,11 +253,13 @@ def validate_solver(method, iterations, tolerance, backend) -> dict:
         Relative residual to stop at, > 0 (dimensionless); None: run all iterations.
     backend : str
         The factorization backend, one of the scene's backend names.
+    initial_guess : str, default "y"
+        ``"y"`` or ``"x_n"``: where each step's iteration starts.
 
     Returns
     -------
     dict
-        ``method``, ``iterations``, ``tolerance``, ``backend``, checked.
+        ``method``, ``iterations``, ``tolerance``, ``backend``, ``initial_guess``, checked.
 
     Raises
     ------
@@ -270,6 +273,8 @@ def validate_solver(method, iterations, tolerance, backend) -> dict:
         "tolerance": None if tolerance is None else number(tolerance, "solver.tolerance",
                                                            positive=True),
         "backend": string(backend, "solver.backend", choices=BACKENDS),
+        "initial_guess": string(initial_guess, "solver.initial_guess",
+                                choices=INITIAL_GUESSES),
     }
 
 
@@ -307,8 +312,9 @@ def validate(raw: dict, base_dir: Path, default_name: str) -> dict:
     d = schema.default
     out["solver"] = validate_solver(so.get("method", d("solver", "method")),
                                     so.get("iterations", d("solver", "iterations")),
-                                    so.get("tolerance"), so.get("backend", d("solver",
-                                                                             "backend")))
+                                    so.get("tolerance"),
+                                    so.get("backend", d("solver", "backend")),
+                                    so.get("initial_guess", d("solver", "initial_guess")))
     effects = raw.get("effects", [])
     if not isinstance(effects, list):
         raise Invalid("effects", f"expected an array of tables ([[effects]]), got "
