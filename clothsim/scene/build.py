@@ -14,7 +14,7 @@ from pathlib import Path
 
 import numpy as np
 
-from ..effects import EFFECTS, Pin
+from ..effects import EFFECTS
 from ..errors import InputError, SceneError
 from ..io.assignment import read_assignment, read_pins
 from ..io.meshes import load_mesh
@@ -25,6 +25,7 @@ from ..simulation import Simulation
 from ..springs import FAMILIES, Springs, grid_springs, mesh_springs, springs_from_pairs
 from .checks import Invalid, integer, locate
 from .effects import constructor_params
+from .pins import declared_pins
 from .schema import MAX_SUBSTEPS
 from .tables import read_index_list, read_spring_table, read_triangles, read_values, read_vertices
 from .validate import validate, validate_solver
@@ -211,23 +212,21 @@ class Scene:
 
     def _implicit_pins(self, vertex_count: int | None = None) -> list:
         """Pins the cloth's files declare: the assignment's ``b``, the table's attachments."""
-        out = []
-        if self.data["cloth"]["shape"] == "jacobson":
-            out.append(("cloth.file", Pin(read_pins(self.data["cloth"]["file"]))))
+        c = self.data["cloth"]
+        b = read_pins(c["file"]) if c["shape"] == "jacobson" else None
+        t = None
         if "table" in self.data["springs"]:
             if vertex_count is None:
                 vertex_count = self.build_model().vertex_count
             t = self._spring_table(vertex_count)
-            for k in dict.fromkeys(t.attached_stiffness.tolist()):
-                vs = t.attached[t.attached_stiffness == k]
-                out.append(("springs.table", Pin(vs, method="penalty", stiffness=k)))
-        return out
+        return declared_pins(c, b, t)
 
     def build_effects(self, model=None) -> list:
         """Fresh effect objects: the cloth files' pins first, then the declared effects.
 
-        The pins a cloth's files declare come first: a ``jacobson`` cloth's exact pins (its
-        JSON's ``b`` list), then a spring table's attachments as penalty pins.
+        The pins a cloth's files declare come first: a ``jacobson`` cloth's pins (its JSON's
+        ``b`` list), then a spring table's attachments, held as ``[cloth] pin_method`` and
+        ``pin_stiffness`` say (:mod:`clothsim.scene.pins`).
 
         Parameters
         ----------

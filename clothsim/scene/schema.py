@@ -132,6 +132,14 @@ KEYS: tuple[Key, ...] = (
     Key("cloth", "file", "string (file)", REQUIRED, "",
         "An assignment `.json` file; mesh, springs, masses and pins all come from it.",
         ("jacobson",)),
+    Key("cloth", "pin_method", "string", "penalty", "",
+        "How the pins a cloth's files declare (a `jacobson` JSON's `b`, a spring table's "
+        "attachment rows) are held: `\"penalty\"`, a spring of rest length 0 to the pin's "
+        "target (the assignment's `main.cpp`), or `\"constraint\"`, exactly. A pin "
+        "effect keeps its own `method`."),
+    Key("cloth", "pin_stiffness", "number", NONE, "N/m",
+        "Stiffness of those penalty pins, > 0. Default: the assignment's w = 1e10 for a "
+        "`jacobson` cloth, each attachment row's own stiffness for a spring table."),
     Key("cloth", "vertices", "string (file)", REQUIRED, "m",
         "Initial positions: a text file of n lines of 3 numbers, or one line of 3n numbers "
         "(x y z per vertex); `#` starts a comment.", ("files",)),

@@ -12,6 +12,7 @@ import math
 from pathlib import Path
 from typing import Any
 
+from ..effects.pins import PIN_METHODS
 from ..factorization import BACKENDS
 from ..mesh import PLANES
 from ..model import MASS_LUMPINGS
@@ -130,6 +131,11 @@ def _cloth(raw: dict, base_dir: Path) -> tuple[dict, int | None]:
             raise Invalid(f"cloth.{key}", f"not used with cloth.shape = '{shape}' (only with "
                                           f"{' or '.join(repr(u) for u in users)})")
     cloth: dict[str, Any] = {"shape": shape}
+    cloth["pin_method"] = string(c.get("pin_method", "penalty"), "cloth.pin_method",
+                                 choices=PIN_METHODS)
+    if "pin_stiffness" in c:
+        cloth["pin_stiffness"] = number(c["pin_stiffness"], "cloth.pin_stiffness",
+                                        positive=True)
     vertex_count = None
     if shape == "grid":
         vertex_count = _grid(c, cloth)
