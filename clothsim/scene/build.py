@@ -253,7 +253,7 @@ class Scene:
         for i, e in enumerate(self.data["effects"]):
             params = constructor_params(e["kind"], e)
             path = f"effects[{i}]"
-            if e["kind"] == "pin" and isinstance(params.get("vertices"), str):
+            if isinstance(params.get("vertices"), str):  # a pin's or a force's file
                 n = (self.build_model() if model is None else model).vertex_count
                 params["vertices"] = read_index_list(params["vertices"], f"{path}.vertices",
                                                      e.get("index_base", 0), n)

@@ -195,9 +195,12 @@ KEYS: tuple[Key, ...] = (
 # [[effects]]: kind -> key -> (type, unit). The type words are checked by
 # clothsim.scene.effects: "vec3"/"point" 3 numbers (a point within ±1e100 m), "number",
 # "nonneg" (>= 0), "positive" (> 0), "time" (>= 0), "length" (> 0, <= 1e100), "string",
-# "strings", "count" (an iteration count), "vertices" (indices or a file), "region", "base".
+# "strings", "count" (an iteration count), "vertices" (indices or a file), "region", "base",
+# "file" (a file name, resolved against the scene's folder).
 EFFECT_KEYS: dict[str, dict[str, tuple[str, str]]] = {
     "gravity": {"acceleration": ("vec3", "m/s²")},
+    "force": {"per_vertex": ("vec3", "N"), "vertices": ("vertices", ""), "file": ("file", ""),
+              "index_base": ("base", "")},
     "pin": {"vertices": ("vertices", ""), "region": ("region", "m"), "method": ("string", ""),
             "stiffness": ("positive", "N/m"), "release": ("time", "s"),
             "velocity": ("vec3", "m/s"), "index_base": ("base", "")},
@@ -217,7 +220,8 @@ _TYPE_WORDS = {"vec3": "[3] numbers", "point": "[3] numbers", "number": "number"
                "nonneg": "number ≥ 0", "positive": "number > 0", "time": "number ≥ 0",
                "length": "number > 0", "string": "string", "strings": "array of strings",
                "count": "integer ≥ 1", "vertices": "array of integers, or a file",
-               "region": "table `{min, max}`", "base": "0 or 1 (with a file)"}
+               "region": "table `{min, max}`", "base": "0 or 1 (with a file)",
+               "file": "string (file)"}
 
 
 def keys(table: str, shape: str | None = None) -> tuple[str, ...]:
