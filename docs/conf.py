@@ -90,7 +90,7 @@ def setup(app):
 #: page whose prefix it has.
 API_PAGES = {
     "model": ("Meshes, springs, models", [
-        "clothsim.mesh", "clothsim.polygon", "clothsim.mesh_checks",
+        "clothsim.mesh", "clothsim.polygon", "clothsim.mesh_checks", "clothsim.voronoi",
         "clothsim.springs", "clothsim.model", "clothsim.gallery"]),
     "solvers": ("Solvers and the time step", [
         "clothsim.simulation", "clothsim.problem", "clothsim.objective", "clothsim.solvers",
