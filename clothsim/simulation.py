@@ -16,6 +16,7 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from .effects.base import HOOKS, Effect, overrides
+from .effects.pins import Pin
 from .errors import InputError, NonFiniteStateError, check_finite
 from .model import Model
 from .problem import PinSet, check_initial_guess
@@ -99,7 +100,9 @@ class Simulation:
     h : float
         Time step [s].
     effects : sequence of Effect
-        The declared effects (gravity, pins, obstacles, …). Nothing else is simulated.
+        The declared effects (gravity, pins, obstacles, …). Nothing else is simulated,
+        except that the model's vertices of mass 0 that no pin holds get an exact
+        :class:`~clothsim.effects.Pin` (first in :attr:`effects`).
     solver : str or Solver, default "local-global"
         A solver instance, or a method name for :func:`clothsim.solvers.make_solver`.
     iterations, tolerance, backend
@@ -146,6 +149,16 @@ class Simulation:
         for e in self.effects:
             e.bind(model, self.h)
         self._hooks = {hook: [e for e in self.effects if overrides(e, hook)] for hook in HOOKS}
+        t1 = (0.0 if state is None else float(getattr(state, "time", 0.0))) + self.h
+        massless = np.setdiff1d(model.massless_vertices, self._pin_list(t1))
+        if len(massless):  # mass 0 means pinned (an inverse mass of 0, as the engines read it)
+            log.info("%d vertices of mass 0 are pinned at their initial positions",
+                     len(massless))
+            pin = Pin(massless)
+            pin.bind(model, self.h)
+            self.effects.insert(0, pin)
+            self._hooks = {hook: [e for e in self.effects if overrides(e, hook)]
+                           for hook in HOOKS}
         for e in self._hooks["connect_pins"]:  # effects that must not move pinned vertices
             e.connect_pins(self.pinned_vertices)
         n = model.vertex_count

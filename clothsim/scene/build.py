@@ -329,7 +329,7 @@ class Scene:
             return
         n, m = model.vertex_count, model.vertex_mass
         diag = np.bincount(sv[:, 0], k, n) + np.bincount(sv[:, 1], k, n)
-        ratio = (h * h) * diag / m
+        ratio = np.divide((h * h) * diag, m, out=np.zeros(n), where=m > 0)  # m = 0: pinned
         v = int(np.argmax(ratio))
         if ratio[v] * EPS < 1.0:
             return

@@ -107,8 +107,10 @@ KEYS: tuple[Key, ...] = (
     Key("cloth", "mass", "number", 1.0, "kg",
         "Total mass, > 0, spread over the vertices by `mass_lumping`.", _ALL_BUT_JACOBSON),
     Key("cloth", "vertex_mass", "number, array or file", NONE, "kg",
-        "Mass of every vertex (one number, one per vertex, or a text file of n numbers), > 0. "
-        "Replaces `mass`; give one of the two.", _ALL_BUT_JACOBSON),
+        "Mass of every vertex (one number > 0, or one per vertex, or a text file of n "
+        "numbers, each ≥ 0). A vertex of mass 0 is pinned exactly at its initial position "
+        "(as engines read an inverse mass of 0). Replaces `mass`; give one of the two.",
+        _ALL_BUT_JACOBSON),
     Key("cloth", "mass_lumping", "string", "uniform", "",
         "`\"uniform\"`: every vertex the same. `\"area\"`: proportional to a third of the "
         "adjacent triangles' area.", _ALL_BUT_JACOBSON),

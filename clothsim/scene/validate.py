@@ -186,7 +186,7 @@ def _cloth(raw: dict, base_dir: Path) -> tuple[dict, int | None]:
         if "vertex_mass" in c:
             vm = c["vertex_mass"]
             if isinstance(vm, (list, tuple)):
-                vm = [number(m, f"cloth.vertex_mass[{i}]", positive=True)
+                vm = [number(m, f"cloth.vertex_mass[{i}]", nonnegative=True)
                       for i, m in enumerate(vm)]
                 if vertex_count is not None and len(vm) != vertex_count:
                     raise Invalid("cloth.vertex_mass", f"expected {vertex_count} values (one "

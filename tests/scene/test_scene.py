@@ -228,7 +228,7 @@ BAD = [
      "must be non-negative, got -1.0"),
     ("zero mass", "[cloth]\nmass = 0.0\n", "cloth.mass", "must be positive, got 0.0"),
     ("negative vertex mass", "[cloth]\nresolution = [2, 2]\nvertex_mass = [1.0, -2.0, 1.0, 1.0]\n",
-     "cloth.vertex_mass[1]", "must be positive, got -2.0"),
+     "cloth.vertex_mass[1]", "must be non-negative, got -2.0"),
     ("vertex mass count", "[cloth]\nresolution = [2, 2]\nvertex_mass = [1.0, 1.0]\n",
      "cloth.vertex_mass", "expected 4 values"),
     ("mass twice", "[cloth]\nmass = 1.0\nvertex_mass = 0.1\n", "cloth.vertex_mass",
