@@ -139,6 +139,10 @@ class Simulation:
         else:
             self.solver = make_solver(solver, model, iterations=iterations, tolerance=tolerance,
                                       backend=backend, **solver_options)
+        self._damped = bool(model.springs.spring_damping.any())
+        self._solver_options = dict(iterations=self.solver.iterations,
+                                    tolerance=self.solver.tolerance, backend=backend,
+                                    **solver_options)
         self.effects: list[Effect] = list(effects)
         for i, e in enumerate(self.effects):
             if not isinstance(e, Effect):
@@ -255,6 +259,34 @@ class Simulation:
                            pins.fixed_positions, pins.anchor_vertices, pins.anchor_positions,
                            pins.anchor_stiffness, start=self.initial_guess)
 
+    def step_model(self, state: State | None = None) -> Model:
+        """The model whose objective g the next step minimizes.
+
+        :attr:`model` itself, unless springs are damped: then the springs of
+        :meth:`~clothsim.springs.Springs.implicit_damping` at x_n (stiffness k + c/h, rest
+        length (k r + (c/h) ℓ(x_n)) / (k + c/h)), whose g is the damped step's.
+
+        Parameters
+        ----------
+        state : State, optional
+            Start of the step; default the current state.
+
+        Returns
+        -------
+        Model
+        """
+        if not self._damped:
+            return self.model
+        s = self.state if state is None else state
+        m = self.model
+        return Model(m.mesh, m.springs.implicit_damping(self.h, s.positions), m.vertex_mass)
+
+    def _step_solver(self, state: State) -> Solver:
+        """The solver of the next step: :attr:`solver`, or one for the damped step model."""
+        if not self._damped:
+            return self.solver
+        return make_solver(self.solver.name, self.step_model(state), **self._solver_options)
+
     def step(self) -> StepRecord:
         """Advance one time step h.
 
@@ -276,7 +308,7 @@ class Simulation:
         start = _time.perf_counter()
         s, h = self.state, self.h
         problem = self.problem(s)
-        result: StepResult = self.solver.solve(problem)
+        result: StepResult = self._step_solver(s).solve(problem)
         x = result.x
         t1 = s.time + h
         for e in self._hooks["correct_positions"]:

@@ -200,7 +200,7 @@ class Scene:
                             table.rest)
             fam = np.full(len(rest), FAMILIES.index("structural"), np.int8)
             springs = Springs.concatenate([springs, Springs(table.pairs, table.stiffness,
-                                                            rest, fam)])
+                                                            rest, fam, None, table.damping)])
         vm = c.get("vertex_mass")
         if isinstance(vm, str):
             vm = read_values(vm, "cloth.vertex_mass")

@@ -169,8 +169,10 @@ KEYS: tuple[Key, ...] = (
         "(rest must be 0).", _ALL_BUT_JACOBSON),
     Key("springs", "columns", "array of strings", ["a", "b", "stiffness", "rest"], "",
         "Column names of `table`: `a`, `b` (vertex indices, required), `stiffness` [N/m] "
-        "(required), `rest` [m] (default: the initial distance); any other name (e.g. "
-        "`type`) is read and ignored.", _ALL_BUT_JACOBSON),
+        "(required), `rest` [m] (default: the initial distance), `damping` [N·s/m] (≥ 0, "
+        "default 0: damping along the spring as newton and warp define it, implicit in the "
+        "step; docs/math.md); any other name (e.g. `type`) is read and ignored.",
+        _ALL_BUT_JACOBSON),
     Key("springs", "index_base", "integer", 0, "",
         "0 or 1: the number of the first vertex in `table` (−1 in `b` always marks an "
         "attachment).", _ALL_BUT_JACOBSON),

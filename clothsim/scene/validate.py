@@ -234,7 +234,7 @@ def _springs(raw: dict, shape: str, base_dir: Path) -> dict:
             if need not in cols:
                 raise Invalid("springs.columns", f"needs a column '{need}', got {show(cols)}")
         for i, v in enumerate(cols):
-            if v in cols[:i] and v in ("a", "b", "stiffness", "rest"):
+            if v in cols[:i] and v in ("a", "b", "stiffness", "rest", "damping"):
                 raise Invalid(f"springs.columns[{i}]", f"column '{v}' is named twice")
         springs["columns"] = cols
         springs["index_base"] = integer(sp.get("index_base", 0), "springs.index_base",
