@@ -12,7 +12,19 @@ The pipeline, one module per stage::
 imported where they are used.
 """
 
-from .effects import Box, Damping, Effect, Gravity, Impulse, Pin, Plane, Sphere, StrainLimit, Wind
+from .effects import (
+    Box,
+    Damping,
+    Effect,
+    Force,
+    Gravity,
+    Impulse,
+    Pin,
+    Plane,
+    Sphere,
+    StrainLimit,
+    Wind,
+)
 from .errors import (
     ClothsimError,
     ClothsimWarning,
@@ -44,7 +56,7 @@ __all__ = [
     "Mesh", "grid", "polygon", "load", "Springs", "grid_springs", "mesh_springs", "Model",
     "Simulation", "State", "load_scene", "LocalGlobalSolver", "ChebyshevSolver",
     "NewtonSolver", "SymplecticEulerSolver", "StepProblem", "make_solver", "Effect", "Gravity",
-    "Pin", "Plane", "Sphere", "Box", "Impulse", "Wind", "Damping", "StrainLimit",
+    "Force", "Pin", "Plane", "Sphere", "Box", "Impulse", "Wind", "Damping", "StrainLimit",
     "ClothsimError", "ClothsimWarning", "ConvergenceWarning", "ConditioningWarning",
     "InputError", "MeshWarning", "NonFiniteStateError", "__version__",
 ]

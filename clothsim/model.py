@@ -29,7 +29,9 @@ class Model:
     springs : Springs
         Spring topology, stiffness k [N/m], rest length r [m].
     vertex_mass : ndarray, shape (n,), float64
-        m_i [kg], all > 0.
+        m_i [kg], all ≥ 0. A vertex of mass 0 is pinned (as the engines read an inverse
+        mass of 0): a :class:`~clothsim.simulation.Simulation` holds it exactly at its
+        initial position (:attr:`massless_vertices`).
     """
 
     mesh: Mesh
@@ -37,7 +39,7 @@ class Model:
     vertex_mass: np.ndarray
 
     def __post_init__(self):
-        m = check_positive("vertex_mass", self.vertex_mass)
+        m = check_positive("vertex_mass", self.vertex_mass, allow_zero=True)
         n = self.mesh.vertex_count
         m = np.broadcast_to(m, (n,)).copy() if m.ndim == 0 else m
         if m.shape != (n,):
@@ -54,6 +56,17 @@ class Model:
                              f"out of range 0..{n - 1}")
         m.flags.writeable = False
         object.__setattr__(self, "vertex_mass", m)
+
+    @property
+    def massless_vertices(self) -> np.ndarray:
+        """Vertices of mass 0, which a simulation pins at their initial positions.
+
+        Returns
+        -------
+        ndarray, shape (p,), int64
+            Sorted indices.
+        """
+        return np.flatnonzero(self.vertex_mass == 0)
 
     @classmethod
     def build(

@@ -1,4 +1,4 @@
-"""One implicit Euler step as an optimization problem: its data, objective and gradient.
+"""One implicit Euler step as an optimization problem: the data every solver minimizes over.
 
 One step (Liu et al. 2013, Eq. 4) asks for
 
@@ -11,23 +11,19 @@ and penalty pins ("anchors": zero-rest-length springs of stiffness k to fixed po
 
 - :class:`PinSet`: the pins active during one step (what effects hand the simulation);
 - :class:`StepProblem`: the data of one step;
-- :class:`PenaltyAnchors`: the anchor terms (energy, gradient, right-hand side);
-- :func:`objective`: g(x);
-- :func:`augmented_objective`: ĝ(x, d) (Eq. 9), with ĝ(x, d(x)) = g(x);
-- :func:`objective_gradient`: ∇g(x);
-- :func:`gradient_noise_floor`: the norm of ∇g below which the gradient is rounding noise.
+- :class:`PenaltyAnchors`: the anchor terms (energy, gradient, right-hand side).
+
+The objective g, its gradient and the augmented objective are in
+:mod:`clothsim.objective`.
 """
 
 from __future__ import annotations
 
-import math
 from dataclasses import dataclass, field
 
 import numpy as np
 
-from . import energy
 from .errors import InputError, check_finite
-from .model import Model
 
 _EMPTY_I = np.zeros(0, np.int64)
 _EMPTY_X = np.zeros((0, 3))
@@ -58,6 +54,34 @@ def _points(name: str, value, rows: int | None) -> np.ndarray:
         want = f"({rows}, 3)" if rows is not None else "(p, 3)"
         raise InputError(f"{name}: expected shape {want}, got {arr.shape}")
     return arr
+
+
+#: The starting points an iteration may take: the inertial target y (the paper) or x_n.
+INITIAL_GUESSES = ("y", "x_n")
+
+
+def check_initial_guess(value) -> str:
+    """``value`` if it names a starting point of :data:`INITIAL_GUESSES`.
+
+    Parameters
+    ----------
+    value : str
+        ``"y"`` (the inertial target, the paper's choice) or ``"x_n"`` (the previous
+        positions).
+
+    Returns
+    -------
+    str
+        ``value``.
+
+    Raises
+    ------
+    InputError
+        At ``initial_guess`` for any other value.
+    """
+    if not isinstance(value, str) or value not in INITIAL_GUESSES:
+        raise InputError(f"initial_guess: expected \"y\" or \"x_n\", got {value!r}")
+    return value
 
 
 @dataclass
@@ -203,6 +227,9 @@ class StepProblem:
         Their positions at the end of the step [m].
     anchor_vertices, anchor_positions, anchor_stiffness : ndarray, shapes (q,), (q, 3), (q,)
         Penalty pins: zero-rest-length springs of stiffness k [N/m] to points q [m].
+    start : {"y", "x_n"}
+        Where the iteration starts (:meth:`initial_guess`): the inertial target y (the
+        paper, default) or the previous positions x_n (what most ports do).
     """
 
     h: float
@@ -215,8 +242,10 @@ class StepProblem:
     anchor_vertices: np.ndarray = field(default_factory=lambda: _EMPTY_I)
     anchor_positions: np.ndarray = field(default_factory=lambda: _EMPTY_X)
     anchor_stiffness: np.ndarray = field(default_factory=lambda: np.zeros(0))
+    start: str = "y"
 
     def __post_init__(self):
+        self.start = check_initial_guess(self.start)
         h = float(check_finite("h", self.h))
         if h <= 0:
             raise InputError(f"h: the time step must be positive, got {h!r}")
@@ -247,13 +276,16 @@ class StepProblem:
                                       self.anchor_stiffness)
 
     def initial_guess(self) -> np.ndarray:
-        """The paper's starting point: y with fixed vertices at their prescribed positions.
+        """The iteration's starting point x_0, with fixed vertices at their prescribed positions.
+
+        x_0 = y (the paper) or x_n, as :attr:`start` says. Penalty pins are springs of the
+        energy, not constraints: their vertices start where y or x_n puts them.
 
         Returns
         -------
         ndarray, shape (n, 3), a new array of positions [m]
         """
-        x0 = np.array(self.y, dtype=np.float64)
+        x0 = np.array(self.x if self.start == "x_n" else self.y, dtype=np.float64)
         x0[self.fixed_vertices] = self.fixed_positions
         return x0
 
@@ -272,129 +304,3 @@ class StepProblem:
         mask = np.ones(n, bool)
         mask[self.fixed_vertices] = False
         return mask
-
-
-def _objective_without_springs(model: Model, problem: StepProblem, x: np.ndarray) -> float:
-    """½ (x − y)ᵀ M (x − y) + h² (anchor energy − xᵀ f): the terms g and ĝ share."""
-    dx = x - problem.y
-    g = 0.5 * float(np.sum(model.vertex_mass[:, None] * dx * dx))
-    e = 0.0
-    if len(problem.anchors):
-        e += problem.anchors.energy(x)
-    if problem.f_ext is not None:
-        e -= float(np.sum(x * problem.f_ext))
-    return g + problem.h ** 2 * e
-
-
-def objective(model: Model, problem: StepProblem, x: np.ndarray) -> float:
-    """g(x) = ½ (x − y)ᵀ M (x − y) + h² E(x), E with springs, anchors and −xᵀf [J·s²].
-
-    Parameters
-    ----------
-    model : Model
-    problem : StepProblem
-    x : ndarray, shape (n, 3), positions [m]
-
-    Returns
-    -------
-    float, g(x) [J·s²] (= kg·m²)
-    """
-    return (_objective_without_springs(model, problem, x)
-            + problem.h ** 2 * energy.spring_energy(model, x))
-
-
-def augmented_objective(model: Model, problem: StepProblem, x: np.ndarray,
-                        d: np.ndarray) -> float:
-    """The augmented objective ĝ(x, d) of the local/global method (Eq. 9).
-
-    ĝ(x, d) = ½ (x − y)ᵀ M (x − y) + h² (½ Σ_i k_i |p_i − d_i|² + E_anchor(x) − xᵀ f),
-    with p_i = x_{a_i} − x_{b_i}: g with (|p_i| − r_i)² replaced by |p_i − d_i|², i.e.
-    ½ xᵀ (M + h² L) x − h² xᵀ J d − xᵀ (M y + h² f) up to a constant. ĝ(x, d) ≥ g(x) when
-    every |d_i| = r_i, with equality at the local step's d_i = r_i p_i / |p_i|.
-
-    Parameters
-    ----------
-    model : Model
-    problem : StepProblem
-    x : ndarray, shape (n, 3), positions [m]
-    d : ndarray, shape (s, 3), one auxiliary vector per spring [m]
-
-    Returns
-    -------
-    float, ĝ(x, d) [J·s²]
-    """
-    q = energy.spring_vectors(model, x) - d
-    springs = 0.5 * float(np.sum(model.springs.spring_stiffness[:, None] * q * q))
-    return _objective_without_springs(model, problem, x) + problem.h ** 2 * springs
-
-
-def objective_gradient(model: Model, problem: StepProblem, x: np.ndarray) -> np.ndarray:
-    """The gradient of the objective g.
-
-    ∇g(x) = M (x − y) + h² ∇E(x), with ∇E = Σ_i k_i (1 − r_i/|p_i|) p_i at a_i (minus at
-    b_i) + Σ_j k_j (x_{v_j} − q_j) − f. Zero at the solution x_{n+1}.
-
-    Parameters
-    ----------
-    model : Model
-    problem : StepProblem
-    x : ndarray, shape (n, 3), positions [m]
-
-    Returns
-    -------
-    ndarray, shape (n, 3)
-        ∇g(x) [N·s²]; rows of fixed vertices are zero (they are not unknowns).
-    """
-    h2 = problem.h ** 2
-    grad = model.vertex_mass[:, None] * (x - problem.y) + h2 * energy.spring_gradient(model, x)
-    problem.anchors.add_gradient(grad, x, h2)
-    if problem.f_ext is not None:
-        grad -= h2 * problem.f_ext
-    grad[problem.fixed_vertices] = 0.0
-    return grad
-
-
-def gradient_noise_floor(model: Model, problem: StepProblem, x: np.ndarray) -> float:
-    """‖∇g‖ below which the gradient is rounding noise: eps h² (‖k‖₂ ‖x‖∞ + ‖f‖₂).
-
-    ∇g sums spring terms k_i (p_i − d_i) that cancel at the solution, and p_i = x_a − x_b
-    carries a rounding error of about eps |x| (positions are stored absolutely), so ‖∇g‖
-    cannot be computed more accurately than about eps h² ‖k‖ |x| (measured on a 41 × 41
-    cloth at rest: 0.35 of this bound). A step that starts almost at its solution (a cloth
-    at rest) can therefore not reduce ‖∇g‖ / ‖∇g(x_0)‖ to a tight tolerance; once ‖∇g‖ is
-    below this floor the iterate is optimal to rounding, and the solvers stop and count the
-    step as converged instead of warning.
-
-    Parameters
-    ----------
-    model : Model
-    problem : StepProblem
-    x : ndarray, shape (n, 3), positions [m] (usually the initial guess)
-
-    Returns
-    -------
-    float, the floor [N·s²]
-    """
-    force = float(np.linalg.norm(model.springs.spring_stiffness)) * float(np.abs(x).max())
-    if problem.f_ext is not None:
-        force += float(np.linalg.norm(problem.f_ext))
-    return float(np.finfo(float).eps) * problem.h ** 2 * force
-
-
-def relative(norm: float, norm0: float) -> float:
-    """Relative residual norm / norm0.
-
-    Parameters
-    ----------
-    norm, norm0 : float
-        Current and initial residual norms, e.g. of ∇g(x_k) and ∇g(x_0) [N·s²].
-
-    Returns
-    -------
-    float
-        norm / norm0 (dimensionless); 0 when both vanish (the initial guess is already the
-        solution), inf when only norm0 vanishes or is not finite.
-    """
-    if norm0 == 0.0 or not math.isfinite(norm0):
-        return 0.0 if norm == 0.0 else math.inf
-    return norm / norm0

@@ -16,9 +16,10 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from .effects.base import HOOKS, Effect, overrides
+from .effects.pins import Pin
 from .errors import InputError, NonFiniteStateError, check_finite
 from .model import Model
-from .problem import PinSet
+from .problem import PinSet, check_initial_guess
 from .solvers import Solver, StepProblem, StepResult, make_solver
 
 log = logging.getLogger(__name__)
@@ -99,11 +100,17 @@ class Simulation:
     h : float
         Time step [s].
     effects : sequence of Effect
-        The declared effects (gravity, pins, obstacles, …). Nothing else is simulated.
+        The declared effects (gravity, pins, obstacles, …). Nothing else is simulated,
+        except that the model's vertices of mass 0 that no pin holds get an exact
+        :class:`~clothsim.effects.Pin` (first in :attr:`effects`).
     solver : str or Solver, default "local-global"
         A solver instance, or a method name for :func:`clothsim.solvers.make_solver`.
     iterations, tolerance, backend
         Passed to the solver when ``solver`` is a name.
+    initial_guess : {"y", "x_n"}, default "y"
+        Where each step's iteration starts: the inertial target y = x_n + h v_n (the paper)
+        or the previous positions x_n (most ports; the assignment's ``main.cpp``). With a
+        fixed iteration count the answer depends on it; a converged step does not.
     state : State, optional
         Initial state; default: the model's positions at rest, zero velocity, t = 0.
 
@@ -121,8 +128,9 @@ class Simulation:
 
     def __init__(self, model: Model, *, h: float, effects=(), solver="local-global",
                  iterations: int = 10, tolerance: float | None = None, backend: str = "auto",
-                 state: State | None = None, **solver_options):
+                 state: State | None = None, initial_guess: str = "y", **solver_options):
         self.model = model
+        self.initial_guess = check_initial_guess(initial_guess)
         self.h = float(check_finite("h", h))
         if self.h <= 0:
             raise InputError(f"h: the time step must be positive, got {self.h!r}")
@@ -131,6 +139,10 @@ class Simulation:
         else:
             self.solver = make_solver(solver, model, iterations=iterations, tolerance=tolerance,
                                       backend=backend, **solver_options)
+        self._damped = bool(model.springs.spring_damping.any())
+        self._solver_options = dict(iterations=self.solver.iterations,
+                                    tolerance=self.solver.tolerance, backend=backend,
+                                    **solver_options)
         self.effects: list[Effect] = list(effects)
         for i, e in enumerate(self.effects):
             if not isinstance(e, Effect):
@@ -141,6 +153,16 @@ class Simulation:
         for e in self.effects:
             e.bind(model, self.h)
         self._hooks = {hook: [e for e in self.effects if overrides(e, hook)] for hook in HOOKS}
+        t1 = (0.0 if state is None else float(getattr(state, "time", 0.0))) + self.h
+        massless = np.setdiff1d(model.massless_vertices, self._pin_list(t1))
+        if len(massless):  # mass 0 means pinned (an inverse mass of 0, as the engines read it)
+            log.info("%d vertices of mass 0 are pinned at their initial positions",
+                     len(massless))
+            pin = Pin(massless)
+            pin.bind(model, self.h)
+            self.effects.insert(0, pin)
+            self._hooks = {hook: [e for e in self.effects if overrides(e, hook)]
+                           for hook in HOOKS}
         for e in self._hooks["connect_pins"]:  # effects that must not move pinned vertices
             e.connect_pins(self.pinned_vertices)
         n = model.vertex_count
@@ -206,7 +228,8 @@ class Simulation:
         """The implicit Euler problem of the next step from ``state``.
 
         Calls the effects' ``add_force``, ``adjust_target`` and ``pins`` hooks: f_ext is
-        the sum of the forces, y = x_n + h v_n as adjusted, pins at t + h.
+        the sum of the forces, y = x_n + h v_n as adjusted, pins at t + h; the problem
+        starts its iteration from :attr:`initial_guess`.
 
         Parameters
         ----------
@@ -234,7 +257,35 @@ class Simulation:
             pins = PinSet.merge([e.pins(t + h) for e in self._hooks["pins"]])
         return StepProblem(h, s.positions, s.velocities, y, f, pins.fixed_vertices,
                            pins.fixed_positions, pins.anchor_vertices, pins.anchor_positions,
-                           pins.anchor_stiffness)
+                           pins.anchor_stiffness, start=self.initial_guess)
+
+    def step_model(self, state: State | None = None) -> Model:
+        """The model whose objective g the next step minimizes.
+
+        :attr:`model` itself, unless springs are damped: then the springs of
+        :meth:`~clothsim.springs.Springs.implicit_damping` at x_n (stiffness k + c/h, rest
+        length (k r + (c/h) ℓ(x_n)) / (k + c/h)), whose g is the damped step's.
+
+        Parameters
+        ----------
+        state : State, optional
+            Start of the step; default the current state.
+
+        Returns
+        -------
+        Model
+        """
+        if not self._damped:
+            return self.model
+        s = self.state if state is None else state
+        m = self.model
+        return Model(m.mesh, m.springs.implicit_damping(self.h, s.positions), m.vertex_mass)
+
+    def _step_solver(self, state: State) -> Solver:
+        """The solver of the next step: :attr:`solver`, or one for the damped step model."""
+        if not self._damped:
+            return self.solver
+        return make_solver(self.solver.name, self.step_model(state), **self._solver_options)
 
     def step(self) -> StepRecord:
         """Advance one time step h.
@@ -257,7 +308,7 @@ class Simulation:
         start = _time.perf_counter()
         s, h = self.state, self.h
         problem = self.problem(s)
-        result: StepResult = self.solver.solve(problem)
+        result: StepResult = self._step_solver(s).solve(problem)
         x = result.x
         t1 = s.time + h
         for e in self._hooks["correct_positions"]:

@@ -44,6 +44,9 @@ class Springs:
     vertex_count : int or None
         Vertices of the mesh the springs were built for (set by the builders below; a
         :class:`~clothsim.model.Model` refuses springs built for a mesh of another size).
+    spring_damping : ndarray, shape (s,), float64
+        c_i [N·s/m], >= 0 (default 0): damping along the spring, as newton's and warp's
+        ``spring_damping`` (see :meth:`implicit_damping`).
     """
 
     spring_vertices: np.ndarray
@@ -51,6 +54,7 @@ class Springs:
     spring_rest_length: np.ndarray
     spring_family: np.ndarray
     vertex_count: int | None = None
+    spring_damping: np.ndarray | None = None
 
     def __post_init__(self):
         idx = _vertex_pairs(self.spring_vertices)
@@ -62,12 +66,16 @@ class Springs:
                         check_positive("spring_rest_length", self.spring_rest_length,
                                        allow_zero=True), s)
         fam = _per_spring("spring_family", np.asarray(self.spring_family, dtype=np.int8), s)
+        c = _per_spring("spring_damping",
+                        check_positive("spring_damping", 0.0 if self.spring_damping is None
+                                       else self.spring_damping, allow_zero=True), s)
         self_loops = np.flatnonzero(idx[:, 0] == idx[:, 1])
         if len(self_loops):
             raise InputError(f"spring_vertices[{self_loops[0]}]: a spring joins vertex "
                              f"{idx[self_loops[0], 0]} to itself")
         for name, a in (("spring_vertices", idx), ("spring_stiffness", k),
-                        ("spring_rest_length", r), ("spring_family", fam)):
+                        ("spring_rest_length", r), ("spring_family", fam),
+                        ("spring_damping", c)):
             a.flags.writeable = False
             object.__setattr__(self, name, a)
 
@@ -102,7 +110,42 @@ class Springs:
         Springs
         """
         return Springs(self.spring_vertices, stiffness, self.spring_rest_length,
-                       self.spring_family, self.vertex_count)
+                       self.spring_family, self.vertex_count, self.spring_damping)
+
+    def implicit_damping(self, h: float, positions: np.ndarray) -> Springs:
+        """The springs whose energy is this step's springs plus their damping potential.
+
+        A spring of damping c_i contributes to one implicit Euler step the dissipation
+        potential D_i(x) = c_i / (2h) (ℓ_i(x) − ℓ_i(x_n))², ℓ_i the spring's length, whose
+        force −∇D_i = −(c_i/h)(ℓ_i(x) − ℓ_i(x_n)) d̂_i ≈ −c_i (v_rel · d̂_i) d̂_i is the
+        damping force of newton's VBD solver (warp.sim's, taken at the end of the step).
+        As a function of ℓ, ½ k (ℓ − r)² + c/(2h) (ℓ − ℓ_n)² is ½ k' (ℓ − r')² plus a
+        constant, with k' = k + c/h and r' = (k r + (c/h) ℓ_n) / k': the step minimizes the
+        paper's g for springs of stiffness k' and rest length r' (``docs/math.md``).
+
+        Parameters
+        ----------
+        h : float
+            Time step [s].
+        positions : ndarray, shape (n, 3)
+            x_n, the positions at the start of the step [m].
+
+        Returns
+        -------
+        Springs
+            Stiffness k' [N/m] and rest length r' [m] (no damping); the same object when no
+            spring is damped.
+        """
+        c = self.spring_damping
+        if not c.any():
+            return self
+        sv = self.spring_vertices
+        length = np.linalg.norm(positions[sv[:, 0]] - positions[sv[:, 1]], axis=1)
+        k = self.spring_stiffness + c / h
+        safe = np.where(k > 0, k, 1.0)
+        rest = np.where(k > 0, (self.spring_stiffness * self.spring_rest_length
+                                + (c / h) * length) / safe, self.spring_rest_length)
+        return Springs(sv, k, rest, self.spring_family, self.vertex_count)
 
     @staticmethod
     def concatenate(parts: list[Springs]) -> Springs:
@@ -120,6 +163,7 @@ class Springs:
             np.concatenate([p.spring_rest_length for p in parts]),
             np.concatenate([p.spring_family for p in parts]),
             counts.pop() if counts else None,
+            np.concatenate([p.spring_damping for p in parts]),
         )
 
 

@@ -90,10 +90,10 @@ def setup(app):
 #: page whose prefix it has.
 API_PAGES = {
     "model": ("Meshes, springs, models", [
-        "clothsim.mesh", "clothsim.polygon", "clothsim.mesh_checks",
+        "clothsim.mesh", "clothsim.polygon", "clothsim.mesh_checks", "clothsim.voronoi",
         "clothsim.springs", "clothsim.model", "clothsim.gallery"]),
     "solvers": ("Solvers and the time step", [
-        "clothsim.simulation", "clothsim.problem", "clothsim.solvers",
+        "clothsim.simulation", "clothsim.problem", "clothsim.objective", "clothsim.solvers",
         "clothsim.factorization"]),
     "effects": ("Effects", ["clothsim.effects"]),
     "scenes-and-runs": ("Scenes, runs and files", [

@@ -44,8 +44,9 @@ else:
         e1 = total_energy(sim.state)
         print(f"{name}: {model.vertex_count} vertices, {model.spring_count} springs; "
               f"energy {e0:.3f} J -> {e1:.3f} J after 2 s")
-        # the pins hold, and implicit Euler dissipates: never more energy than at the start
-        assert np.array_equal(sim.state.positions[pinned], x_pins)
+        # the pins hold (the assignment's penalty w = 1e10 N/m gives by load / w, far below
+        # a micrometre), and implicit Euler dissipates: never more energy than at the start
+        assert np.abs(sim.state.positions[pinned] - x_pins).max() < 1e-6
         assert e1 < e0
         draw(ax, model.mesh, sim.state.positions, effects=sim.effects, t=sim.state.time)
         ax.set_title(name, fontsize=9)

@@ -75,9 +75,11 @@ def test_jacobson_cloths_run(tmp_path, scene, vertices):
     out = tmp_path / scene
     assert cli.main(["run", scene, "--out", str(out), "--frames", "2"]) == 0
     z, run = check_results(out, 2, vertices)
-    assert run["effects_built"] == ["pin", "gravity"]
+    assert run["effects_built"] == ["pin", "force"]  # the assignment: −9.8 N per vertex
     pins = np.asarray(json.loads((data_dir() / f"{scene[9:]}.json").read_text())["b"]) - 1
-    assert np.array_equal(z["positions"][2][pins], z["positions"][0][pins])
+    # the assignment's penalty pins (w = 1e10 N/m) hold within load / w, far below 1e-6 m
+    moved = np.abs(z["positions"][2][pins] - z["positions"][0][pins]).max()
+    assert 0 < moved < 1e-6
     free = np.setdiff1d(np.arange(vertices), pins)
     assert z["positions"][2][free, 1].mean() < z["positions"][0][free, 1].mean()
 
@@ -89,9 +91,10 @@ def test_jacobson_json_runs_directly(tmp_path):
     out = tmp_path / "chain"
     assert cli.main(["run", str(path), "--out", str(out), "--frames", "3"]) == 0
     z, run = check_results(out, 3, 10)
-    # both ends pinned, the middle sags; the chain stays symmetric about its middle
+    # both ends pinned (by the assignment's w = 1e10 N/m penalty: they give by load / w,
+    # about 1e-9 m), the middle sags; the chain stays symmetric about its middle
     y = z["positions"][3][:, 1]
-    assert y[0] == y[9] == 0.0 and y[4] < -0.01
+    assert abs(y[0]) < 1e-8 and abs(y[9]) < 1e-8 and y[4] < -0.01
     np.testing.assert_allclose(y, y[::-1], atol=1e-12)
 
 

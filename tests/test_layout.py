@@ -19,11 +19,11 @@ PACKAGE = Path(__file__).resolve().parents[1] / "clothsim"
 #: The pipeline, lowest first. A module may import its own stage and the stages below it.
 STAGES = [
     {"errors"},
-    {"mesh", "polygon", "mesh_checks"},
+    {"mesh", "polygon", "mesh_checks", "voronoi"},
     {"springs"},
     {"model"},
     {"matrices", "reference", "energy", "factorization"},
-    {"problem"},
+    {"problem", "objective"},
     {"solvers"},
     {"effects"},
     {"simulation"},

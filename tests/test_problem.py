@@ -5,13 +5,8 @@ import pytest
 
 from clothsim.errors import InputError
 from clothsim.gallery import GRAVITY, grid_cloth
-from clothsim.problem import (
-    PenaltyAnchors,
-    StepProblem,
-    objective,
-    objective_gradient,
-    relative,
-)
+from clothsim.objective import objective, objective_gradient, relative
+from clothsim.problem import PenaltyAnchors, StepProblem
 
 
 def problem_with_anchors(seed=0):

@@ -8,6 +8,7 @@ the models. :data:`EFFECTS` maps a scene's ``kind`` to the class; the scene pars
 from .base import Effect, PinSet, overrides
 from .box import Box
 from .damping import Damping
+from .force import Force
 from .gravity import Gravity
 from .impulse import Impulse
 from .obstacles import Obstacle, Plane, Sphere
@@ -17,6 +18,7 @@ from .wind import Wind
 
 EFFECTS: dict[str, type[Effect]] = {
     "gravity": Gravity,
+    "force": Force,
     "pin": Pin,
     "plane": Plane,
     "sphere": Sphere,
@@ -27,5 +29,5 @@ EFFECTS: dict[str, type[Effect]] = {
     "strain-limit": StrainLimit,
 }
 
-__all__ = ["Effect", "PinSet", "overrides", "Gravity", "Pin", "Plane", "Sphere", "Box",
+__all__ = ["Effect", "PinSet", "overrides", "Gravity", "Force", "Pin", "Plane", "Sphere", "Box",
            "Obstacle", "Impulse", "Wind", "Damping", "StrainLimit", "EFFECTS"]

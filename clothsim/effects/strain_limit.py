@@ -162,7 +162,8 @@ class StrainLimit(Effect):
         self._a = springs.spring_vertices[index, 0]
         self._b = springs.spring_vertices[index, 1]
         self._limit = (1.0 + self.max_strain) * springs.spring_rest_length[index]
-        self._inverse_mass = 1.0 / model.vertex_mass
+        m = model.vertex_mass
+        self._inverse_mass = np.divide(1.0, m, out=np.zeros_like(m), where=m > 0)  # 0: pinned
         self._groups = [(self._a[g], self._b[g], self._limit[g]) for g in
                         matching_groups(springs.spring_vertices[index], model.vertex_count)]
 

@@ -12,18 +12,21 @@ key       meaning, and how clothsim reads it
           strands (the chain, the net, the single spring).
 ``k``     One stiffness [N/m] for every spring. As in the assignment, springs lie on the
           sides of every face (each polygon's boundary, no quad diagonals), one per edge.
-``m``     Mass of every vertex [kg]. Without it, each vertex gets a third of the area of
-          its adjacent triangles at 1 kg/m² (the assignment uses libigl's Voronoi mass
-          matrix; the two agree in total mass, the area of the mesh).
-``b``     Pinned vertices, **1-based**; clothsim pins them exactly (the assignment uses a
-          stiff penalty, w = 1e10) at their initial positions.
+``m``     Mass of every vertex [kg]. Without it, each vertex gets its mixed Voronoi area
+          at 1 kg/m², as the assignment's libigl mass matrix
+          (``MASSMATRIX_TYPE_VORONOI``, Meyer et al. 2003; :mod:`clothsim.voronoi`).
+``b``     Pinned vertices, **1-based**, held at their initial positions by the scene's
+          ``[cloth] pin_method`` / ``pin_stiffness``: by default a penalty spring of
+          w = 1e10 N/m, as the assignment (:mod:`clothsim.scene.pins`).
 ``png``   Texture; ignored.
 ========  ==================================================================================
 
-The assignment's step is 1/30 s and its gravity is a force of −9.8 N per vertex; clothsim
-uses h = 1/30 s and gravity as an *acceleration* of 9.8 m/s², which is the same thing
-where m = 1 kg (chain, net, spring) and the physical reading elsewhere (flag, skirt).
-No mesh file passes through meshio here: OBJ polygons and line faces are read directly.
+:func:`scene_dict` (and the built-in ``jacobson-*`` scenes) run it as the assignment's
+``main.cpp`` does: h = 1/30 s, gravity as a *force* of −9.8 N on every vertex (a
+:class:`~clothsim.effects.Force`, not m g: the same where m = 1 kg, as in the chain, net
+and spring, but about 5e4 g on the flag's 2e-4 kg vertices), each step's iteration
+started from x_n, 50 local/global iterations. No mesh file passes through meshio here:
+OBJ polygons and line faces are read directly.
 """
 
 from __future__ import annotations
@@ -37,6 +40,7 @@ import numpy as np
 
 from ..errors import InputError, SceneError
 from ..mesh import Mesh, fan_triangles
+from ..voronoi import voronoi_areas
 from .obj import read_obj_cells
 
 
@@ -195,10 +199,10 @@ def _read_cached(path: str, stamp: int) -> Assignment:
     else:
         if mesh.triangle_count == 0:
             raise _error(p, "m", "missing: a mesh without polygons needs a per-vertex mass m")
-        m = mesh.vertex_areas()  # kg at 1 kg/m²
+        m = voronoi_areas(mesh.vertices, mesh.triangles)  # kg at 1 kg/m², as libigl
         if np.any(m <= 0):
             raise _error(p, "m", f"missing, and vertex {int(np.argmin(m)) + 1} touches no "
-                                 f"polygon, so area lumping gives it no mass")
+                                 f"polygon, so its Voronoi area, its mass, is 0")
     pinned = read_pins(p)
     if len(pinned) and pinned.max() >= n:
         i = int(np.argmax(pinned))
@@ -211,8 +215,9 @@ def _read_cached(path: str, stamp: int) -> Assignment:
 def scene_dict(path, *, frames: int = 60, iterations: int = 50) -> dict:
     """A scene document (as :class:`~clothsim.scene.Scene.from_dict` takes) for a JSON file.
 
-    h = 1/30 s as in the assignment, gravity 9.8 m/s² along −y, exact pins from ``b``,
-    ``iterations`` local/global iterations per step.
+    As the assignment's ``main.cpp``: h = 1/30 s, −9.8 N along y on every vertex (a
+    ``force`` effect), penalty pins of w = 1e10 N/m from ``b`` (the ``jacobson`` shape's
+    default), each step started from x_n, ``iterations`` local/global iterations.
 
     Parameters
     ----------
@@ -227,7 +232,7 @@ def scene_dict(path, *, frames: int = 60, iterations: int = 50) -> dict:
     -------
     dict
         The scene document: ``scene``, ``cloth`` (shape ``"jacobson"``), ``solver`` and
-        ``effects`` (gravity) tables.
+        ``effects`` (the force) tables.
     """
     p = Path(path).resolve()
     _load_json(p)  # fail early, naming the JSON file
@@ -235,8 +240,8 @@ def scene_dict(path, *, frames: int = 60, iterations: int = 50) -> dict:
         "scene": {"name": f"jacobson-{p.stem}", "frames": frames, "fps": 30, "substeps": 1,
                   "description": f"assignment scene {p.name}"},
         "cloth": {"shape": "jacobson", "file": str(p)},
-        "solver": {"method": "local-global", "iterations": iterations},
-        "effects": [{"kind": "gravity", "acceleration": [0.0, -9.8, 0.0]}],
+        "solver": {"method": "local-global", "iterations": iterations, "initial_guess": "x_n"},
+        "effects": [{"kind": "force", "per_vertex": [0.0, -9.8, 0.0]}],
     }
 
 

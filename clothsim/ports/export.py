@@ -253,7 +253,7 @@ def export_port(source, out_dir, *, frames: int = 60, iterate_steps: int = 3) ->
         "frames": frames + 1,
         "solver": {"method": solver.name, "iterations": solver.iterations,
                    "tolerance": solver.tolerance,
-                   "initial_guess": "y = x_n + h v_n (after target-changing effects)"},
+                   "initial_guess": sim.initial_guess},
         "effects": [e.describe() for e in sim.effects],
         "pinned_vertices": [int(r[0]) for r in pins],
         "pins": [{"vertex": int(r[0]), "method": "penalty" if r[1] else "constraint",

@@ -14,7 +14,7 @@ from pathlib import Path
 
 import numpy as np
 
-from ..effects import EFFECTS, Pin
+from ..effects import EFFECTS
 from ..errors import InputError, SceneError
 from ..io.assignment import read_assignment, read_pins
 from ..io.meshes import load_mesh
@@ -25,6 +25,7 @@ from ..simulation import Simulation
 from ..springs import FAMILIES, Springs, grid_springs, mesh_springs, springs_from_pairs
 from .checks import Invalid, integer, locate
 from .effects import constructor_params
+from .pins import declared_pins
 from .schema import MAX_SUBSTEPS
 from .tables import read_index_list, read_spring_table, read_triangles, read_values, read_vertices
 from .validate import validate, validate_solver
@@ -199,7 +200,7 @@ class Scene:
                             table.rest)
             fam = np.full(len(rest), FAMILIES.index("structural"), np.int8)
             springs = Springs.concatenate([springs, Springs(table.pairs, table.stiffness,
-                                                            rest, fam)])
+                                                            rest, fam, None, table.damping)])
         vm = c.get("vertex_mass")
         if isinstance(vm, str):
             vm = read_values(vm, "cloth.vertex_mass")
@@ -211,23 +212,21 @@ class Scene:
 
     def _implicit_pins(self, vertex_count: int | None = None) -> list:
         """Pins the cloth's files declare: the assignment's ``b``, the table's attachments."""
-        out = []
-        if self.data["cloth"]["shape"] == "jacobson":
-            out.append(("cloth.file", Pin(read_pins(self.data["cloth"]["file"]))))
+        c = self.data["cloth"]
+        b = read_pins(c["file"]) if c["shape"] == "jacobson" else None
+        t = None
         if "table" in self.data["springs"]:
             if vertex_count is None:
                 vertex_count = self.build_model().vertex_count
             t = self._spring_table(vertex_count)
-            for k in dict.fromkeys(t.attached_stiffness.tolist()):
-                vs = t.attached[t.attached_stiffness == k]
-                out.append(("springs.table", Pin(vs, method="penalty", stiffness=k)))
-        return out
+        return declared_pins(c, b, t)
 
     def build_effects(self, model=None) -> list:
         """Fresh effect objects: the cloth files' pins first, then the declared effects.
 
-        The pins a cloth's files declare come first: a ``jacobson`` cloth's exact pins (its
-        JSON's ``b`` list), then a spring table's attachments as penalty pins.
+        The pins a cloth's files declare come first: a ``jacobson`` cloth's pins (its JSON's
+        ``b`` list), then a spring table's attachments, held as ``[cloth] pin_method`` and
+        ``pin_stiffness`` say (:mod:`clothsim.scene.pins`).
 
         Parameters
         ----------
@@ -254,7 +253,7 @@ class Scene:
         for i, e in enumerate(self.data["effects"]):
             params = constructor_params(e["kind"], e)
             path = f"effects[{i}]"
-            if e["kind"] == "pin" and isinstance(params.get("vertices"), str):
+            if isinstance(params.get("vertices"), str):  # a pin's or a force's file
                 n = (self.build_model() if model is None else model).vertex_count
                 params["vertices"] = read_index_list(params["vertices"], f"{path}.vertices",
                                                      e.get("index_base", 0), n)
@@ -295,7 +294,7 @@ class Scene:
             solver = validate_solver(so["method"] if method is None else method,
                                      so["iterations"] if iterations is None else iterations,
                                      so["tolerance"] if tolerance is None else tolerance,
-                                     so["backend"])
+                                     so["backend"], so["initial_guess"])
             if substeps is not None:
                 substeps = integer(substeps, "scene.substeps", minimum=1, maximum=MAX_SUBSTEPS)
         except Invalid as exc:
@@ -312,7 +311,8 @@ class Scene:
         try:
             return Simulation(model, h=h, effects=effects, solver=solver["method"],
                               iterations=solver["iterations"], tolerance=solver["tolerance"],
-                              backend=solver["backend"])
+                              backend=solver["backend"],
+                              initial_guess=solver["initial_guess"])
         except InputError as exc:
             raise self._locate(exc, model, h) from None
 
@@ -329,7 +329,7 @@ class Scene:
             return
         n, m = model.vertex_count, model.vertex_mass
         diag = np.bincount(sv[:, 0], k, n) + np.bincount(sv[:, 1], k, n)
-        ratio = (h * h) * diag / m
+        ratio = np.divide((h * h) * diag, m, out=np.zeros(n), where=m > 0)  # m = 0: pinned
         v = int(np.argmax(ratio))
         if ratio[v] * EPS < 1.0:
             return

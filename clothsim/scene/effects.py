@@ -31,7 +31,7 @@ MAX_LENGTH = 1e100  # [m]: coordinates and radii whose squares stay finite
 
 PARAMETERS = {kind: {key: t for key, (t, _unit) in keys.items()}
               for kind, keys in EFFECT_KEYS.items()}  # kind -> key -> type word
-_SCENE_ONLY = {"pin": ("index_base",)}       # read by the scene, not given to the effect
+_SCENE_ONLY = {"pin": ("index_base",), "force": ("index_base",)}  # read by the scene only
 _PYTHON_ONLY_KEYS = {"pin": ("motion",)}     # callables: Python API only, not in scene files
 
 
@@ -107,6 +107,8 @@ def check_parameter(kind: str, key: str, v, path: str, base_dir: Path):
             if corner not in r:
                 raise Invalid(f"{path}.{corner}", "missing: a region needs 'min' and 'max'")
         return {c: _vec3(r[c], f"{path}.{c}", point=True) for c in ("min", "max")}
+    if t == "file":
+        return str(resolve_path(string(v, path), base_dir, path))
     if t == "vertices":
         if isinstance(v, str):
             return str(resolve_path(v, base_dir, path))
@@ -163,7 +165,7 @@ def validate_effect(e, path: str, vertex_count: int | None, base_dir: Path) -> d
             raise Invalid(f"{path}.normal", "must not be the zero vector")
         if big > 1e150 or big < 1e-150:  # rescaled so that its length neither over- nor
             params["normal"] = [x / big for x in params["normal"]]  # underflows
-    if kind == "pin":
+    if kind in ("pin", "force"):
         if "index_base" in params and not isinstance(params.get("vertices"), str):
             raise Invalid(f"{path}.index_base", "only used when 'vertices' is a file")
         vs = params.get("vertices")
@@ -176,7 +178,7 @@ def validate_effect(e, path: str, vertex_count: int | None, base_dir: Path) -> d
                 if v in seen:
                     raise Invalid(f"{path}.vertices[{i}]", f"vertex {v} is listed twice")
                 seen.add(v)
-    if not (kind == "pin" and isinstance(params.get("vertices"), str)):
+    if not isinstance(params.get("vertices"), str):  # a file of indices: read on build
         try:  # the constructor checks its own parameters; nothing is bound to a model here
             EFFECTS[kind](**constructor_params(kind, params))
         except (InputError, TypeError, ValueError) as exc:

@@ -107,8 +107,10 @@ KEYS: tuple[Key, ...] = (
     Key("cloth", "mass", "number", 1.0, "kg",
         "Total mass, > 0, spread over the vertices by `mass_lumping`.", _ALL_BUT_JACOBSON),
     Key("cloth", "vertex_mass", "number, array or file", NONE, "kg",
-        "Mass of every vertex (one number, one per vertex, or a text file of n numbers), > 0. "
-        "Replaces `mass`; give one of the two.", _ALL_BUT_JACOBSON),
+        "Mass of every vertex (one number > 0, or one per vertex, or a text file of n "
+        "numbers, each ≥ 0). A vertex of mass 0 is pinned exactly at its initial position "
+        "(as engines read an inverse mass of 0). Replaces `mass`; give one of the two.",
+        _ALL_BUT_JACOBSON),
     Key("cloth", "mass_lumping", "string", "uniform", "",
         "`\"uniform\"`: every vertex the same. `\"area\"`: proportional to a third of the "
         "adjacent triangles' area.", _ALL_BUT_JACOBSON),
@@ -132,6 +134,14 @@ KEYS: tuple[Key, ...] = (
     Key("cloth", "file", "string (file)", REQUIRED, "",
         "An assignment `.json` file; mesh, springs, masses and pins all come from it.",
         ("jacobson",)),
+    Key("cloth", "pin_method", "string", "penalty", "",
+        "How the pins a cloth's files declare (a `jacobson` JSON's `b`, a spring table's "
+        "attachment rows) are held: `\"penalty\"`, a spring of rest length 0 to the pin's "
+        "target (the assignment's `main.cpp`), or `\"constraint\"`, exactly. A pin "
+        "effect keeps its own `method`."),
+    Key("cloth", "pin_stiffness", "number", NONE, "N/m",
+        "Stiffness of those penalty pins, > 0. Default: the assignment's w = 1e10 for a "
+        "`jacobson` cloth, each attachment row's own stiffness for a spring table."),
     Key("cloth", "vertices", "string (file)", REQUIRED, "m",
         "Initial positions: a text file of n lines of 3 numbers, or one line of 3n numbers "
         "(x y z per vertex); `#` starts a comment.", ("files",)),
@@ -159,8 +169,10 @@ KEYS: tuple[Key, ...] = (
         "(rest must be 0).", _ALL_BUT_JACOBSON),
     Key("springs", "columns", "array of strings", ["a", "b", "stiffness", "rest"], "",
         "Column names of `table`: `a`, `b` (vertex indices, required), `stiffness` [N/m] "
-        "(required), `rest` [m] (default: the initial distance); any other name (e.g. "
-        "`type`) is read and ignored.", _ALL_BUT_JACOBSON),
+        "(required), `rest` [m] (default: the initial distance), `damping` [N·s/m] (≥ 0, "
+        "default 0: damping along the spring as newton and warp define it, implicit in the "
+        "step; docs/math.md); any other name (e.g. `type`) is read and ignored.",
+        _ALL_BUT_JACOBSON),
     Key("springs", "index_base", "integer", 0, "",
         "0 or 1: the number of the first vertex in `table` (−1 in `b` always marks an "
         "attachment).", _ALL_BUT_JACOBSON),
@@ -177,15 +189,22 @@ KEYS: tuple[Key, ...] = (
     Key("solver", "backend", "string", "auto", "",
         "Sparse factorization: `\"auto\"` (CHOLMOD if installed, else SuperLU), "
         "`\"cholmod\"`, `\"splu\"`."),
+    Key("solver", "initial_guess", "string", "y", "",
+        "Where each step's iteration starts: `\"y\"`, the inertial target x_n + h v_n (the "
+        "paper), or `\"x_n\"`, the previous positions (most ports, the assignment's "
+        "`main.cpp`). With a fixed iteration count the answer depends on it."),
 )
 
 
 # [[effects]]: kind -> key -> (type, unit). The type words are checked by
 # clothsim.scene.effects: "vec3"/"point" 3 numbers (a point within ±1e100 m), "number",
 # "nonneg" (>= 0), "positive" (> 0), "time" (>= 0), "length" (> 0, <= 1e100), "string",
-# "strings", "count" (an iteration count), "vertices" (indices or a file), "region", "base".
+# "strings", "count" (an iteration count), "vertices" (indices or a file), "region", "base",
+# "file" (a file name, resolved against the scene's folder).
 EFFECT_KEYS: dict[str, dict[str, tuple[str, str]]] = {
     "gravity": {"acceleration": ("vec3", "m/s²")},
+    "force": {"per_vertex": ("vec3", "N"), "vertices": ("vertices", ""), "file": ("file", ""),
+              "index_base": ("base", "")},
     "pin": {"vertices": ("vertices", ""), "region": ("region", "m"), "method": ("string", ""),
             "stiffness": ("positive", "N/m"), "release": ("time", "s"),
             "velocity": ("vec3", "m/s"), "index_base": ("base", "")},
@@ -205,7 +224,8 @@ _TYPE_WORDS = {"vec3": "[3] numbers", "point": "[3] numbers", "number": "number"
                "nonneg": "number ≥ 0", "positive": "number > 0", "time": "number ≥ 0",
                "length": "number > 0", "string": "string", "strings": "array of strings",
                "count": "integer ≥ 1", "vertices": "array of integers, or a file",
-               "region": "table `{min, max}`", "base": "0 or 1 (with a file)"}
+               "region": "table `{min, max}`", "base": "0 or 1 (with a file)",
+               "file": "string (file)"}
 
 
 def keys(table: str, shape: str | None = None) -> tuple[str, ...]:

@@ -199,6 +199,8 @@ class SpringTable:
         Vertices of the attachment rows (``b`` = −1), in file order.
     attached_stiffness : ndarray, shape (p,)
         Their stiffness [N/m].
+    damping : ndarray, shape (s,)
+        Damping c [N·s/m] of each spring (0 without a ``damping`` column).
     """
 
     pairs: np.ndarray
@@ -206,6 +208,7 @@ class SpringTable:
     rest: np.ndarray
     attached: np.ndarray
     attached_stiffness: np.ndarray
+    damping: np.ndarray
 
 
 def read_spring_table(path, key: str, columns: list[str], base: int,
@@ -242,7 +245,7 @@ def _read_table(path: str, stamp: int, key: str, columns: tuple, base: int,
                 vertex_count: int) -> SpringTable:
     name = Path(path).name
     col = {c: i for i, c in enumerate(columns)}
-    pairs, ks, rests, att, att_k = [], [], [], [], []
+    pairs, ks, rests, att, att_k, cs = [], [], [], [], [], []
     for line, values in _rows(path, key):
         if len(values) != len(columns):
             raise Invalid(key, f"line {line} of {name}: expected {len(columns)} numbers "
@@ -257,6 +260,10 @@ def _read_table(path: str, stamp: int, key: str, columns: tuple, base: int,
             raise Invalid(key, f"line {line} of {name}: stiffness must be non-negative, got "
                                f"{k!r}")
         rest = values[col["rest"]] if "rest" in col else float("nan")
+        c = values[col["damping"]] if "damping" in col else 0.0
+        if c < 0:
+            raise Invalid(key, f"line {line} of {name}: damping must be non-negative, got "
+                               f"{c!r}")
         if b == -1:
             if "rest" in col and rest != 0:
                 raise Invalid(key, f"line {line} of {name}: an attachment (b = -1) must have "
@@ -279,10 +286,12 @@ def _read_table(path: str, stamp: int, key: str, columns: tuple, base: int,
         pairs.append((a, b))
         ks.append(k)
         rests.append(rest)
+        cs.append(c)
     out = SpringTable(np.asarray(pairs, np.int64).reshape(-1, 2), np.asarray(ks, float),
                       np.asarray(rests, float), np.asarray(att, np.int64),
-                      np.asarray(att_k, float))
-    for a in (out.pairs, out.stiffness, out.rest, out.attached, out.attached_stiffness):
+                      np.asarray(att_k, float), np.asarray(cs, float))
+    for a in (out.pairs, out.stiffness, out.rest, out.attached, out.attached_stiffness,
+              out.damping):
         a.flags.writeable = False
     return out
 

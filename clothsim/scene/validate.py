@@ -12,9 +12,11 @@ import math
 from pathlib import Path
 from typing import Any
 
+from ..effects.pins import PIN_METHODS
 from ..factorization import BACKENDS
 from ..mesh import PLANES
 from ..model import MASS_LUMPINGS
+from ..problem import INITIAL_GUESSES
 from ..solvers import SOLVERS
 from ..springs import BENDING_PATTERNS
 from . import schema
@@ -129,6 +131,11 @@ def _cloth(raw: dict, base_dir: Path) -> tuple[dict, int | None]:
             raise Invalid(f"cloth.{key}", f"not used with cloth.shape = '{shape}' (only with "
                                           f"{' or '.join(repr(u) for u in users)})")
     cloth: dict[str, Any] = {"shape": shape}
+    cloth["pin_method"] = string(c.get("pin_method", "penalty"), "cloth.pin_method",
+                                 choices=PIN_METHODS)
+    if "pin_stiffness" in c:
+        cloth["pin_stiffness"] = number(c["pin_stiffness"], "cloth.pin_stiffness",
+                                        positive=True)
     vertex_count = None
     if shape == "grid":
         vertex_count = _grid(c, cloth)
@@ -179,7 +186,7 @@ def _cloth(raw: dict, base_dir: Path) -> tuple[dict, int | None]:
         if "vertex_mass" in c:
             vm = c["vertex_mass"]
             if isinstance(vm, (list, tuple)):
-                vm = [number(m, f"cloth.vertex_mass[{i}]", positive=True)
+                vm = [number(m, f"cloth.vertex_mass[{i}]", nonnegative=True)
                       for i, m in enumerate(vm)]
                 if vertex_count is not None and len(vm) != vertex_count:
                     raise Invalid("cloth.vertex_mass", f"expected {vertex_count} values (one "
@@ -227,7 +234,7 @@ def _springs(raw: dict, shape: str, base_dir: Path) -> dict:
             if need not in cols:
                 raise Invalid("springs.columns", f"needs a column '{need}', got {show(cols)}")
         for i, v in enumerate(cols):
-            if v in cols[:i] and v in ("a", "b", "stiffness", "rest"):
+            if v in cols[:i] and v in ("a", "b", "stiffness", "rest", "damping"):
                 raise Invalid(f"springs.columns[{i}]", f"column '{v}' is named twice")
         springs["columns"] = cols
         springs["index_base"] = integer(sp.get("index_base", 0), "springs.index_base",
@@ -239,7 +246,7 @@ def _springs(raw: dict, shape: str, base_dir: Path) -> dict:
     return springs
 
 
-def validate_solver(method, iterations, tolerance, backend) -> dict:
+def validate_solver(method, iterations, tolerance, backend, initial_guess="y") -> dict:
     """Check the ``[solver]`` values (also used for overrides).
 
     Parameters
@@ -252,11 +259,13 @@ def validate_solver(method, iterations, tolerance, backend) -> dict:
         Relative residual to stop at, > 0 (dimensionless); None: run all iterations.
     backend : str
         The factorization backend, one of the scene's backend names.
+    initial_guess : str, default "y"
+        ``"y"`` or ``"x_n"``: where each step's iteration starts.
 
     Returns
     -------
     dict
-        ``method``, ``iterations``, ``tolerance``, ``backend``, checked.
+        ``method``, ``iterations``, ``tolerance``, ``backend``, ``initial_guess``, checked.
 
     Raises
     ------
@@ -270,6 +279,8 @@ def validate_solver(method, iterations, tolerance, backend) -> dict:
         "tolerance": None if tolerance is None else number(tolerance, "solver.tolerance",
                                                            positive=True),
         "backend": string(backend, "solver.backend", choices=BACKENDS),
+        "initial_guess": string(initial_guess, "solver.initial_guess",
+                                choices=INITIAL_GUESSES),
     }
 
 
@@ -307,8 +318,9 @@ def validate(raw: dict, base_dir: Path, default_name: str) -> dict:
     d = schema.default
     out["solver"] = validate_solver(so.get("method", d("solver", "method")),
                                     so.get("iterations", d("solver", "iterations")),
-                                    so.get("tolerance"), so.get("backend", d("solver",
-                                                                             "backend")))
+                                    so.get("tolerance"),
+                                    so.get("backend", d("solver", "backend")),
+                                    so.get("initial_guess", d("solver", "initial_guess")))
     effects = raw.get("effects", [])
     if not isinstance(effects, list):
         raise Invalid("effects", f"expected an array of tables ([[effects]]), got "

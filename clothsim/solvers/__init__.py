@@ -13,14 +13,8 @@ method                class
 ====================  ===================================================================
 """
 
-from ..problem import (
-    PinSet,
-    StepProblem,
-    augmented_objective,
-    gradient_noise_floor,
-    objective,
-    objective_gradient,
-)
+from ..objective import augmented_objective, gradient_noise_floor, objective, objective_gradient
+from ..problem import PinSet, StepProblem
 from .anderson import AndersonSolver
 from .base import Iterate, Solver, StepResult
 from .chebyshev import ChebyshevSolver, estimate_spectral_radius

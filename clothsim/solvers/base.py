@@ -17,16 +17,14 @@ import numpy as np
 
 from ..errors import ConvergenceWarning, InputError, check_finite
 from ..model import Model
-from ..problem import (  # noqa: F401  (re-exported: the solvers' public vocabulary)
-    PenaltyAnchors,
-    PinSet,
-    StepProblem,
+from ..objective import (  # noqa: F401  (re-exported: the solvers' public vocabulary)
     augmented_objective,
     gradient_noise_floor,
     objective,
     objective_gradient,
     relative,
 )
+from ..problem import PenaltyAnchors, PinSet, StepProblem  # noqa: F401  (re-exported)
 
 
 class Iterate:
@@ -86,7 +84,7 @@ class StepResult:
         Relative residual before each iteration and after the last.
     converged : bool or None
         True when a tolerance was set and met, or when ‖∇g‖ reached its rounding floor
-        (:func:`~clothsim.problem.gradient_noise_floor`); False when a tolerance was set
+        (:func:`~clothsim.objective.gradient_noise_floor`); False when a tolerance was set
         and missed; None ("not checked") when no tolerance was set.
     """
 

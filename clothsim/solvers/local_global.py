@@ -288,7 +288,8 @@ class LocalGlobalSolver(Solver):
         problem : StepProblem
             The step's h [s], y [m], forces [N] and pins.
         x0 : ndarray, shape (n, 3), optional
-            Initial guess [m]; default y with the pins applied.
+            Initial guess [m]; default :meth:`StepProblem.initial_guess` (y or x_n as the
+            problem's ``start`` says, pins applied).
 
         Yields
         ------
@@ -298,6 +299,7 @@ class LocalGlobalSolver(Solver):
         sysf = self.system(problem)
         free, fixed = sysf.free, sysf.fixed
         dirs = self._dirs
+        from_y = x0 is None and problem.start == "y"   # x_0 = y: p(x_0) is p(y)
         x = problem.initial_guess() if x0 is None else np.array(x0, dtype=np.float64)
         xT = np.ascontiguousarray(x.T)
         # per-step constants: y, p(y), c_F = (h² f + h² K_anchor (q − y))_F − A_FP δ_P
@@ -332,7 +334,7 @@ class LocalGlobalSolver(Solver):
             return math.sqrt(float(np.dot(flat, flat)))
 
         # local step at x_0; x_0 = y (pins applied) has p(y)'s vectors but at the exact pins
-        if x0 is None:
+        if from_y:
             np.copyto(eT, pyT)
             pinned = sysf.pinned_springs
             if len(pinned):
@@ -340,7 +342,7 @@ class LocalGlobalSolver(Solver):
         else:
             dirs.vectors_into(xT, eT)
         right_hand_side(dirs.e_into(xT, eT, pyT), rhsT)
-        if x0 is None:    # δ_F = 0 at x_0, so ∇g(x_0)_F = (A δ)_F − (b − A y)_F = −rhs_F
+        if from_y:        # δ_F = 0 at x_0, so ∇g(x_0)_F = (A δ)_F − (b − A y)_F = −rhs_F
             yield Iterate(0, x, norm(rhsT), d=dirs.current)
         else:
             g0 = self.gradient(problem, x, dirs.current().T)

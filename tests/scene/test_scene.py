@@ -101,7 +101,7 @@ def test_defaults_and_roundtrip():
                           "substeps": 1}
     assert d["cloth"]["resolution"] == [21, 21] and d["cloth"]["mass"] == 1.0
     assert d["solver"] == {"method": "local-global", "iterations": 10, "tolerance": None,
-                           "backend": "auto"}
+                           "backend": "auto", "initial_guess": "y"}
     assert d["effects"] == [] and d["springs"] == {"bending_pattern": "every"}
     json.dumps(d)  # JSON-ready
     again = Scene.from_dict(d)
@@ -158,13 +158,26 @@ def test_jacobson_json_net_and_flag():
     np.testing.assert_array_equal(model.vertex_mass, np.ones(61))
     assert set(model.springs.spring_stiffness) == {300.0}
     sim = net.build_simulation(model)
-    assert sim.effects_built == ["pin", "gravity"]
+    # the assignment's main.cpp: w = 1e10 penalty pins, −9.8 N per vertex, x_n, 50
+    # iterations, h = 1/30 s
+    assert sim.effects_built == ["pin", "force"]
     np.testing.assert_array_equal(np.sort(sim.effects[0].vertices), [0, 4, 26, 34, 56, 60])
+    assert sim.effects[0].method == "penalty" and sim.effects[0].stiffness == 1e10
+    assert sim.effects[1].per_vertex.tolist() == [0.0, -9.8, 0.0]
     assert sim.solver.iterations == 50 and sim.h == pytest.approx(1 / 30)
-    flag = load_scene("jacobson-flag").build_model()
+    assert sim.initial_guess == "x_n"
+    flag_scene = load_scene("jacobson-flag")
+    flag = flag_scene.build_model()
     # 40 x 80 vertices, 39 x 79 quads: springs on quad sides only (no diagonals)
     assert flag.vertex_count == 3200 and flag.spring_count == 40 * 79 + 39 * 80
+    # no m in flag.json: libigl's Voronoi areas at 1 kg/m², summing to the area
     assert flag.total_mass == pytest.approx(flag.mesh.triangle_areas().sum())
+    from clothsim.voronoi import voronoi_areas
+    np.testing.assert_array_equal(flag.vertex_mass,
+                                  voronoi_areas(flag.mesh.vertices, flag.mesh.triangles))
+    assert 1e-4 < flag.vertex_mass.min() < flag.vertex_mass.max() < 1e-3
+    f = flag_scene.build_simulation(flag).problem().f_ext
+    np.testing.assert_array_equal(f, np.tile([0.0, -9.8, 0.0], (3200, 1)))
 
 
 def test_builtin_scenes_all_validate():
@@ -215,7 +228,7 @@ BAD = [
      "must be non-negative, got -1.0"),
     ("zero mass", "[cloth]\nmass = 0.0\n", "cloth.mass", "must be positive, got 0.0"),
     ("negative vertex mass", "[cloth]\nresolution = [2, 2]\nvertex_mass = [1.0, -2.0, 1.0, 1.0]\n",
-     "cloth.vertex_mass[1]", "must be positive, got -2.0"),
+     "cloth.vertex_mass[1]", "must be non-negative, got -2.0"),
     ("vertex mass count", "[cloth]\nresolution = [2, 2]\nvertex_mass = [1.0, 1.0]\n",
      "cloth.vertex_mass", "expected 4 values"),
     ("mass twice", "[cloth]\nmass = 1.0\nvertex_mass = 0.1\n", "cloth.vertex_mass",

@@ -12,7 +12,7 @@ import clothsim as cs
 from clothsim import reference
 from clothsim.factorization import cholmod_available
 from clothsim.gallery import curtain, grid_cloth
-from clothsim.problem import gradient_noise_floor
+from clothsim.objective import gradient_noise_floor
 from clothsim.solvers import (
     Iterate,
     LocalGlobalSolver,
