@@ -11,9 +11,10 @@ matrices
     (its n × n block).
 model (plain text)
     ``vertices.txt`` (n lines x y z), ``x0.txt`` (one line of 3n), ``triangles.txt``,
-    ``springs.txt`` (a b k r, 0-based), ``masses.txt``, ``pins.txt`` (vertex method
-    stiffness x y z; stiffness 0 for exact pins), ``forces.txt`` (external force at t = 0,
-    n lines).
+    ``springs.txt`` (a b k r [damping], 0-based), ``masses.txt``, ``pins.txt`` (vertex
+    method stiffness x y z; stiffness 0 for exact pins), ``forces.txt`` (external force at
+    t = 0, n lines), ``settings.txt`` (``key value`` lines: h, iterations, tolerance,
+    initial_guess, method, frames, precision).
 trajectory
     ``trajectory.npz`` (positions, velocities (frames, n, 3), time); ``positions.txt``,
     ``velocities.txt`` (one frame a line of 3n numbers, %.17g); ``positions.f64``,
@@ -94,6 +95,57 @@ def export_matrices(model, h: float, out_dir, *, pinned=None, anchor_vertices=()
                 | {"spring_vertices.txt": "a_i b_i per spring, 0-based"}}
     (out / "manifest.json").write_text(json.dumps(manifest, indent=2))
     return manifest
+
+
+def write_springs(path, springs) -> None:
+    """Write ``a b k r`` per spring (0-based), and a fifth column ``damping`` when any is damped.
+
+    Parameters
+    ----------
+    path : path
+    springs : Springs
+    """
+    cols = [springs.spring_vertices, springs.spring_stiffness, springs.spring_rest_length]
+    fmt, header = ["%d", "%d", "%.17g", "%.17g"], "a b k r (0-based vertices)"
+    if springs.spring_damping.any():
+        cols.append(springs.spring_damping)
+        fmt, header = fmt + ["%.17g"], "a b k r damping (0-based vertices) [-, -, N/m, m, N s/m]"
+    np.savetxt(path, np.column_stack(cols), fmt=fmt, header=header)
+
+
+def settings(sim, frames: int) -> dict:
+    """The step settings a port must match: what ``settings.txt`` holds.
+
+    Parameters
+    ----------
+    sim : Simulation
+    frames : int
+        Steps of the reference trajectory.
+
+    Returns
+    -------
+    dict
+        ``h`` [s], ``iterations``, ``tolerance`` (0 when the count is fixed),
+        ``initial_guess`` (y | x_n), ``method``, ``frames``, ``precision`` (float64).
+    """
+    return {"h": sim.h, "iterations": sim.solver.iterations,
+            "tolerance": sim.solver.tolerance or 0.0, "initial_guess": sim.initial_guess,
+            "method": sim.solver.name, "frames": frames, "precision": "float64"}
+
+
+def write_settings(path, sim, frames: int) -> None:
+    """Write :func:`settings` as ``key value`` lines (numbers as %.17g).
+
+    Parameters
+    ----------
+    path : path
+    sim : Simulation
+    frames : int
+    """
+    lines = ["# clothsim step settings: key value"]
+    for key, value in settings(sim, frames).items():
+        lines.append(f"{key} {value:.17g}" if isinstance(value, float) else f"{key} {value}")
+    Path(path).write_text("\n".join(lines) + "\n")
 
 
 def pin_table(sim) -> np.ndarray:
@@ -210,9 +262,7 @@ def export_port(source, out_dir, *, frames: int = 60, iterate_steps: int = 3) ->
     np.savetxt(out / "x0.txt", x0.reshape(1, -1), fmt="%.17g")
     np.savetxt(out / "triangles.txt", model.mesh.triangles, fmt="%d")
     sv = model.springs.spring_vertices
-    np.savetxt(out / "springs.txt", np.column_stack([sv, model.springs.spring_stiffness,
-                                                     model.springs.spring_rest_length]),
-               fmt=["%d", "%d", "%.17g", "%.17g"], header="a b k r (0-based vertices)")
+    write_springs(out / "springs.txt", model.springs)
     io.write_vector(out / "masses.txt", model.vertex_mass)
     np.savetxt(out / "pins.txt", pins, fmt=["%d", "%d", "%.17g", "%.17g", "%.17g",
                                                       "%.17g"],
@@ -226,7 +276,10 @@ def export_port(source, out_dir, *, frames: int = 60, iterate_steps: int = 3) ->
         "springs.txt": "a b k r per spring (0-based) [-, -, N/m, m]",
         "masses.txt": "m_i per vertex [kg]",
         "pins.txt": "vertex method(0 exact, 1 penalty) stiffness x y z [-, -, N/m, m]",
-        "forces.txt": "external force per vertex at t = 0 [N]"})
+        "forces.txt": "external force per vertex at t = 0 [N]",
+        "settings.txt": "key value lines: h, iterations, tolerance, initial_guess, method, "
+                        "frames, precision"})
+    write_settings(out / "settings.txt", sim, frames)
     steps = record_iterates(sim, min(iterate_steps, frames))
     for k, it in enumerate(steps):
         np.savez(out / "iterates" / f"step_{k:04d}.npz", **it)
