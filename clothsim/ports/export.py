@@ -261,7 +261,6 @@ def export_port(source, out_dir, *, frames: int = 60, iterate_steps: int = 3) ->
     np.savetxt(out / "vertices.txt", x0, fmt="%.17g")
     np.savetxt(out / "x0.txt", x0.reshape(1, -1), fmt="%.17g")
     np.savetxt(out / "triangles.txt", model.mesh.triangles, fmt="%d")
-    sv = model.springs.spring_vertices
     write_springs(out / "springs.txt", model.springs)
     io.write_vector(out / "masses.txt", model.vertex_mass)
     np.savetxt(out / "pins.txt", pins, fmt=["%d", "%d", "%.17g", "%.17g", "%.17g",

@@ -111,7 +111,8 @@ def test_float32_port_checked_at_float64_gets_a_hint():
     xs, vs = run(hanging, 3)
     x32, v32 = (a.astype(np.float32).astype(np.float64) for a in (xs, vs))
     report = check_steps(hanging, x32, v32)
-    assert not report.passed and any("precision float32" in n for n in report.notes)
+    first = report.first_failure
+    assert first.status == "float32 rounding" and "precision float32" in first.note, first.line()
     assert check_steps(hanging, x32, v32, precision="float32").passed
 
 

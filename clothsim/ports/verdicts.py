@@ -1,0 +1,174 @@
+"""The checker's verdicts: one per step, and the summary line of a whole check.
+
+Verdicts that pass:
+
+``agrees``
+    Every vertex within the tolerance, or the port's answer is itself within the tolerance
+    of the minimizer of g that clothsim's answer converges to (a port converged further, or
+    with another stopping rule).
+``non-unique``
+    Both answers lead to certified minima of the same g (positive definite Hessian), the
+    pinned vertices included, and they differ: a buckling step has two valid answers.
+
+Verdicts that fail:
+
+``pinned vertex moved``
+    A vertex the scene pins exactly is not at its target in the port's answer.
+``start-dependent``
+    Neither answer is a minimizer (a fixed iteration count stops short): the answer depends
+    on where the iteration starts and how many iterations it takes, so the step cannot be
+    judged. Not the port's error: match the settings named in the note.
+``not converged``
+    The port's answer is heading for clothsim's minimizer but is not there yet.
+``not a minimizer``
+    The port's answer is not optimal for g, by a local error at the vertex named.
+``model differs``
+    clothsim's step is converged and the port's answer is far from it nearly everywhere: the
+    port solves another problem (``clothsim diff-model``).
+``float32 rounding``
+    Checked as float64, but the difference is within what float32 arithmetic gives.
+``velocities differ``
+    Positions agree but v_{k+1} does not (a damping or velocity update that differs).
+"""
+
+from __future__ import annotations
+
+from collections import Counter
+from dataclasses import dataclass, field
+
+import numpy as np
+
+PASSING = ("agrees", "non-unique")
+
+
+@dataclass
+class StepCheck:
+    """Verdict on the port's step k → k + 1.
+
+    Attributes
+    ----------
+    k : int
+    status : str
+        One of the verdicts of :mod:`clothsim.ports.verdicts`.
+    error : float
+        max over vertices of |x_clothsim − x_port| [m].
+    vertex : int
+        The vertex named (largest error, or largest gradient difference).
+    gradient_port, gradient_clothsim : float
+        ‖∇g(x)‖ / ‖∇g(x_0)‖ of the two answers (x_0 the initial guess).
+    note : str
+        Why, and what to change.
+    role : str
+        How the named vertex is held (e.g. "pinned by a 1e+10 N/m penalty"), or "".
+    tolerance : float
+        The per-vertex tolerance this step was judged with [m].
+    settings : str
+        The solver settings with which clothsim's own iterations reproduce the port's
+        answer, when the checker found them (e.g. ``[solver] initial_guess = "x_n" and
+        iterations = 50``), else "".
+    """
+
+    k: int
+    status: str
+    error: float
+    vertex: int
+    gradient_port: float = float("nan")
+    gradient_clothsim: float = float("nan")
+    note: str = ""
+    role: str = ""
+    tolerance: float = float("nan")
+    settings: str = ""
+
+    @property
+    def passed(self) -> bool:
+        return self.status in PASSING
+
+    def line(self) -> str:
+        """One line naming the step, its verdict, error [m] and vertex (and its role).
+
+        Returns
+        -------
+        str
+        """
+        role = f" ({self.role})" if self.role else ""
+        text = (f"step {self.k} -> {self.k + 1}: {self.status}, max error {self.error:.3e} m "
+                f"at vertex {self.vertex}{role}")
+        if np.isfinite(self.gradient_port):
+            text += (f", relative gradient port {self.gradient_port:.2e} / clothsim "
+                     f"{self.gradient_clothsim:.2e}")
+        return text + (f" ({self.note})" if self.note else "")
+
+
+def _steps_text(steps, limit=5) -> str:
+    more = f" and {len(steps) - limit} more" if len(steps) > limit else ""
+    return ", ".join(f"{s.k} -> {s.k + 1}" for s in steps[:limit]) + more
+
+
+@dataclass
+class CheckReport:
+    """All steps' verdicts; ``passed`` when every step agrees or is non-unique.
+
+    Attributes
+    ----------
+    steps : list of StepCheck
+        One verdict per checked step.
+    tolerance : float
+        The float64 per-vertex tolerance [m] (float32 steps carry their own).
+    precision : {"float32", "float64"}
+        The port's floating-point precision.
+    notes : list of str
+        Remarks on the whole check.
+    """
+
+    steps: list[StepCheck]
+    tolerance: float
+    precision: str
+    notes: list[str] = field(default_factory=list)
+
+    @property
+    def passed(self) -> bool:
+        return all(s.passed for s in self.steps)
+
+    @property
+    def first_failure(self) -> StepCheck | None:
+        return next((s for s in self.steps if not s.passed), None)
+
+    @property
+    def non_unique(self) -> list[StepCheck]:
+        return [s for s in self.steps if s.status == "non-unique"]
+
+    def summary(self) -> str:
+        """One line: PASS, FAIL or UNDECIDED, with the first failing step and vertex.
+
+        A PASS whose largest error is above the tolerance says which steps passed by
+        optimality and why. UNDECIDED: every failing step is start-dependent (the settings
+        differ; not the port's error).
+
+        Returns
+        -------
+        str
+        """
+        n = len(self.steps)
+        worst = max((s.error for s in self.steps), default=0.0)
+        tol = max((s.tolerance for s in self.steps if np.isfinite(s.tolerance)),
+                  default=self.tolerance)
+        above = [s for s in self.steps if s.passed and s.error > s.tolerance]
+        nu = self.non_unique
+        extra = ""
+        if above:
+            by_minimizer = [s for s in above if s.status == "agrees"]
+            if by_minimizer:
+                extra += (f"; {len(by_minimizer)} step(s) above the tolerance agree because the "
+                          f"port's answer is the minimizer clothsim's converges to: "
+                          f"{_steps_text(by_minimizer)}")
+        if nu:
+            extra += (f"; {len(nu)} non-unique step(s) (two certified minima of g): "
+                      f"{_steps_text(nu)}")
+        failing = [s for s in self.steps if not s.passed]
+        if not failing:
+            return (f"PASS: {n} steps agree within {tol:.3e} m ({self.precision}), "
+                    f"max error {worst:.3e} m{extra}")
+        counts = Counter(s.status for s in failing)
+        tally = ", ".join(f"{c} {status}" for status, c in counts.most_common())
+        word = "UNDECIDED" if set(counts) == {"start-dependent"} else "FAIL"
+        return f"{word} at {failing[0].line()}; {len(failing)} of {n} steps fail: {tally}{extra}"
