@@ -71,7 +71,7 @@ def _add_port_commands(sub) -> None:
     chk.add_argument("--verbose-steps", action="store_true", help="print every step")
 
     dif = sub.add_parser("diff-model", help="compare two models: springs, stiffness, rest "
-                         "lengths, masses, pins")
+                         "lengths, damping, masses, pins, forces, step settings")
     dif.add_argument("a", metavar="A", help="scene or folder of model files")
     dif.add_argument("b", metavar="B", help="scene or folder of model files")
 

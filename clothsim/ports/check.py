@@ -174,7 +174,8 @@ def check_steps(simulation, positions, velocities=None, *, precision: str = "flo
             step = judge(sim, model, problem, k, x_cs, x_port, err, tol, optimality, precision,
                          search=searches < MAX_SEARCHES)
             searches += 1
-            if precision == "float64" and tolerance is None and not step.passed:
+            if (precision == "float64" and tolerance is None and not step.passed
+                    and _float32_data(x_port)):
                 b32 = bound32()
                 if err[worst] <= b32 and not step.settings:
                     step.status = "float32 rounding"
@@ -190,6 +191,15 @@ def check_steps(simulation, positions, velocities=None, *, precision: str = "flo
             step.role = pin_role(problem, step.vertex)
         out.append(step)
     return CheckReport(out, float(tol64), precision, notes)
+
+
+def _float32_data(x: np.ndarray) -> bool:
+    """True when (nearly) every coordinate is a float32 number: data a float32 port wrote.
+
+    A float64 port's answer is not; its differences are not float32 rounding however small
+    (a pin of another stiffness moves a vertex by as little as rounding would).
+    """
+    return float(np.mean(x.astype(np.float32).astype(np.float64) == x)) > 0.99
 
 
 def _frames(sim, positions, velocities, steps):

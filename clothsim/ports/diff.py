@@ -1,53 +1,23 @@
-"""Compare two models: which springs, stiffnesses, rest lengths, masses and pins differ.
+"""Compare two models: springs, stiffnesses, rest lengths, damping, masses, pins, the
+external force on each vertex and the step settings, each difference with its likely cause.
 
-A side is a scene (name, ``.toml`` path or :class:`~clothsim.scene.Scene`), a Simulation (or
-a function returning one), or a folder of plain model files: an export of
-:func:`clothsim.ports.export.export_port` (``vertices.txt``, ``springs.txt`` a b k r,
-``masses.txt``, ``pins.txt``) or a port's dump like the shared ``liu13-port`` data
-(``x0.txt`` one line of 3n numbers, ``springs.txt`` type a b k rest with type 0 an
-attachment: a zero-rest-length spring of vertex a to its initial position, b = −1).
-Vertices are paired by their initial positions, so the two may number them differently.
+The sides are read by :func:`clothsim.ports.model_folder.model_tables` (a scene, a
+Simulation, or a port model folder: the files are listed there). Vertices are paired by
+their initial positions, so the two may number them differently.
 """
 
 from __future__ import annotations
 
 from collections import Counter
 from dataclasses import dataclass, field
-from pathlib import Path
 
 import numpy as np
 
 from ..errors import InputError
-from .check import as_simulation
 from .compare import cloth_size, match_vertices
+from .model_folder import SETTING_UNITS, ModelTables, model_tables
 
-
-@dataclass
-class ModelTables:
-    """A model as plain tables (what two implementations can agree on).
-
-    Attributes
-    ----------
-    x0 : ndarray, shape (n, 3)
-        Initial positions [m].
-    springs : ndarray, shape (s, 2), int
-        End vertices (a_i, b_i).
-    stiffness, rest : ndarray, shape (s,)
-        k_i [N/m] and r_i [m].
-    masses : ndarray, shape (n,) or None
-        Vertex masses [kg] (None: unknown).
-    pins : dict
-        vertex → (method, stiffness [N/m]); stiffness None for exact pins.
-    source : str
-    """
-
-    x0: np.ndarray
-    springs: np.ndarray
-    stiffness: np.ndarray
-    rest: np.ndarray
-    masses: np.ndarray | None
-    pins: dict
-    source: str = ""
+__all__ = ["ModelDiff", "ModelTables", "diff_models", "model_tables"]
 
 
 @dataclass
@@ -57,7 +27,8 @@ class ModelDiff:
     Attributes
     ----------
     identical : bool
-        True when springs, stiffnesses, rest lengths, masses and pins agree.
+        True when springs, stiffnesses, rest lengths, damping, masses, pins, forces and the
+        settings both sides state agree.
     cause : str
         The likely cause of the difference (or a confirmation).
     lines : list of str
@@ -77,65 +48,6 @@ class ModelDiff:
         """
         return "\n".join([("IDENTICAL" if self.identical else "DIFFERENT") + f": {self.cause}"]
                          + [f"  {t}" for t in self.lines])
-
-
-def _from_simulation(sim, source: str) -> ModelTables:
-    m = sim.model
-    p = sim.problem(sim.state)
-    pins = {int(v): ("constraint", None) for v in p.fixed_vertices}
-    pins |= {int(v): ("penalty", float(k)) for v, k in zip(p.anchor_vertices, p.anchor_stiffness)}
-    return ModelTables(m.mesh.vertices, m.springs.spring_vertices, m.springs.spring_stiffness,
-                       m.springs.spring_rest_length, m.vertex_mass, pins, source)
-
-
-def _from_folder(d: Path) -> ModelTables:
-    if (d / "vertices.txt").is_file():
-        x0 = np.loadtxt(d / "vertices.txt").reshape(-1, 3)
-    elif (d / "x0.txt").is_file():
-        x0 = np.loadtxt(d / "x0.txt").reshape(-1, 3)
-    else:
-        raise InputError(f"{d}: no vertices.txt or x0.txt")
-    if not (d / "springs.txt").is_file():
-        raise InputError(f"{d}: no springs.txt")
-    rows = np.loadtxt(d / "springs.txt", comments="#", ndmin=2)
-    pins = {}
-    if rows.shape[1] == 5:
-        att = rows[rows[:, 0] == 0]
-        pins = {int(r[1]): ("penalty", float(r[3])) for r in att}
-        rows = rows[rows[:, 0] != 0][:, 1:]
-    elif rows.shape[1] != 4:
-        raise InputError(f"{d / 'springs.txt'}: expected 4 columns (a b k r) or 5 "
-                         f"(type a b k rest), got {rows.shape[1]}")
-    if (d / "pins.txt").is_file():
-        for r in np.loadtxt(d / "pins.txt", comments="#", ndmin=2):
-            pins[int(r[0])] = ("penalty", float(r[2])) if r[1] else ("constraint", None)
-    masses = np.loadtxt(d / "masses.txt").ravel() if (d / "masses.txt").is_file() else None
-    return ModelTables(x0, rows[:, :2].astype(np.int64), rows[:, 2], rows[:, 3], masses, pins,
-                       str(d))
-
-
-def model_tables(source) -> ModelTables:
-    """Read one side (see the module docstring).
-
-    Parameters
-    ----------
-    source : ModelTables, str, Path, Scene, Simulation or callable
-        A folder of model files, a scene (name or ``.toml`` path, or object), a
-        Simulation or a function returning one.
-
-    Returns
-    -------
-    ModelTables
-    """
-    if isinstance(source, ModelTables):
-        return source
-    if isinstance(source, (str, Path)) and Path(source).is_dir():
-        return _from_folder(Path(source))
-    if isinstance(source, (str, Path)):
-        from ..scene import load_scene
-
-        source = load_scene(source)
-    return _from_simulation(as_simulation(source), str(getattr(source, "source", source)))
 
 
 def _listing(items, limit=6) -> str:
@@ -212,11 +124,22 @@ def diff_models(a, b, *, rtol: float = 1e-12) -> ModelDiff:
         lines.append(f"{len(dr)} springs with other rest length, e.g. {key[0]}-{key[1]}: "
                      f"{ra[key]:.9g} vs {rb[key]:.9g} m")
         causes.append(f"{len(dr)} rest lengths differ")
-    if A.masses is not None and B.masses is not None:
+    for name, t in (("A", A), ("B", B)):
+        if t.masses is not None and (len(t.masses) != len(t.x0)
+                                     or not np.all(np.isfinite(t.masses))):
+            bad = (len(t.masses) if len(t.masses) != len(t.x0)
+                   else int(np.sum(~np.isfinite(t.masses))))
+            text = (f"masses of {name}: {bad} not finite" if len(t.masses) == len(t.x0)
+                    else f"masses of {name}: {bad} for {len(t.x0)} vertices")
+            lines.append(text)
+            causes.insert(0, text)
+    if (A.masses is not None and B.masses is not None and len(A.masses) == len(A.x0)
+            and len(B.masses) == len(B.x0)):
         mb = B.masses[perm]
-        dm = np.abs(A.masses - mb) > rtol * np.abs(A.masses)
+        dm = ~(np.abs(A.masses - mb) <= rtol * np.abs(A.masses))
         if dm.any():
-            i = int(np.argmax(np.abs(A.masses - mb)))
+            i = int(np.flatnonzero(dm)[np.argmax(np.nan_to_num(np.abs(A.masses - mb)[dm],
+                                                               nan=np.inf))])
             lines.append(f"{int(dm.sum())} masses differ, e.g. vertex {i}: {A.masses[i]:.9g} vs "
                          f"{mb[i]:.9g} kg (totals {A.masses.sum():.9g} vs {mb.sum():.9g})")
             causes.append(f"{int(dm.sum())} masses differ")
@@ -239,9 +162,122 @@ def diff_models(a, b, *, rtol: float = 1e-12) -> ModelDiff:
         lines.append(f"{len(other_pins)} pins differ in method or stiffness, e.g. vertex {v}: "
                      f"{pa[v]} vs {pb[v]}")
         causes.append(f"{len(other_pins)} pins differ")
+    if A.damping is not None or B.damping is not None:
+        _, ca_d, _ = table(A.springs, _or_zeros(A.damping, len(A.springs)), A.rest)
+        _, cb_d, _ = table(bsp, _or_zeros(B.damping, len(B.springs)), B.rest)
+        dd = [key for key in common if abs(ca_d[key] - cb_d[key])
+              > rtol * max(abs(ca_d[key]), abs(cb_d[key]), 1e-300)]
+        if dd:
+            key = dd[0]
+            lines.append(f"{len(dd)} springs with other damping, e.g. {key[0]}-{key[1]}: "
+                         f"{ca_d[key]:.9g} vs {cb_d[key]:.9g} N s/m")
+            causes.append(f"{len(dd)} spring dampings differ")
+    _force_lines(A, B, perm, rtol, lines, causes)
+    _setting_lines(A.settings, B.settings, lines, causes)
+    unstated = [f"{what} (stated by {'A' if name == 'B' else 'B'} only)"
+                for what, name in _unstated(A, B)]
     if not causes and not lines:
-        return ModelDiff(True, f"{len(A.x0)} vertices, {len(ca)} springs, pins and masses "
-                               f"agree", [])
+        parts = ["pins", "masses"] + (["forces"] if A.forces is not None
+                                      and B.forces is not None else [])
+        parts += ["settings"] if set(A.settings) & set(B.settings) else []
+        other = f"; not compared: {', '.join(unstated)}" if unstated else ""
+        return ModelDiff(True, f"{len(A.x0)} vertices, {len(ca)} springs, "
+                               f"{', '.join(parts[:-1])} and {parts[-1]} agree{other}", [])
     if not causes:
         return ModelDiff(True, "same model up to vertex numbering", lines)
     return ModelDiff(False, causes[0] if len(causes) == 1 else "; ".join(causes[:3]), lines)
+
+
+def _unstated(A, B):
+    """(what, side) for the forces and settings one side does not state."""
+    for name, t, o in (("A", A, B), ("B", B, A)):
+        if t.forces is None and o.forces is not None:
+            yield "forces", name
+        missing = [k for k in o.settings if k not in t.settings]
+        if missing and t.settings:
+            yield "setting " + " ".join(missing), name
+        elif missing:
+            yield "settings", name
+
+
+def _or_zeros(a, n):
+    return np.zeros(n) if a is None else np.asarray(a, np.float64)
+
+
+def _vector(v) -> str:
+    return "(" + ", ".join(f"{c:.6g}" for c in v) + ")"
+
+
+def _gravity(f, masses, rtol=1e-9):
+    """g [m/s²] when f = m g on every vertex for one g, else None."""
+    if masses is None or np.any(masses <= 0):
+        return None
+    g = f / masses[:, None]
+    return g[0] if np.allclose(g, g[0], rtol=rtol, atol=1e-12 * np.abs(g).max()) else None
+
+
+def _uniform(f, rtol=1e-9):
+    """The force on every vertex [N] when it is the same everywhere, else None."""
+    return f[0] if np.allclose(f, f[0], rtol=rtol, atol=1e-12 * np.abs(f).max()) else None
+
+
+def _force_lines(A, B, perm, rtol, lines, causes) -> None:
+    """Compare the external force on each vertex at the first step; name a gravity mix-up."""
+    if A.forces is None or B.forces is None:
+        return
+    fa, fb = np.asarray(A.forces, float), np.asarray(B.forces, float)[perm]
+    scale = max(float(np.abs(fa).max()), float(np.abs(fb).max()), 1e-300)
+    diff = np.linalg.norm(fa - fb, axis=1)
+    bad = ~(diff <= rtol * scale)
+    if not bad.any():
+        return
+    masses = A.masses if A.masses is not None else B.masses
+    masses = None if masses is None or len(masses) != len(fa) else masses
+    ua, ub = _uniform(fa), _uniform(fb)
+    ga, gb = _gravity(fa, masses), _gravity(fb, masses)
+    if ub is not None and ua is None and ga is not None:
+        text = (f"force: gravity convention: B applies {_vector(ub)} N on every vertex, A "
+                f"m·g with g = {_vector(ga)} m/s² (the coursework's −9.8 N per vertex is not "
+                f"m·g unless every mass is 1 kg)")
+    elif ua is not None and ub is None and gb is not None:
+        text = (f"force: gravity convention: A applies {_vector(ua)} N on every vertex, B "
+                f"m·g with g = {_vector(gb)} m/s² (the coursework's −9.8 N per vertex is not "
+                f"m·g unless every mass is 1 kg)")
+    elif ga is not None and gb is not None:
+        text = f"force: gravity differs: g = {_vector(ga)} (A) vs {_vector(gb)} (B) m/s²"
+    else:
+        i = int(np.argmax(diff))
+        text = (f"force: {int(bad.sum())} vertices feel another external force, e.g. vertex "
+                f"{i}: {_vector(fa[i])} vs {_vector(fb[i])} N (totals {_vector(fa.sum(0))} vs "
+                f"{_vector(fb.sum(0))} N)")
+    lines.append(text)
+    causes.insert(0, text)
+
+
+#: Why a setting matters, for the one-line cause.
+_SETTING_WHY = {
+    "initial_guess": "a fixed iteration count then ends elsewhere ([solver] initial_guess)",
+    "iterations": "an unconverged step depends on it ([solver] iterations)",
+    "precision": "check with --precision float32 when one side computes in float32",
+    "h": "every step differs ([scene] h)",
+    "damping": "velocities differ after each step ([[effects]] kind = \"damping\")",
+    "tolerance": "the stopping rule differs ([solver] tolerance)",
+    "method": "another solver stops elsewhere before convergence ([solver] method)",
+}
+
+
+def _setting_lines(sa: dict, sb: dict, lines, causes) -> None:
+    """One line per step setting both sides state and that differs."""
+    for key in SETTING_UNITS:
+        if key not in sa or key not in sb:
+            continue
+        a, b = sa[key], sb[key]
+        same = (abs(a - b) <= 1e-12 * max(abs(a), abs(b)) if isinstance(a, float)
+                and isinstance(b, float) else a == b)
+        if same:
+            continue
+        unit = f" {SETTING_UNITS[key]}" if SETTING_UNITS[key] else ""
+        text = (f"setting {key}: {a:.9g} vs {b:.9g}{unit}" if isinstance(a, float)
+                else f"setting {key}: {a} vs {b}{unit}") + f": {_SETTING_WHY[key]}"
+        lines.append(text)
+        causes.append(text.split(":")[0] + " differs")

@@ -14,7 +14,7 @@ model (plain text)
     ``springs.txt`` (a b k r [damping], 0-based), ``masses.txt``, ``pins.txt`` (vertex
     method stiffness x y z; stiffness 0 for exact pins), ``forces.txt`` (external force at
     t = 0, n lines), ``settings.txt`` (``key value`` lines: h, iterations, tolerance,
-    initial_guess, method, frames, precision).
+    initial_guess, method, frames, precision, damping).
 trajectory
     ``trajectory.npz`` (positions, velocities (frames, n, 3), time); ``positions.txt``,
     ``velocities.txt`` (one frame a line of 3n numbers, %.17g); ``positions.f64``,
@@ -36,6 +36,7 @@ import scipy.sparse as sp
 from .. import io, matrices
 from ..solvers.local_global import LocalGlobalSolver
 from .check import as_simulation, system_condition_number
+from .model_folder import damping_text
 
 LAYOUT = ("x in R^{3n} is stacked per vertex (x0 y0 z0 x1 y1 z1 ...): index 3*i + c; "
           "d in R^{3s} per spring likewise; raw files are little-endian float64 in the same "
@@ -126,11 +127,13 @@ def settings(sim, frames: int) -> dict:
     -------
     dict
         ``h`` [s], ``iterations``, ``tolerance`` (0 when the count is fixed),
-        ``initial_guess`` (y | x_n), ``method``, ``frames``, ``precision`` (float64).
+        ``initial_guess`` (y | x_n), ``method``, ``frames``, ``precision`` (float64),
+        ``damping`` (the velocity damping effects, ``model:coefficient,…`` or none).
     """
     return {"h": sim.h, "iterations": sim.solver.iterations,
             "tolerance": sim.solver.tolerance or 0.0, "initial_guess": sim.initial_guess,
-            "method": sim.solver.name, "frames": frames, "precision": "float64"}
+            "method": sim.solver.name, "frames": frames, "precision": "float64",
+            "damping": damping_text(sim.effects)}
 
 
 def write_settings(path, sim, frames: int) -> None:
@@ -277,7 +280,7 @@ def export_port(source, out_dir, *, frames: int = 60, iterate_steps: int = 3) ->
         "pins.txt": "vertex method(0 exact, 1 penalty) stiffness x y z [-, -, N/m, m]",
         "forces.txt": "external force per vertex at t = 0 [N]",
         "settings.txt": "key value lines: h, iterations, tolerance, initial_guess, method, "
-                        "frames, precision"})
+                        "frames, precision, damping"})
     write_settings(out / "settings.txt", sim, frames)
     steps = record_iterates(sim, min(iterate_steps, frames))
     for k, it in enumerate(steps):

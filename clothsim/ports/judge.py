@@ -79,7 +79,20 @@ def pinned_moved(problem, x_port: np.ndarray, tol: float):
 
 
 def refine(model, problem, x):
-    """Newton's method from ``x`` to a stationary point of g (relative gradient 1e-13)."""
+    """Newton's method from ``x`` to a stationary point of g (relative gradient 1e-13).
+
+    Parameters
+    ----------
+    model : Model
+    problem : StepProblem
+    x : ndarray, shape (n, 3)
+        Start [m].
+
+    Returns
+    -------
+    ndarray, shape (n, 3)
+        The stationary point Newton's method reaches [m].
+    """
     return NewtonSolver(model, iterations=100, tolerance=1e-13).solve(problem, x).x
 
 
@@ -220,7 +233,7 @@ def judge(sim, model, problem, k, x_cs, x_port, err, tol, optimality, precision,
         return verdict("not converged", vertex, f"the port's relative gradient {rp:.1e} is "
                        f"above {opt:.1e}: it stops short of the minimizer; raise its "
                        f"iterations or tighten its tolerance")
-    if np.mean(err > tol) > 0.5:
+    if rc <= opt and np.mean(err > tol) > 0.5:   # "model differs" only for a converged step
         moved = np.linalg.norm(refine(model, problem, x_port) - x_port, axis=1)
         spread = float(np.mean(moved > max(tol, 0.01 * moved.max())))
         if spread > 0.5:
