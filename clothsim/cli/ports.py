@@ -79,6 +79,10 @@ def _add_port_commands(sub) -> None:
                          "effect each, with reference data and iterates")
     con.add_argument("--out", metavar="DIR", default="conformance",
                      help="output directory (conformance)")
+    con.add_argument("--profile", choices=("general", "coursework"), default="general",
+                     help="general: one effect per case (default); coursework: cases the "
+                     "mass-spring assignment's program runs unchanged (one k, penalty pins "
+                     "w = 1e10, -9.8 N per vertex, x_n, 50 iterations), in its JSON format too")
 
 
 def _positive(args, names) -> str | None:
@@ -173,8 +177,12 @@ def _cmd_diff_model(args) -> int:
 
 
 def _cmd_conformance(args) -> int:
-    from ..ports.conformance import write_conformance
+    if args.profile == "coursework":
+        from ..ports.coursework import write_coursework as write
+    else:
+        from ..ports.conformance import write_conformance as write
 
-    names = write_conformance(args.out)
-    print(f"{len(names)} conformance cases written to {args.out} (read {args.out}/README.md)")
+    names = write(args.out)
+    print(f"{len(names)} {args.profile} conformance cases written to {args.out} "
+          f"(read {args.out}/README.md)")
     return 0

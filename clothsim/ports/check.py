@@ -18,7 +18,7 @@ from ..errors import InputError
 from ..simulation import State
 from .compare import EPS32, RTOL64, cloth_size, condition_number
 from .judge import judge, pin_role, pinned_moved
-from .rounding import float32_tolerance
+from .rounding import float32_deviation, float32_tolerance
 from .verdicts import PASSING, CheckReport, StepCheck
 
 #: Failing steps whose settings are searched for along clothsim's iterations (the rest
@@ -26,7 +26,7 @@ from .verdicts import PASSING, CheckReport, StepCheck
 MAX_SEARCHES = 3
 
 __all__ = ["PASSING", "CheckReport", "StepCheck", "as_simulation", "check_steps",
-           "step_tolerance", "system_condition_number"]
+           "float32_report", "step_tolerance", "system_condition_number"]
 
 
 def as_simulation(source):
@@ -191,6 +191,32 @@ def check_steps(simulation, positions, velocities=None, *, precision: str = "flo
             step.role = pin_role(problem, step.vertex)
         out.append(step)
     return CheckReport(out, float(tol64), precision, notes)
+
+
+def float32_report(scenes=("hanging", "jacobson-net", "jacobson-flag", "drop-on-square")) -> None:
+    """Print, per scene, the first step's float32 deviation, tolerance and the κ bound.
+
+    The numbers of docs/ports.md ("float32 ports") are this function's output.
+
+    Parameters
+    ----------
+    scenes : sequence of str
+        Scene names or ``.toml`` paths.
+    """
+    from ..scene import load_scene
+
+    print(f"{'scene':16} {'n':>5} {'K':>4} {'deviation':>10} {'tolerance':>10} "
+          f"{'kappa bound':>11}")
+    for name in scenes:
+        sim = as_simulation(load_scene(name))
+        x = sim.state.positions
+        problem = sim.problem(sim.state)
+        K = sim.solver.iterations
+        dev = float32_deviation(sim.step_model(), problem, K)
+        tol = float32_tolerance(sim.step_model(), problem, K, RTOL64 * cloth_size(x))
+        kappa = system_condition_number(sim) * EPS32 * float(np.abs(x).max())
+        print(f"{name:16} {sim.model.vertex_count:5d} {K:4d} {dev:10.2e} {tol:10.2e} "
+              f"{kappa:11.2e}")
 
 
 def _float32_data(x: np.ndarray) -> bool:

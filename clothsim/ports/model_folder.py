@@ -110,7 +110,7 @@ def _from_simulation(sim, source: str) -> ModelTables:
                        np.array(m.springs.spring_damping, float), settings)
 
 
-def read_table(path: Path, columns, what: str) -> np.ndarray:
+def read_table(path: Path, columns, what: str, *, empty: bool = False) -> np.ndarray:
     """Rows of numbers of a plain file, ``#`` comments and blank lines skipped.
 
     Parameters
@@ -120,6 +120,8 @@ def read_table(path: Path, columns, what: str) -> np.ndarray:
         The allowed numbers per line (None: any; every line must have the same).
     what : str
         What a line holds, for the error message ("a b k r").
+    empty : bool, default False
+        Allow a file without rows (``pins.txt`` of an unpinned cloth).
 
     Returns
     -------
@@ -154,8 +156,10 @@ def read_table(path: Path, columns, what: str) -> np.ndarray:
             raise InputError(f"{path}:{number}: numbers must be finite, got {body[:60]!r}")
         width = len(row)
         rows.append(row)
-    if not rows:
+    if not rows and not empty:
         raise InputError(f"{path}: no rows ({what})")
+    if not rows:
+        return np.zeros((0, allowed[0] if allowed else 0))
     return np.array(rows, dtype=np.float64)
 
 
@@ -224,7 +228,8 @@ def _from_folder(d: Path) -> ModelTables:
         raise InputError(f"{path}: spring {bad}: end vertices must be integers in "
                          f"[0, {n}), got {ends[bad].tolist()}")
     if (d / "pins.txt").is_file():
-        for r in read_table(d / "pins.txt", 6, "vertex method stiffness x y z"):
+        for r in read_table(d / "pins.txt", 6, "vertex method stiffness x y z",
+                            empty=True):
             if r[0] != round(r[0]) or not 0 <= r[0] < n:
                 raise InputError(f"{d / 'pins.txt'}: vertex {r[0]:g} is not in [0, {n})")
             pins[int(r[0])] = ("penalty", float(r[2])) if r[1] else ("constraint", None)

@@ -123,30 +123,3 @@ def float32_tolerance(model, problem, iterations: int, floor64: float) -> float:
     return max(floor64, 4 * EPS32 * float(np.abs(x).max()),
                MARGIN * float32_deviation(model, problem, iterations))
 
-
-def report(scenes=("hanging", "jacobson-net", "jacobson-flag", "drop-on-square")) -> None:
-    """Print, per scene, the first step's float32 deviation, tolerance and the κ bound.
-
-    The numbers of docs/ports.md ("float32 ports") are this function's output.
-
-    Parameters
-    ----------
-    scenes : sequence of str
-        Scene names or ``.toml`` paths.
-    """
-    from ..scene import load_scene
-    from .check import as_simulation, system_condition_number
-    from .compare import RTOL64, cloth_size
-
-    print(f"{'scene':16} {'n':>5} {'K':>4} {'deviation':>10} {'tolerance':>10} "
-          f"{'kappa bound':>11}")
-    for name in scenes:
-        sim = as_simulation(load_scene(name))
-        x = sim.state.positions
-        problem = sim.problem(sim.state)
-        K = sim.solver.iterations
-        dev = float32_deviation(sim.step_model(), problem, K)
-        tol = float32_tolerance(sim.step_model(), problem, K, RTOL64 * cloth_size(x))
-        kappa = system_condition_number(sim) * EPS32 * float(np.abs(x).max())
-        print(f"{name:16} {sim.model.vertex_count:5d} {K:4d} {dev:10.2e} {tol:10.2e} "
-              f"{kappa:11.2e}")
