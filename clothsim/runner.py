@@ -211,6 +211,7 @@ def _run_locked(scene, model, sim, out: Path, frames: int, progress, resume: boo
         start = 0
     info = {
         "clothsim_run": 1, "scene": scene.to_dict(), "scene_hash": shash,
+        "overrides": list(scene.overrides),
         "source": scene.source, "out_dir": str(out.resolve()),
         "h": sim.h, "fps": fps, "substeps": substeps, "frames_requested": frames,
         "vertex_count": n, "spring_count": model.spring_count,

@@ -41,7 +41,7 @@ from pathlib import Path
 
 from .. import __version__
 from ..errors import InputError
-from .common import PROG, _fail, _Parser, _UsageError, log
+from .common import PROG, _fail, _Parser, _UsageError, add_set_option, log
 from .logs import _configure_logging, _no_progress_bars_off_terminal, _warnings_to_log
 from .ports import (
     _add_port_commands,
@@ -90,6 +90,7 @@ def build_parser() -> argparse.ArgumentParser:
                      help="continue from the last complete frame in the output directory")
     run.add_argument("--no-preview", action="store_true",
                      help="skip preview.gif and final.png")
+    add_set_option(run)
 
     scn = sub.add_parser("scenes", help="list the built-in scenes (or print one: --show NAME)")
     scn.add_argument("--show", metavar="NAME", default=None,
@@ -97,6 +98,7 @@ def build_parser() -> argparse.ArgumentParser:
 
     val = sub.add_parser("validate", help="check a scene file without running it")
     val.add_argument("scene", metavar="SCENE", help="scene file or built-in name")
+    add_set_option(val)
 
     _add_port_commands(sub)
 
@@ -126,6 +128,7 @@ def build_parser() -> argparse.ArgumentParser:
     acc.add_argument("--paper", action="store_true",
                      help="the paper's Fig. 1 setup: local/global against Newton (crossover)")
     acc.add_argument("--paper-size", type=int, default=41, help="vertices per side (--paper)")
+    add_set_option(acc)
     return parser
 
 
@@ -143,17 +146,17 @@ def _cmd_scenes(args) -> int:
     return 0
 
 
-def _build(scene_arg: str):
+def _build(scene_arg: str, overrides=()):
     """Load, validate and build a scene: (scene, model, simulation)."""
     from ..scene import load_scene
 
-    scene = load_scene(scene_arg)
+    scene = load_scene(scene_arg, overrides)
     model = scene.build_model()
     return scene, model, scene.build_simulation(model)
 
 
 def _cmd_validate(args) -> int:
-    scene, model, sim = _build(args.scene)
+    scene, model, sim = _build(args.scene, args.set)
     print(f"ok: {scene.source}: scene '{scene.name}', {model.vertex_count} vertices, "
           f"{model.spring_count} springs, {scene.frames} frames at h = {scene.h:.6g} s, "
           f"effects: {', '.join(sim.effects_built) or 'none'}")
@@ -166,7 +169,7 @@ def _cmd_run(args) -> int:
 
     if args.frames is not None and args.frames < 0:
         return _fail(f"--frames: must be >= 0, got {args.frames}", 2)
-    scene = load_scene(args.scene or DEFAULT_SCENE)
+    scene = load_scene(args.scene or DEFAULT_SCENE, args.set)
     if args.out:
         out = Path(args.out)
     else:  # out/<scene name>, and never anywhere else
@@ -215,7 +218,7 @@ def _cmd_accuracy(args) -> int:
         return 0
     from ..scene import load_scene
 
-    scene = load_scene(args.scene)
+    scene = load_scene(args.scene, args.set)
     kw = {}
     if args.methods:
         kw["methods"] = tuple(m.strip() for m in args.methods.split(",") if m.strip())

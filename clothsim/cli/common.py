@@ -28,3 +28,17 @@ def _one_line(text: str) -> str:
 def _fail(message: str, code: int) -> int:
     print(f"{PROG}: error: {_one_line(message)}", file=sys.stderr)
     return code
+
+
+def add_set_option(parser) -> None:
+    """``--set KEY=VALUE`` (repeatable): change a scene key before validation.
+
+    Parameters
+    ----------
+    parser : argparse.ArgumentParser
+        A command that loads a scene.
+    """
+    parser.add_argument("--set", action="append", default=[], metavar="KEY=VALUE",
+                        help="change a scene key, e.g. springs.structural=50, "
+                        "solver.iterations=20, effects[1].strength=2 (a TOML value; "
+                        "repeatable; validated like the file)")

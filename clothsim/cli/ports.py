@@ -5,7 +5,7 @@ from __future__ import annotations
 
 from pathlib import Path
 
-from .common import _fail
+from .common import _fail, add_set_option
 
 
 def _add_port_commands(sub) -> None:
@@ -18,6 +18,7 @@ def _add_port_commands(sub) -> None:
                      help="output directory (default: out/<scene-name>/export)")
     exp.add_argument("--frames", type=int, metavar="N", default=None,
                      help="steps of the reference trajectory (default: the scene's)")
+    add_set_option(exp)
     exp.add_argument("--iterate-steps", type=int, metavar="K", default=3,
                      help="steps whose local/global iterates are written (3)")
 
@@ -61,7 +62,10 @@ def _add_port_commands(sub) -> None:
     chk.add_argument("scene", metavar="SCENE", help="scene file or built-in name")
     chk.add_argument("port", metavar="PORT", help="folder with positions.txt and "
                      "velocities.txt, or a trajectory file in any format compare reads")
-    chk.add_argument("--precision", default="float64", choices=("float64", "float32"))
+    chk.add_argument("--precision", default="float64", choices=("float64", "float32"),
+                     help="the port's arithmetic: float32 uses the step's measured float32 "
+                     "tolerance, float64 1e-9 of the cloth size (default float64)")
+    add_set_option(chk)
     chk.add_argument("--tolerance", type=float, default=None,
                      help="allowed per-vertex distance [m] (default from --precision)")
     chk.add_argument("--steps", type=int, default=None, help="check only the first N steps")
@@ -100,7 +104,7 @@ def _cmd_export(args) -> int:
     bad = _positive(args, ("frames", "iterate_steps"))
     if bad:
         return _fail(bad, 2)
-    scene = load_scene(args.scene)
+    scene = load_scene(args.scene, args.set)
     out = Path(args.out) if args.out else Path("out") / scene.name / "export"
     frames = scene.frames if args.frames is None else args.frames
     manifest = export_port(scene, out, frames=frames, iterate_steps=args.iterate_steps)
@@ -154,7 +158,7 @@ def _cmd_check(args) -> int:
     bad = _positive(args, ("tolerance", "steps", "optimality"))
     if bad:
         return _fail(bad, 2)
-    scene = load_scene(args.scene)
+    scene = load_scene(args.scene, args.set)
     x = read_trajectory(args.port)
     v = read_velocities(args.port)
     report = check_steps(scene, x, v, precision=args.precision, tolerance=args.tolerance,

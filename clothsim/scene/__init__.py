@@ -27,6 +27,7 @@ Examples
 
 from __future__ import annotations
 
+import dataclasses
 import re
 
 from ..errors import SceneError
@@ -45,16 +46,20 @@ from .files import (
     list_builtin_scenes,
     parse_toml,
 )
+from .overrides import apply_overrides, rename_error
 from .schema import SHAPES, schema_markdown
 
 
-def load_scene(path_or_name) -> Scene:
+def load_scene(path_or_name, overrides=()) -> Scene:
     """Load and validate a scene file (``.toml``), an assignment ``.json``, or a built-in.
 
     Parameters
     ----------
     path_or_name : str or Path
         A file path, or the name of a built-in scene (see :func:`list_builtin_scenes`).
+    overrides : sequence of str, optional
+        ``KEY=VALUE`` changes applied before validation (``--set``;
+        :mod:`clothsim.scene.overrides`), e.g. ``["springs.structural=50"]``.
 
     Returns
     -------
@@ -72,14 +77,23 @@ def load_scene(path_or_name) -> Scene:
         # the scene name comes from the file name, which the user may have spelled freely
         name = re.sub(r"[^\w.-]+", "-", d["scene"]["name"], flags=re.ASCII)
         d["scene"]["name"] = name.lstrip(".")[:100] or "scene"
-        return Scene.from_dict(d, source=source, base_dir=p.parent)
+        return _validated(d, source, p.parent, overrides)
     try:
         text = p.read_text(encoding="utf-8")
     except UnicodeDecodeError as exc:
         raise SceneError(source, "", f"cannot read: not UTF-8 text (byte {exc.start})") from None
     except OSError as exc:
         raise SceneError(source, "", f"cannot read: {shorten(str(exc), 200)}") from None
-    return Scene.from_dict(parse_toml(text, source), source=source, base_dir=p.parent)
+    return _validated(parse_toml(text, source), source, p.parent, overrides)
+
+
+def _validated(doc: dict, source: str, base_dir, overrides) -> Scene:
+    done = apply_overrides(doc, overrides)
+    try:
+        scene = Scene.from_dict(doc, source=source, base_dir=base_dir)
+    except SceneError as exc:
+        raise rename_error(exc, done) from None
+    return dataclasses.replace(scene, overrides=tuple(done)) if done else scene
 
 
 __all__ = ["Scene", "SceneError", "load_scene", "list_builtin_scenes", "builtin_scene_path",

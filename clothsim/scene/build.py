@@ -46,11 +46,15 @@ class Scene:
         Where it came from (file path, or ``"<dict>"``); starts every error message.
     base_dir : Path
         Directory that relative paths were resolved against.
+    overrides : tuple of str
+        The ``--set KEY=VALUE`` changes applied to the file's document before validation
+        (:mod:`clothsim.scene.overrides`), recorded with a run.
     """
 
     data: dict
     source: str = "<dict>"
     base_dir: Path = field(default_factory=Path.cwd)
+    overrides: tuple = ()
 
     @classmethod
     def from_dict(cls, d: dict, *, source: str = "<dict>", base_dir=None) -> Scene:
