@@ -8,8 +8,9 @@ import sys
 import time
 
 BENCHMARKS = ("stiffness", "stability_figures", "performance", "accuracy_bench")
-#: run only when named: the 257² × 500-frame memory run takes about 6 minutes
-LONG = ("memory",)
+#: run only when named: the 257² × 500-frame memory run and the scale ladder up to 1025²
+#: take minutes each
+LONG = ("memory", "scale_ladder")
 
 
 def main(argv: list[str]) -> int:

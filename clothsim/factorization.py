@@ -16,10 +16,11 @@ backend        what runs
 :class:`Factor` records which backend ran (``factor.backend``) and can estimate the
 matrix's 1-norm condition number.
 
-Which CHOLMOD mode is faster depends on the number of right-hand sides: for the global
-step's n × n matrix with three right-hand sides (x, y, z), simplicial solves 1.6–2×
-faster than supernodal on the cloth grids measured in docs/performance.md, so
-:class:`~clothsim.solvers.LocalGlobalSolver` asks for it explicitly.
+Which CHOLMOD mode is faster depends on the size and the number of right-hand sides: for
+the global step's n × n matrix with three right-hand sides (x, y, z), simplicial solves
+1.6–2× faster than supernodal on small cloth grids, while on large ones supernodal factors
+3–5× faster and solves as fast. :func:`choose_cholmod_mode` picks by size for
+:class:`~clothsim.solvers.LocalGlobalSolver` (``[solver] cholmod_mode`` overrides it).
 
 Two helpers of the iterations that run around a factor: :func:`spmv_add` (a sparse product
 accumulated in place, no temporary) and :func:`single_threaded` (BLAS and OpenMP limited to
@@ -48,6 +49,39 @@ log = logging.getLogger(__name__)
 
 BACKENDS = ("auto", "cholmod", "splu")
 CHOLMOD_MODES = ("auto", "simplicial", "supernodal")
+#: Free vertices from which the global step's matrix is factored supernodal. On the cloth
+#: grids (docs/performance.md, benchmarks/scale_ladder.py) simplicial's three-column solves
+#: are about 2× faster up to 257² (66 049 vertices), about as fast as supernodal's at 513²,
+#: where supernodal factors 3× faster (seconds saved against milliseconds per solve:
+#: break-even after about a thousand solves, a 100-frame run).
+SUPERNODAL_FROM = 150_000
+
+
+def choose_cholmod_mode(n: int, requested: str = "auto") -> tuple[str, str]:
+    """CHOLMOD's mode for the global step's n × n matrix, and why.
+
+    Parameters
+    ----------
+    n : int
+        Free vertices (the matrix's size).
+    requested : {"auto", "simplicial", "supernodal"}
+        ``[solver] cholmod_mode``: "auto" decides by size (:data:`SUPERNODAL_FROM`).
+
+    Returns
+    -------
+    (str, str)
+        "simplicial" or "supernodal", and the reason in one line.
+    """
+    if requested not in CHOLMOD_MODES:
+        raise InputError(f"solver.cholmod_mode: must be one of "
+                         f"{', '.join(map(repr, CHOLMOD_MODES))}, got {requested!r}")
+    if requested != "auto":
+        return requested, f"{requested}: requested by solver.cholmod_mode"
+    if n < SUPERNODAL_FROM:
+        return "simplicial", (f"simplicial: {n} free vertices < {SUPERNODAL_FROM}, where its "
+                              f"three-column solves are faster and the factor is cheap")
+    return "supernodal", (f"supernodal: {n} free vertices >= {SUPERNODAL_FROM}, where it "
+                          f"factors 3-5x faster and solves about as fast")
 CONDITION_WARNING_THRESHOLD = 1e12
 _warned_fallback = False
 
@@ -142,6 +176,7 @@ class Factor:
         self.A = sp.csc_matrix(A)
         self.shape = self.A.shape
         self.backend = resolve_backend(backend)
+        self.mode_reason = cholmod_mode if self.backend == "cholmod" else "SuperLU"
         if self.backend == "cholmod":
             from sksparse.cholmod import CholmodNotPositiveDefiniteError, cholesky
 

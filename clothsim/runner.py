@@ -264,6 +264,7 @@ def _run_locked(scene, model, sim, out: Path, frames: int, progress, resume: boo
             backend = getattr(sim.solver, "backend", None)
             with signals_deferred():
                 run.info["backend"] = run.info["solver"]["backend"] = backend
+                run.info["factorization"] = getattr(sim.solver, "factorization", None)
                 writer.write(k, k / fps, x, v)
                 store.append(x, v)
                 run.records.append(record)

@@ -298,7 +298,7 @@ class Scene:
             solver = validate_solver(so["method"] if method is None else method,
                                      so["iterations"] if iterations is None else iterations,
                                      so["tolerance"] if tolerance is None else tolerance,
-                                     so["backend"], so["initial_guess"])
+                                     so["backend"], so["initial_guess"], so["cholmod_mode"])
             if substeps is not None:
                 substeps = integer(substeps, "scene.substeps", minimum=1, maximum=MAX_SUBSTEPS)
         except Invalid as exc:
@@ -313,12 +313,18 @@ class Scene:
         self._check_stiffness(model, h)
         effects = self.build_effects(model)
         try:
-            return Simulation(model, h=h, effects=effects, solver=solver["method"],
-                              iterations=solver["iterations"], tolerance=solver["tolerance"],
-                              backend=solver["backend"],
-                              initial_guess=solver["initial_guess"])
+            sim = Simulation(model, h=h, effects=effects, solver=solver["method"],
+                             iterations=solver["iterations"], tolerance=solver["tolerance"],
+                             backend=solver["backend"],
+                             initial_guess=solver["initial_guess"])
         except InputError as exc:
             raise self._locate(exc, model, h) from None
+        if solver["cholmod_mode"] != "auto":
+            if not hasattr(sim.solver, "cholmod_mode"):
+                raise self._error("solver.cholmod_mode", f"applies to the local/global family "
+                                  f"of solvers, not to {solver['method']!r}")
+            sim.solver.cholmod_mode = solver["cholmod_mode"]
+        return sim
 
     def _check_stiffness(self, model, h: float) -> None:
         """Reject springs so stiff that M + h²L cannot be factored in float64.

@@ -189,6 +189,11 @@ KEYS: tuple[Key, ...] = (
     Key("solver", "backend", "string", "auto", "",
         "Sparse factorization: `\"auto\"` (CHOLMOD if installed, else SuperLU), "
         "`\"cholmod\"`, `\"splu\"`."),
+    Key("solver", "cholmod_mode", "string", "auto", "",
+        "CHOLMOD's factorization of the global step (local/global family): `\"auto\"` by "
+        "size (simplicial below 150 000 free vertices, where its solves are faster; "
+        "supernodal above, where it factors 3-5x faster), `\"simplicial\"`, "
+        "`\"supernodal\"`. The run's `run.json` records the choice and why."),
     Key("solver", "initial_guess", "string", "y", "",
         "Where each step's iteration starts: `\"y\"`, the inertial target x_n + h v_n (the "
         "paper), or `\"x_n\"`, the previous positions (most ports, the assignment's "

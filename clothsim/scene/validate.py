@@ -13,7 +13,7 @@ from pathlib import Path
 from typing import Any
 
 from ..effects.pins import PIN_METHODS
-from ..factorization import BACKENDS
+from ..factorization import BACKENDS, CHOLMOD_MODES
 from ..mesh import PLANES
 from ..model import MASS_LUMPINGS
 from ..problem import INITIAL_GUESSES
@@ -246,7 +246,8 @@ def _springs(raw: dict, shape: str, base_dir: Path) -> dict:
     return springs
 
 
-def validate_solver(method, iterations, tolerance, backend, initial_guess="y") -> dict:
+def validate_solver(method, iterations, tolerance, backend, initial_guess="y",
+                    cholmod_mode="auto") -> dict:
     """Check the ``[solver]`` values (also used for overrides).
 
     Parameters
@@ -261,11 +262,14 @@ def validate_solver(method, iterations, tolerance, backend, initial_guess="y") -
         The factorization backend, one of the scene's backend names.
     initial_guess : str, default "y"
         ``"y"`` or ``"x_n"``: where each step's iteration starts.
+    cholmod_mode : str, default "auto"
+        ``"auto"``, ``"simplicial"`` or ``"supernodal"``.
 
     Returns
     -------
     dict
-        ``method``, ``iterations``, ``tolerance``, ``backend``, ``initial_guess``, checked.
+        ``method``, ``iterations``, ``tolerance``, ``backend``, ``initial_guess``,
+        ``cholmod_mode``, checked.
 
     Raises
     ------
@@ -281,6 +285,7 @@ def validate_solver(method, iterations, tolerance, backend, initial_guess="y") -
         "backend": string(backend, "solver.backend", choices=BACKENDS),
         "initial_guess": string(initial_guess, "solver.initial_guess",
                                 choices=INITIAL_GUESSES),
+        "cholmod_mode": string(cholmod_mode, "solver.cholmod_mode", choices=CHOLMOD_MODES),
     }
 
 
@@ -320,7 +325,8 @@ def validate(raw: dict, base_dir: Path, default_name: str) -> dict:
                                     so.get("iterations", d("solver", "iterations")),
                                     so.get("tolerance"),
                                     so.get("backend", d("solver", "backend")),
-                                    so.get("initial_guess", d("solver", "initial_guess")))
+                                    so.get("initial_guess", d("solver", "initial_guess")),
+                                    so.get("cholmod_mode", d("solver", "cholmod_mode")))
     effects = raw.get("effects", [])
     if not isinstance(effects, list):
         raise Invalid("effects", f"expected an array of tables ([[effects]]), got "

@@ -68,9 +68,16 @@ class LocalGlobalSolver(Solver):
         the exact-pin set or the penalty pins change, or after :meth:`invalidate`).
     backend : str or None
         The factorization backend that ran last.
+    cholmod_mode : {"auto", "simplicial", "supernodal"}
+        CHOLMOD's mode for the next factorization (``[solver] cholmod_mode``); "auto"
+        chooses by size (:func:`clothsim.factorization.choose_cholmod_mode`).
+    factorization : str or None
+        The mode of the last factorization and why, e.g. "simplicial: 441 free vertices < …".
     """
 
     name = "local-global"
+    cholmod_mode = "auto"
+    factorization: str | None = None
 
     def __init__(self, model: Model, *, iterations: int = 10, tolerance: float | None = None,
                  backend: str = "auto", check_conditioning: bool = True):
@@ -121,9 +128,11 @@ class LocalGlobalSolver(Solver):
         with single_threaded():   # CHOLMOD's OpenMP threads: gain nothing here (see solve)
             sysf = factor_system(self.model, problem, self._Js, self._a, self._b,
                                  backend=self.backend_requested,
-                                 check_conditioning=self.check_conditioning)
+                                 check_conditioning=self.check_conditioning,
+                                 cholmod_mode=self.cholmod_mode)
         self.factor_count += 1
         self.backend = sysf.A_FF_factor.backend
+        self.factorization = sysf.A_FF_factor.mode_reason
         return sysf
 
     # -- the two half steps ---------------------------------------------------------------

@@ -15,7 +15,7 @@ import numpy as np
 import scipy.sparse as sp
 
 from .. import matrices
-from ..factorization import Factor
+from ..factorization import Factor, choose_cholmod_mode
 from ..model import Model
 from ..problem import StepProblem
 
@@ -62,7 +62,7 @@ class SystemFactor:
 
 def factor_system(model: Model, problem: StepProblem, Js: sp.csr_matrix, a: np.ndarray,
                   b: np.ndarray, *, backend: str = "auto",
-                  check_conditioning: bool = True) -> SystemFactor:
+                  check_conditioning: bool = True, cholmod_mode: str = "auto") -> SystemFactor:
     """Assemble and factor M_s + h² (L_s + K_anchor) for this problem's h and pins.
 
     Parameters
@@ -79,6 +79,8 @@ def factor_system(model: Model, problem: StepProblem, Js: sp.csr_matrix, a: np.n
         Factorization backend (:class:`clothsim.factorization.Factor`).
     check_conditioning : bool
         Warn when the condition estimate passes the threshold.
+    cholmod_mode : {"auto", "simplicial", "supernodal"}
+        CHOLMOD's mode; "auto" by size (:func:`clothsim.factorization.choose_cholmod_mode`).
 
     Returns
     -------
@@ -92,11 +94,12 @@ def factor_system(model: Model, problem: StepProblem, Js: sp.csr_matrix, a: np.n
     A_csr = A.tocsr()
     A_FF = A_csr[free][:, free]
     A_FP = A_csr[free][:, fixed]
-    # simplicial CHOLMOD: faster than supernodal for three right-hand sides
+    mode, reason = choose_cholmod_mode(len(free), cholmod_mode)
     factor = Factor(A_FF, backend=backend,
-                    check_conditioning=check_conditioning, cholmod_mode="simplicial")
-    log.info("factored M + h^2 L: %d free of %d vertices, h=%g, backend=%s",
-             len(free), n, problem.h, factor.backend)
+                    check_conditioning=check_conditioning, cholmod_mode=mode)
+    factor.mode_reason = reason if factor.backend == "cholmod" else "SuperLU (no CHOLMOD)"
+    log.info("factored M + h^2 L: %d free of %d vertices, h=%g, backend=%s (%s)",
+             len(free), n, problem.h, factor.backend, factor.mode_reason)
     h2J_F = (problem.h ** 2 * Js[free]).tocsr()
     breaks = np.flatnonzero(np.diff(free) != 1) + 1
     runs = None
