@@ -7,6 +7,7 @@
 
 #include <cmath>
 #include <cstdio>
+#include <filesystem>
 #include <fstream>
 #include <map>
 #include <sstream>
@@ -130,6 +131,8 @@ inline Eigen::MatrixXd read_vectors(const std::string& dir, const std::string& n
 inline Model read_model(const std::string& dir) {
     Model m;
     m.dir = dir;
+    if (!std::filesystem::is_directory(dir))
+        throw ReadError(dir + ":0: not a directory (the folder `clothsim export` writes)");
     {
         std::ifstream probe(dir + "/vertices.txt");
         m.V = probe ? read_vectors(dir, "vertices.txt", -1) : read_vectors(dir, "x0.txt", -1);
