@@ -9,6 +9,7 @@ each give the verdict they should. Skipped without g++, Eigen or the assignment 
 
 from __future__ import annotations
 
+import shlex
 import shutil
 import subprocess
 from pathlib import Path
@@ -238,3 +239,32 @@ def test_a_bad_line_is_a_one_line_error_naming_file_and_line(programs, net, tmp_
                           capture_output=True, text=True)
     assert done.returncode == 2 and message in done.stderr, done.stderr
     assert len(done.stderr.strip().splitlines()) == 1
+
+
+# -- docs/ports.md's section runs as written ----------------------------------------------------
+def test_the_docs_commands_run_and_give_the_verdicts_they_state(programs, tmp_path, monkeypatch,
+                                                                capsys):
+    text = (REPO / "docs" / "ports.md").read_text(encoding="utf-8")
+    section = text.split("## A compiled port: examples/ports/cpp", 1)[1]
+    block = section.split("```sh\n", 1)[1].split("```", 1)[0].splitlines()
+    assert block[0].startswith("B=")
+    build = tmp_path / "b"
+    build.mkdir()
+    for program in programs.values():  # already built: make finds them up to date
+        shutil.copy2(program, build / program.name)
+    _scene("jacobson-net")
+    monkeypatch.chdir(REPO)
+    statuses = []
+    for line in block[1:]:
+        argv = [a.replace("$B", str(build)) for a in shlex.split(line)]
+        if argv[0] == "./.venv/bin/clothsim":
+            statuses.append(cli_main(argv[1:]))
+        else:
+            done = subprocess.run(argv, capture_output=True, text=True)
+            assert done.returncode == 0, (line, done.stderr)
+            statuses.append(0)
+    out = capsys.readouterr().out
+    # the checks: pass, pins off fails, sign fault fails, the assignment passes
+    checks = [s for line, s in zip(block[1:], statuses) if " check " in line]
+    assert checks == [0, 1, 1, 0], out
+    assert out.count("PASS") == 2 and out.count("FAIL at step 0 -> 1") == 2, out
