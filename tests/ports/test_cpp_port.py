@@ -152,6 +152,27 @@ def test_injected_faults_fail_at_the_first_step(programs, net, tmp_path, fault):
     assert first.status not in ("float32 rounding", "start-dependent"), first.line()
 
 
+def test_initial_velocities_from_v0_txt_are_used(programs, net, tmp_path):
+    model = tmp_path / "model"
+    shutil.copytree(net, model, ignore=shutil.ignore_patterns("*.mtx", "*.npz", "*.f64"))
+    v0 = np.zeros((61, 3))
+    v0[:, 2] = 0.1  # 0.1 m/s out of the net's plane
+    np.savetxt(model / "v0.txt", v0, fmt="%.17g")
+    out = run(programs["port"], model, tmp_path / "o", "--frames", "3")
+    x, v = trajectory(out)
+    assert np.array_equal(v[0], v0)
+    report = check_steps(_scene("jacobson-net"), x, v)
+    assert report.passed and max(s.error for s in report.steps) < 1e-12, report.summary()
+    # the same frames claiming v_0 = 0: step 0 -> 1 is then wrong
+    v[0] = 0
+    assert check_steps(_scene("jacobson-net"), x, v).first_failure.k == 0
+
+
+def test_exact_pins_in_double_agree_to_rounding(programs, hanging, tmp_path):
+    report = check("hanging", run(programs["port"], hanging, tmp_path / "d"))
+    assert report.passed and max(s.error for s in report.steps) < 1e-12, report.summary()
+
+
 # -- float32 ----------------------------------------------------------------------------------
 def test_float_build_passes_as_float32_on_hanging(programs, hanging, tmp_path):
     out = run(programs["port"], hanging, tmp_path / "f", "--precision", "float")
@@ -239,6 +260,18 @@ def test_a_bad_line_is_a_one_line_error_naming_file_and_line(programs, net, tmp_
                           capture_output=True, text=True)
     assert done.returncode == 2 and message in done.stderr, done.stderr
     assert len(done.stderr.strip().splitlines()) == 1
+
+
+@pytest.mark.parametrize("args, message", [
+    (["--precision", "half"], "--precision: float or double"),
+    (["--iterations", "0"], "--iterations: must be an integer >= 1"),
+    (["--fault", "typo"], "--fault: none, unnormalized or sign"),
+    (["--bogus", "1"], "unknown option --bogus"),
+])
+def test_bad_flags_exit_2(programs, net, tmp_path, args, message):
+    done = subprocess.run([str(programs["port"]), str(net), str(tmp_path / "o"), *args],
+                          capture_output=True, text=True)
+    assert done.returncode == 2 and message in done.stderr, done.stderr
 
 
 # -- docs/ports.md's section runs as written ----------------------------------------------------
