@@ -145,6 +145,18 @@ def test_softer_pins_fail_and_pass_the_scene_with_those_pins(programs, net, tmp_
     assert passed.passed and max(s.error for s in passed.steps) < 1e-12, passed.summary()
 
 
+def test_settings_flags_match_a_scene_with_those_settings(programs, net, tmp_path):
+    out = run(programs["port"], net, tmp_path / "o", "--start", "y", "--iterations", "10",
+              "--h", "0.02", "--frames", "5")
+    assert len(trajectory(out)[0]) == 6
+    variant = scene_variant(tmp_path, "jacobson-net", initial_guess='initial_guess = "y"',
+                            iterations="iterations = 10", fps="h = 0.02",
+                            substeps="")
+    report = check(variant, out)
+    assert report.passed and max(s.error for s in report.steps) < 1e-12, report.summary()
+    assert not check("jacobson-net", out).passed
+
+
 @pytest.mark.parametrize("fault", ["unnormalized", "sign"])
 def test_injected_faults_fail_at_the_first_step(programs, net, tmp_path, fault):
     report = check("jacobson-net", run(programs["port"], net, tmp_path / "o", "--fault", fault),
