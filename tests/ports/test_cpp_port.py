@@ -230,12 +230,6 @@ def test_flag_run_against_a_y_start_scene_is_start_dependent(flag_run, tmp_path)
     assert all('initial_guess = "x_n"' in s.settings for s in failing), failing[0].line()
 
 
-@pytest.mark.xfail(strict=True, reason=(
-    "checker (check.py): only the first MAX_SEARCHES = 3 failing steps get the settings "
-    "search; a later start-dependent step of a float64 port without settings whose error is "
-    "below clothsim's float32 bound (flag steps 5-9: ~1e-3 m vs ~5e-3 m) is relabelled "
-    "'float32 rounding', so the summary says FAIL; with the search on every step all 9 are "
-    "start-dependent and it says UNDECIDED"))
 def test_flag_run_against_a_y_start_scene_is_undecided_over_all_steps(flag_run, tmp_path):
     scene = scene_variant(tmp_path, "jacobson-flag", initial_guess='initial_guess = "y"')
     report = check(scene, flag_run)
@@ -316,3 +310,17 @@ def test_the_docs_commands_run_and_give_the_verdicts_they_state(programs, tmp_pa
     assert "PASS" in out[0] and "PASS" in out[3], out
     assert "FAIL at step 0 -> 1" in out[1] and "pinned" in out[1], out[1]
     assert "FAIL at step 0 -> 1" in out[2], out[2]
+
+
+# -- the coursework profile, through the assignment driver ------------------------------------
+def test_every_coursework_case_runs_through_the_assignment_driver_and_passes(programs,
+                                                                             tmp_path):
+    from clothsim.ports.coursework import CASES, write_coursework
+
+    write_coursework(tmp_path / "profile", frames=10)
+    for name in CASES:
+        case = tmp_path / "profile" / name
+        out = run(programs["driver"], case, tmp_path / "out" / name)
+        report = check(case / "scene.toml", out)
+        assert report.passed, f"{name}: {report.summary()}"
+        assert all(s.status == "agrees" for s in report.steps), f"{name}: {report.summary()}"
