@@ -324,3 +324,42 @@ def test_every_coursework_case_runs_through_the_assignment_driver_and_passes(pro
         report = check(case / "scene.toml", out)
         assert report.passed, f"{name}: {report.summary()}"
         assert all(s.status == "agrees" for s in report.steps), f"{name}: {report.summary()}"
+
+
+def test_the_coursework_section_runs_as_written(programs, tmp_path):
+    text = (REPO / "docs" / "ports.md").read_text(encoding="utf-8")
+    section = text.split("## Checking a coursework solution", 1)[1]
+    block = section.split("```sh\n", 1)[1].split("```", 1)[0].splitlines()
+    build = tmp_path / "b"
+    build.mkdir()
+    for program in programs.values():
+        shutil.copy2(program, build / program.name)
+    clothsim = f"{shlex.quote(sys.executable)} -m clothsim"
+    env = dict(os.environ, PYTHONPATH=str(REPO))
+    outputs = []
+    for line in block:
+        line = line.replace("$PWD", str(tmp_path)).replace("/tmp/clothsim-cpp", str(build))
+        argv = shlex.split(line)
+        if argv[0] == ".venv/bin/clothsim":
+            argv = [sys.executable, "-m", "clothsim", *argv[1:]]
+            cwd = tmp_path
+        else:
+            assert argv[:3] == ["make", "-C", "examples/ports/cpp"], line
+            argv += [f"CLOTHSIM={clothsim}", f"RUN={tmp_path / 'run'}"]
+            cwd = REPO
+        done = subprocess.run(argv, cwd=cwd, env=env, capture_output=True, text=True)
+        assert done.returncode == 0, (line, done.stdout, done.stderr)
+        outputs.append(done.stdout)
+    assert "6 coursework conformance cases written" in outputs[0]
+    assert "PASS: 30 steps agree" in outputs[1], outputs[1]
+
+
+def test_too_few_iterations_are_not_converged_with_the_settings_named(programs, tmp_path):
+    from clothsim.ports.coursework import write_coursework
+
+    write_coursework(tmp_path / "profile", frames=3, cases=["net"])
+    case = tmp_path / "profile" / "net"
+    out = run(programs["port"], case, tmp_path / "out", "--start", "y", "--iterations", "5")
+    first = check(case / "scene.toml", out).first_failure
+    assert first is not None and first.k == 0 and first.status == "not converged", first
+    assert first.settings == '[solver] initial_guess = "y" and iterations = 5', first.line()
