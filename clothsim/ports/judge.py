@@ -233,6 +233,11 @@ def judge(sim, model, problem, k, x_cs, x_port, err, tol, optimality, precision,
         return verdict("not converged", vertex, f"the port's relative gradient {rp:.1e} is "
                        f"above {opt:.1e}: it stops short of the minimizer; raise its "
                        f"iterations or tighten its tolerance")
+    if rc <= opt and rp < 1 and not local and _descends(model, problem, x_port):
+        return verdict("not converged", vertex, f"the port's answer lowers g below its start "
+                       f"and its gradient to {rp:.1e} of the start's, but stops short of the "
+                       f"minimizer: raise its iterations (if it is converged by its own "
+                       f"measure, it solves another problem: clothsim diff-model)")
     if rc <= opt and np.mean(err > tol) > 0.5:   # "model differs" only for a converged step
         moved = np.linalg.norm(refine(model, problem, x_port) - x_port, axis=1)
         spread = float(np.mean(moved > max(tol, 0.01 * moved.max())))
@@ -252,6 +257,12 @@ def judge(sim, model, problem, k, x_cs, x_port, err, tol, optimality, precision,
                  f"clothsim {away_c:.3e} m (a port whose pin is missing or of another "
                  f"stiffness)")
     return verdict("not a minimizer", vertex, note)
+
+
+def _descends(model, problem, x_port) -> bool:
+    """g(x_port) below g at the step's start (an iteration of the same g has made progress)."""
+    return bool(objective(model, problem, x_port)
+                < objective(model, problem, problem.initial_guess()))
 
 
 def _optimal(model, problem, x_cs, x_port, tol, verdict, worst) -> StepCheck:

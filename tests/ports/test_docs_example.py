@@ -59,8 +59,8 @@ def test_worked_example_runs_with_the_helper_model(tmp_path, monkeypatch, capsys
 
     data = port_dir().parents[1]
     real = clothsim.scene.load_scene
-    monkeypatch.setattr(clothsim.scene, "load_scene", lambda s: _HelperScene()
-                        if str(s).endswith("liu13-default.toml") else real(s))
+    monkeypatch.setattr(clothsim.scene, "load_scene", lambda s, overrides=(): _HelperScene()
+                        if str(s).endswith("liu13-default.toml") else real(s, overrides))
     monkeypatch.chdir(tmp_path)
     for argv in commands():
         argv = [a.replace("../shared/data", str(data)) for a in argv]
