@@ -25,7 +25,7 @@ SCRIPT = Path(__file__).resolve().parents[1] / "examples" / "engines" / "newton_
 def nv():
     import warp as wp
 
-    wp.config.quiet = True
+    wp.config.log_level = wp.LOG_WARNING
     spec = importlib.util.spec_from_file_location("newton_vbd", SCRIPT)
     module = importlib.util.module_from_spec(spec)
     spec.loader.exec_module(module)

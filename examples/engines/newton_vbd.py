@@ -285,7 +285,7 @@ def main(argv=None) -> None:
     """Print the summary of each case of :data:`CASES` (docs/howto/check-an-engine.md)."""
     import warp as wp
 
-    wp.config.quiet = True  # before newton initializes warp
+    wp.config.log_level = wp.LOG_WARNING  # no banner or kernel-load lines
     import newton
 
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
