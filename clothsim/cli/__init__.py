@@ -3,11 +3,11 @@
 ::
 
     clothsim [--version] [-v | -vv] COMMAND [-v | -vv] ...
-    clothsim run [SCENE] [--out DIR] [--frames N] [--resume] [--no-preview]
+    clothsim run [SCENE] [--out DIR] [--frames N] [--resume] [--no-preview] [--force]
     clothsim scenes [--show NAME]
     clothsim validate SCENE
     clothsim accuracy [SCENE] [...]
-    clothsim export SCENE [--out DIR] [--frames N] [--iterate-steps K]
+    clothsim export SCENE [--out DIR] [--frames N] [--iterate-steps K] [--force]
     clothsim compare TRAJECTORY REFERENCE [--key K] [--precision P] [--rtol R] [--atol A] ...
     clothsim check SCENE PORT [--precision float32|float64] [--tolerance T]
     clothsim diff-model A B
@@ -90,6 +90,9 @@ def build_parser() -> argparse.ArgumentParser:
                      help="continue from the last complete frame in the output directory")
     run.add_argument("--no-preview", action="store_true",
                      help="skip preview.gif and final.png")
+    run.add_argument("--force", action="store_true",
+                     help="write into DIR even when it holds files that are not a clothsim "
+                     "run's (files named like a run's are replaced)")
 
     scn = sub.add_parser("scenes", help="list the built-in scenes (or print one: --show NAME)")
     scn.add_argument("--show", metavar="NAME", default=None,
@@ -167,7 +170,9 @@ def _cmd_run(args) -> int:
     if args.frames is not None and args.frames < 0:
         return _fail(f"--frames: must be >= 0, got {args.frames}", 2)
     scene = load_scene(args.scene or DEFAULT_SCENE)
-    if args.out:
+    if args.out == "":
+        return _fail("--out: empty; name a folder", 2)
+    if args.out is not None:
         out = Path(args.out)
     else:  # out/<scene name>, and never anywhere else
         base = Path("out")
@@ -192,7 +197,8 @@ def _cmd_run(args) -> int:
     try:
         with handle_signals():
             result = run_scene(scene, out, frames=frames, progress=progress,
-                               resume=args.resume, preview=not args.no_preview)
+                               resume=args.resume, preview=not args.no_preview,
+                               force=args.force)
     except KeyboardInterrupt as exc:  # Ctrl-C, SIGTERM, SIGHUP: exit 128 + signal number
         signum = getattr(exc, "signum", signal.SIGINT)
         name = signal.Signals(signum).name

@@ -20,6 +20,8 @@ def _add_port_commands(sub) -> None:
                      help="steps of the reference trajectory (default: the scene's)")
     exp.add_argument("--iterate-steps", type=int, metavar="K", default=3,
                      help="steps whose local/global iterates are written (3)")
+    exp.add_argument("--force", action="store_true",
+                     help="write into DIR even when it is not an export folder of clothsim")
 
     cmp_ = sub.add_parser("compare", help="compare a trajectory with a reference: per-vertex "
                           "distance per frame, relative to the cloth size")
@@ -96,10 +98,13 @@ def _cmd_export(args) -> int:
     bad = _positive(args, ("frames", "iterate_steps"))
     if bad:
         return _fail(bad, 2)
+    if args.out == "":
+        return _fail("--out: empty; name a folder", 2)
     scene = load_scene(args.scene)
-    out = Path(args.out) if args.out else Path("out") / scene.name / "export"
+    out = Path(args.out) if args.out is not None else Path("out") / scene.name / "export"
     frames = scene.frames if args.frames is None else args.frames
-    manifest = export_port(scene, out, frames=frames, iterate_steps=args.iterate_steps)
+    manifest = export_port(scene, out, frames=frames, iterate_steps=args.iterate_steps,
+                           force=args.force)
     print(f"{scene.name}: {len(manifest['files'])} files for n = {manifest['vertex_count']}, "
           f"s = {manifest['spring_count']}, h = {manifest['h']:.6g} s, {frames} frames, "
           f"κ(M + h²L) = {manifest['condition_number']:.4g} written to {out}")
