@@ -10,6 +10,7 @@ from pathlib import Path
 from .display import OBSTACLES_NAME
 from .errors import InputError
 from .io.frames import read_frame
+from .scene.inputs import changed_input
 
 log = logging.getLogger(__name__)
 
@@ -42,7 +43,8 @@ def completed_frames(out_dir) -> int | None:
     return None if k < 0 else k
 
 
-def resume_point(out: Path, previous: dict | None, shash: str, frames: int) -> int | None:
+def resume_point(out: Path, previous: dict | None, shash: str, frames: int,
+                 inputs: dict | None = None) -> int | None:
     """The frame ``--resume`` continues from.
 
     Parameters
@@ -55,6 +57,9 @@ def resume_point(out: Path, previous: dict | None, shash: str, frames: int) -> i
         :func:`clothsim.runner.scene_hash` of the scene to resume.
     frames : int
         Frames requested: the point is never beyond it.
+    inputs : dict, optional
+        :func:`clothsim.scene.inputs.input_hashes` of the scene now: compared with the
+        ``inputs`` its ``run.json`` recorded at the start.
 
     Returns
     -------
@@ -65,7 +70,8 @@ def resume_point(out: Path, previous: dict | None, shash: str, frames: int) -> i
     Raises
     ------
     InputError
-        The folder holds another scene's run, or frames no run record describes.
+        The folder holds another scene's run, an input file changed since the run started
+        (named), or frames no run record describes.
     """
     last = completed_frames(out)
     if last is None:
@@ -74,6 +80,12 @@ def resume_point(out: Path, previous: dict | None, shash: str, frames: int) -> i
         raise InputError(f"{out}: frame files but no readable run.json; cannot check they are "
                          "this scene's, so cannot resume (run without --resume into another "
                          "folder)")
+    recorded = previous.get("inputs")
+    if inputs is not None and isinstance(recorded, dict):
+        changed = changed_input(recorded, inputs)
+        if changed:
+            raise InputError(f"{out}: cannot resume: input file {changed}; the frames on disk "
+                             "are of the old input (run without --resume to start afresh)")
     if "scene_hash" not in previous:
         raise InputError(f"{out}: its run.json has no scene hash (an older clothsim wrote it), "
                          "so it cannot be checked to be this scene; cannot resume")

@@ -63,6 +63,7 @@ from .runfolder import (
     resume_point,
 )
 from .scene import Scene, load_scene
+from .scene.inputs import input_hashes
 from .simulation import State
 
 log = logging.getLogger(__name__)
@@ -182,9 +183,10 @@ def _run_locked(scene, model, sim, out: Path, frames: int, progress, resume: boo
                 preview: bool, force: bool = False) -> RunResult:
     fps, substeps, n = scene.fps, scene.substeps, model.vertex_count
     shash = scene_hash(scene, model)
+    inputs = input_hashes(scene)  # every file the scene reads, by content
     previous = read_json(out / "run.json")
     ours = previous is not None and "clothsim_run" in previous
-    start = resume_point(out, previous, shash, frames) if resume else None
+    start = resume_point(out, previous, shash, frames, inputs) if resume else None
     resuming = start is not None
     if not resuming:
         if resume:
@@ -193,7 +195,7 @@ def _run_locked(scene, model, sim, out: Path, frames: int, progress, resume: boo
         start = 0
     info = {
         "clothsim_run": 1, "scene": scene.to_dict(), "scene_hash": shash,
-        "source": scene.source, "out_dir": str(out.resolve()),
+        "source": scene.source, "inputs": inputs, "out_dir": str(out.resolve()),
         "h": sim.h, "fps": fps, "substeps": substeps, "frames_requested": frames,
         "vertex_count": n, "spring_count": model.spring_count,
         "triangle_count": model.mesh.triangle_count, "total_mass": model.total_mass,
