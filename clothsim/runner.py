@@ -64,6 +64,7 @@ from .runfolder import (
 )
 from .scene import Scene, load_scene
 from .scene.inputs import input_hashes
+from .scene.schema import MAX_FRAMES
 from .simulation import State
 
 log = logging.getLogger(__name__)
@@ -167,9 +168,11 @@ def run_scene(scene, out_dir, *, frames: int | None = None,
     """
     if not isinstance(scene, Scene):
         scene = load_scene(scene)
+    if frames is not None and (isinstance(frames, bool) or not isinstance(frames, int | np.integer)
+                               or not 0 <= frames <= MAX_FRAMES):
+        raise InputError(f"frames: must be an integer between 0 and {MAX_FRAMES:.0e}, got "
+                         f"{frames!r}"[:200])
     frames = scene.frames if frames is None else int(frames)
-    if frames < 0:
-        raise InputError(f"frames: must be >= 0, got {frames}")
     model = scene.build_model()
     sim = scene.build_simulation(model)
     out = claim_folder(out_dir, "run", force=force)  # before anything is written there

@@ -41,7 +41,8 @@ from pathlib import Path
 
 from .. import __version__
 from ..errors import InputError
-from .common import PROG, _fail, _Parser, _UsageError, log
+from ..scene.schema import MAX_FRAMES, MAX_VERTICES
+from .common import PROG, _fail, _Parser, _UsageError, count, log
 from .logs import _configure_logging, _no_progress_bars_off_terminal, _warnings_to_log
 from .ports import (
     _add_port_commands,
@@ -84,7 +85,7 @@ def build_parser() -> argparse.ArgumentParser:
                      help="scene file or built-in name (default: drop-on-square)")
     run.add_argument("--out", metavar="DIR", default=None,
                      help="output directory (default: out/<scene-name>)")
-    run.add_argument("--frames", type=int, metavar="N", default=None,
+    run.add_argument("--frames", type=count(0, MAX_FRAMES), metavar="N", default=None,
                      help="frames after the initial one (default: the scene's)")
     run.add_argument("--resume", action="store_true",
                      help="continue from the last complete frame in the output directory")
@@ -111,14 +112,15 @@ def build_parser() -> argparse.ArgumentParser:
     acc.add_argument("--methods", default=None,
                      help="comma-separated solvers (default: local-global,chebyshev,anderson,"
                           "lbfgs,newton)")
-    acc.add_argument("--problems", type=int, default=8,
+    acc.add_argument("--problems", type=count(1, 10_000), default=8,
                      help="step problems recorded along the run (default 8)")
-    acc.add_argument("--frames", type=int, default=None,
+    acc.add_argument("--frames", type=count(0, MAX_FRAMES), default=None,
                      help="frames of the recorded run (default: the scene's)")
-    acc.add_argument("--repeats", type=int, default=5, help="interleaved timing repeats (5)")
+    acc.add_argument("--repeats", type=count(1, 10_000), default=5,
+                     help="interleaved timing repeats (5)")
     acc.add_argument("--target", type=float, default=None,
                      help="report only this solver-error level (e.g. 1e-6)")
-    acc.add_argument("--jobs", type=int, default=1, help="parallel workers (joblib)")
+    acc.add_argument("--jobs", type=count(1, 1024), default=1, help="parallel workers (joblib)")
     acc.add_argument("--scheduler", default=None, metavar="ADDRESS",
                      help="Dask scheduler address (joblib's dask backend)")
     acc.add_argument("--no-time-steps", action="store_true",
@@ -128,7 +130,8 @@ def build_parser() -> argparse.ArgumentParser:
                      help="few problems, budgets and repeats (a first look, not for a referee)")
     acc.add_argument("--paper", action="store_true",
                      help="the paper's Fig. 1 setup: local/global against Newton (crossover)")
-    acc.add_argument("--paper-size", type=int, default=41, help="vertices per side (--paper)")
+    acc.add_argument("--paper-size", type=count(2, int(MAX_VERTICES ** 0.5)), default=41,
+                     help="vertices per side (--paper)")
     return parser
 
 

@@ -28,3 +28,33 @@ def _one_line(text: str) -> str:
 def _fail(message: str, code: int) -> int:
     print(f"{PROG}: error: {_one_line(message)}", file=sys.stderr)
     return code
+
+
+def count(low: int, high: int):
+    """An argparse ``type``: an integer flag within ``[low, high]`` (the scene schema's limits).
+
+    Parameters
+    ----------
+    low, high : int
+        Inclusive bounds.
+
+    Returns
+    -------
+    callable
+        ``str -> int``; raises :class:`argparse.ArgumentTypeError` with ``must be an integer
+        between low and high, got …`` (argparse names the flag).
+    """
+    from ..scene.schema import sci
+
+    def parse(text: str) -> int:
+        try:
+            value = int(text)
+        except ValueError:
+            value = None
+        if value is None or not low <= value <= high:
+            raise argparse.ArgumentTypeError(
+                f"must be an integer between {low} and {sci(high)}, got {text[:40]!r}")
+        return value
+
+    parse.__name__ = "count"
+    return parse

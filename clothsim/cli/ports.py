@@ -3,9 +3,11 @@
 
 from __future__ import annotations
 
+import math
 from pathlib import Path
 
-from .common import _fail
+from ..scene.schema import MAX_FRAMES, MAX_VERTICES
+from .common import _fail, count
 
 
 def _add_port_commands(sub) -> None:
@@ -16,9 +18,9 @@ def _add_port_commands(sub) -> None:
     exp.add_argument("scene", metavar="SCENE", help="scene file or built-in name")
     exp.add_argument("--out", metavar="DIR", default=None,
                      help="output directory (default: out/<scene-name>/export)")
-    exp.add_argument("--frames", type=int, metavar="N", default=None,
+    exp.add_argument("--frames", type=count(0, MAX_FRAMES), metavar="N", default=None,
                      help="steps of the reference trajectory (default: the scene's)")
-    exp.add_argument("--iterate-steps", type=int, metavar="K", default=3,
+    exp.add_argument("--iterate-steps", type=count(0, MAX_FRAMES), metavar="K", default=3,
                      help="steps whose local/global iterates are written (3)")
     exp.add_argument("--force", action="store_true",
                      help="write into DIR even when it is not an export folder of clothsim")
@@ -36,7 +38,7 @@ def _add_port_commands(sub) -> None:
                       help="format of TRAJECTORY when its name does not say")
     cmp_.add_argument("--dtype", default=None, choices=("float32", "float64"),
                       help="raw files: element type")
-    cmp_.add_argument("--vertices", type=int, default=None, metavar="N",
+    cmp_.add_argument("--vertices", type=count(1, MAX_VERTICES), default=None, metavar="N",
                       help="raw files: vertex count n")
     cmp_.add_argument("--precision", default="float64", choices=("float64", "float32"),
                       help="float32: tolerance from κ(M + h²L) ε32 |x| (needs --scene, "
@@ -46,7 +48,7 @@ def _add_port_commands(sub) -> None:
     cmp_.add_argument("--rtol", type=float, default=None,
                       help="tolerance relative to the cloth size (1e-9)")
     cmp_.add_argument("--atol", type=float, default=None, help="absolute tolerance [m]")
-    cmp_.add_argument("--frames", type=int, default=None, metavar="N",
+    cmp_.add_argument("--frames", type=count(1, MAX_FRAMES), default=None, metavar="N",
                       help="compare only the first N frames")
     cmp_.add_argument("--match-vertices", action="store_true",
                       help="pair vertices by their initial positions (other vertex order)")
@@ -66,7 +68,8 @@ def _add_port_commands(sub) -> None:
     chk.add_argument("--precision", default="float64", choices=("float64", "float32"))
     chk.add_argument("--tolerance", type=float, default=None,
                      help="allowed per-vertex distance [m] (default from --precision)")
-    chk.add_argument("--steps", type=int, default=None, help="check only the first N steps")
+    chk.add_argument("--steps", type=count(0, MAX_FRAMES), default=None,
+                     help="check only the first N steps")
     chk.add_argument("--optimality", type=float, default=1e-6,
                      help="largest relative gradient |grad g(x)| / |grad g(x0)| of a port's "
                      "answer counted as a minimizer (1e-6)")
@@ -86,8 +89,9 @@ def _add_port_commands(sub) -> None:
 def _positive(args, names) -> str | None:
     for name in names:
         value = getattr(args, name)
-        if value is not None and not value >= 0:
-            return f"--{name.replace('_', '-')}: must be a non-negative number, got {value}"
+        if value is not None and not (value >= 0 and math.isfinite(value)):
+            return (f"--{name.replace('_', '-')}: must be a finite non-negative number, "
+                    f"got {value}")
     return None
 
 
