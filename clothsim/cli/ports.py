@@ -95,6 +95,16 @@ def _positive(args, names) -> str | None:
     return None
 
 
+def _refuse_special(*paths) -> None:
+    """A FIFO, device or socket among the inputs (or directly in an input folder) is
+    refused at once: reading it would block."""
+    from ..io.common import refuse_special
+
+    for p in paths:
+        if p is not None:
+            refuse_special(p, inside=True)
+
+
 def _cmd_export(args) -> int:
     from ..ports.export import export_port
     from ..scene import load_scene
@@ -121,6 +131,7 @@ def _cmd_compare(args) -> int:
     bad = _positive(args, ("rtol", "atol", "kappa"))
     if bad:
         return _fail(bad, 2)
+    _refuse_special(args.trajectory, args.reference, args.scene)
     if Path(args.trajectory).suffix == ".mtx":
         from ..ports.matrices import compare_matrices
 
@@ -159,6 +170,7 @@ def _cmd_check(args) -> int:
     bad = _positive(args, ("tolerance", "steps", "optimality"))
     if bad:
         return _fail(bad, 2)
+    _refuse_special(args.scene, args.port)
     scene = load_scene(args.scene)
     x = read_trajectory(args.port)
     v = read_velocities(args.port)
@@ -176,6 +188,7 @@ def _cmd_check(args) -> int:
 def _cmd_diff_model(args) -> int:
     from ..ports.diff import diff_models
 
+    _refuse_special(args.a, args.b)
     result = diff_models(args.a, args.b)
     print(result.report())
     return 0 if result.identical else 1

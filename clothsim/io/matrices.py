@@ -8,6 +8,7 @@ from pathlib import Path
 import numpy as np
 
 from ..errors import InputError
+from .common import refuse_special
 
 
 def write_matrix(path, A) -> None:
@@ -52,6 +53,7 @@ def read_matrix(path):
     import scipy.sparse
 
     path = Path(path)
+    refuse_special(path)
     if not path.is_file():
         raise InputError(f"matrix: file not found: {path}")
     A = scipy.io.mmread(path)
@@ -85,4 +87,5 @@ def read_vector(path) -> np.ndarray:
     ndarray, shape (k,)
         The float64 values (k = 1 for a single number).
     """
+    refuse_special(path)
     return np.atleast_1d(np.loadtxt(path, dtype=np.float64))

@@ -31,6 +31,7 @@ import numpy as np
 
 from .. import io
 from ..errors import InputError
+from ..io.common import refuse_special
 
 TEXT_SUFFIXES = (".txt", ".csv", ".dat")
 RAW_SUFFIXES = (".bin", ".raw", ".f64", ".f32")
@@ -104,6 +105,7 @@ def read_trajectory(path, *, key: str = "positions", fmt: str | None = None,
     p = Path(path)
     if not p.exists():
         raise InputError(f"{path}: file not found")
+    refuse_special(p, inside=True)  # a FIFO would block the read forever
     if p.is_dir() and fmt in (None, "frames"):
         name = "velocities" if key == "velocities" else "positions"
         for cand in (p / f"{name}.txt", p / "trajectory.npz", p / "trajectory.pvd"):
