@@ -190,6 +190,8 @@ def _run_locked(scene, model, sim, out: Path, frames: int, progress, resume: boo
     previous = read_json(out / "run.json")
     ours = previous is not None and "clothsim_run" in previous
     start = resume_point(out, previous, shash, frames, inputs) if resume else None
+    if start is not None:  # one record per frame: recompute frames without one (bit for bit)
+        start = _recorded_through(previous, start)
     resuming = start is not None
     if not resuming:
         if resume:
@@ -271,15 +273,32 @@ def _run_locked(scene, model, sim, out: Path, frames: int, progress, resume: boo
     except BaseException as exc:
         if run.status in ("completed", "interrupted", "failed"):
             raise  # the record is final already (an error in the previews)
-        status = "failed" if isinstance(exc, NonFiniteStateError) else "interrupted"
+        # an interruption can be resumed as is; an error (a blow-up, a full disk) failed
+        status = "interrupted" if isinstance(exc, KeyboardInterrupt) else "failed"
         error = f"{type(exc).__name__}: {' '.join(str(exc).split())}".rstrip(": ")
         log.info("run of %s stopped at frame %d: %s", scene.name, run.done + 1, error)
         if run.done >= 0 or not resuming:  # else the earlier run.json stays as it was
-            with signals_deferred():
-                run.finish(store, model, fps, status, error)
+            try:
+                with signals_deferred():
+                    run.finish(store, model, fps, status, error)
+            except OSError as again:  # e.g. still no space: the first error is the news
+                log.warning("could not record the %s run in %s: %s", status, out,
+                            again.strerror or again)
         raise
     finally:
         store.close()
+
+
+def _recorded_through(previous: dict, start: int) -> int:
+    """The last frame k <= start with records for frames 1..k in ``previous`` (run.json):
+    after SIGKILL, a full disk or ``--frames`` down then up, frames on disk may lack one."""
+    recorded = {r.get("frame") for r in previous.get("frames", []) if isinstance(r, dict)}
+    k = 0
+    while k < start and k + 1 in recorded:
+        k += 1
+    if k < start:
+        log.info("frames %d..%d have no record in run.json; recomputing them", k + 1, start)
+    return k
 
 
 def _advance(sim, substeps: int, k: int) -> list:

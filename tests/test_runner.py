@@ -107,7 +107,8 @@ def test_interrupt_at_frame_k_leaves_frames_before(tiny, tmp_path, monkeypatch, 
         x, _ = io.read_frame(out / f"frame_{j:06d}.vtu")
         assert x.shape == (25, 3)
     run = json.loads((out / "run.json").read_text())
-    assert run["status"] == "interrupted" and run["last_frame"] == k - 1
+    status = "interrupted" if isinstance(exc, KeyboardInterrupt) else "failed"
+    assert run["status"] == status and run["last_frame"] == k - 1
     assert run["error"].startswith(type(exc).__name__)
     assert len(run["frames"]) == k - 1
     z = np.load(out / "trajectory.npz")

@@ -42,7 +42,7 @@ from pathlib import Path
 from .. import __version__
 from ..errors import InputError
 from ..scene.schema import MAX_FRAMES, MAX_VERTICES
-from .common import PROG, _fail, _Parser, _UsageError, count, log
+from .common import PROG, _fail, _Parser, _UsageError, count, log, os_error_line
 from .logs import _configure_logging, _no_progress_bars_off_terminal, _warnings_to_log
 from .ports import (
     _add_port_commands,
@@ -209,6 +209,10 @@ def _cmd_run(args) -> int:
                      128 + signum)
     except NonFiniteStateError as exc:
         return _fail(f"{exc}; run.json (status failed) is in {out}", 1)
+    except OSError as exc:  # full disk, read-only folder, file too large, ...
+        log.debug("I/O error", exc_info=True)
+        return _fail(f"{os_error_line(exc, out)}; frames written so far stay (run.json says "
+                     "failed when it could be written; --resume continues)", 1)
     finally:
         if bar is not None:
             bar.close()
@@ -276,6 +280,11 @@ def main(argv: list[str] | None = None) -> int:
     except BrokenPipeError:  # the reader went away (`clothsim scenes | head`): stop quietly
         sys.stdout = open(os.devnull, "w")  # noqa: SIM115 - no flush error at exit
         return 141
+    except OSError as exc:  # a path and its cause, not "OSError: [Errno 28] ..."
+        log.debug("I/O error", exc_info=True)
+        return _fail(os_error_line(exc), 1)
+    except MemoryError:
+        return _fail("out of memory", 1)
     except Exception as exc:  # one line, no traceback; -vv logs it in full
         log.debug("unhandled error", exc_info=True)
         return _fail(f"{type(exc).__name__}: {exc}", 1)

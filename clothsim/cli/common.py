@@ -58,3 +58,25 @@ def count(low: int, high: int):
 
     parse.__name__ = "count"
     return parse
+
+
+def os_error_line(exc: OSError, where=None) -> str:
+    """One line for an I/O error: the path and the cause, no Python type name.
+
+    Parameters
+    ----------
+    exc : OSError
+    where : path, optional
+        The folder or file the command was writing (named first, e.g. the run folder).
+
+    Returns
+    -------
+    str
+        E.g. ``"out/run: cannot write: No space left on device (out/run/frame_000003.vtu)"``.
+    """
+    cause = exc.strerror or " ".join(str(exc).split()) or type(exc).__name__
+    name = exc.filename if exc.filename is not None else None
+    if where is None:
+        return f"{name}: {cause}" if name is not None else cause
+    detail = f" ({name})" if name is not None and str(name) != str(where) else ""
+    return f"{where}: {cause}{detail}"

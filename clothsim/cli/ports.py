@@ -95,6 +95,9 @@ def _positive(args, names) -> str | None:
     return None
 
 
+MODEL_FILES = ("vertices.txt", "x0.txt", "springs.txt", "pins.txt", "masses.txt")
+
+
 def _refuse_special(*paths) -> None:
     """A FIFO, device or socket among the inputs (or directly in an input folder) is
     refused at once: reading it would block."""
@@ -186,10 +189,23 @@ def _cmd_check(args) -> int:
 
 
 def _cmd_diff_model(args) -> int:
+    from ..errors import InputError
     from ..ports.diff import diff_models
+    from ..ports.formats import check_number_table
 
     _refuse_special(args.a, args.b)
-    result = diff_models(args.a, args.b)
+    for folder in (Path(args.a), Path(args.b)):
+        if folder.is_dir():  # a port's model files: numbers, or one line naming the line
+            for name in MODEL_FILES:
+                if (folder / name).is_file():
+                    check_number_table(folder / name)
+    try:
+        result = diff_models(args.a, args.b)
+    except InputError:
+        raise
+    except (ValueError, IndexError, KeyError, TypeError, MemoryError) as exc:
+        kind = "too large" if isinstance(exc, MemoryError) else "shapes or values do not fit"
+        return _fail(f"{args.a} / {args.b}: cannot read the model files ({kind})", 2)
     print(result.report())
     return 0 if result.identical else 1
 
