@@ -26,6 +26,7 @@ from ..springs import FAMILIES, Springs, grid_springs, mesh_springs, springs_fro
 from .checks import Invalid, integer, locate
 from .effects import constructor_params
 from .pins import declared_pins
+from .scale import overflow_problem, scene_key
 from .schema import MAX_SUBSTEPS
 from .tables import read_index_list, read_spring_table, read_triangles, read_values, read_vertices
 from .validate import validate, validate_solver
@@ -307,6 +308,8 @@ class Scene:
             h = 1.0 / (self.fps * substeps)
         model = self.build_model() if model is None else model
         self._check_stiffness(model, h)
+        if (problem := overflow_problem(model, h)) is not None:  # no silent freeze
+            raise self._error(scene_key(problem[0], self.data), problem[1])
         effects = self.build_effects(model)
         try:
             return Simulation(model, h=h, effects=effects, solver=solver["method"],

@@ -22,6 +22,7 @@ from pathlib import Path
 import numpy as np
 
 from .checks import Invalid, shorten
+from .effects import MAX_LENGTH
 
 
 def _rows(path, key: str) -> list[tuple[int, list[float]]]:
@@ -82,12 +83,19 @@ def read_vertices(path, key: str) -> np.ndarray:
         if len(values) % 3:
             raise Invalid(key, f"line {line} of {name}: one line must hold 3n numbers "
                                f"(x y z per vertex), got {len(values)}")
-        return np.asarray(values, dtype=np.float64).reshape(-1, 3)
-    for line, values in rows:
-        if len(values) != 3:
-            raise Invalid(key, f"line {line} of {name}: expected 3 numbers (x y z), got "
-                               f"{len(values)}")
-    return np.asarray([v for _, v in rows], dtype=np.float64)
+        x = np.asarray(values, dtype=np.float64).reshape(-1, 3)
+        lines = [line] * len(x)
+    else:
+        for line, values in rows:
+            if len(values) != 3:
+                raise Invalid(key, f"line {line} of {name}: expected 3 numbers (x y z), got "
+                                   f"{len(values)}")
+        x, lines = np.asarray([v for _, v in rows], dtype=np.float64), [r[0] for r in rows]
+    far = np.flatnonzero((np.abs(x) > MAX_LENGTH).any(axis=1))
+    if len(far):  # squares of such coordinates overflow float64 in every step
+        raise Invalid(key, f"line {lines[far[0]]} of {name}: coordinates must be within "
+                           f"±{MAX_LENGTH:g} m, got {float(np.abs(x[far[0]]).max()):.3g}")
+    return x
 
 
 def _indices(values, line: int, name: str, key: str, base: int, count: int | None,
