@@ -21,7 +21,7 @@ from pathlib import Path
 
 import numpy as np
 
-from .checks import Invalid, shorten
+from .checks import Invalid
 from .effects import MAX_LENGTH
 
 
@@ -41,16 +41,21 @@ def _rows(path, key: str) -> list[tuple[int, list[float]]]:
             values = [float(w) for w in words]
         except ValueError:
             bad = next(w for w in words if not _is_float(w))
-            raise Invalid(key, f"line {i} of {p.name}: not a number: "
-                               f"{shorten(repr(bad))}") from None
+            raise Invalid(key, f"line {i} of {p.name}: not a number: {_token(bad)}") from None
         for w, v in zip(words, values):
             if not np.isfinite(v):
                 raise Invalid(key, f"line {i} of {p.name}: must be a finite number, got "
-                                   f"{shorten(w)}")
+                                   f"{w if len(w) <= 24 else _token(w)}")
         out.append((i, values))
     if not out:
         raise Invalid(key, f"{p.name} holds no numbers")
     return out
+
+
+def _token(w: str) -> str:
+    """The offending word for a message: short printable words as they are, others by
+    length only (a file that is no table, e.g. ``/proc/self/environ``, is not echoed)."""
+    return repr(w) if len(w) <= 24 and w.isprintable() else f"a {len(w)}-character word"
 
 
 def _is_float(w: str) -> bool:
