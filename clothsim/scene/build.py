@@ -19,6 +19,7 @@ from ..errors import InputError, SceneError
 from ..io.assignment import read_assignment, read_pins
 from ..io.meshes import load_mesh
 from ..mesh import Mesh, grid
+from ..mesh_checks import check_mesh
 from ..model import Model
 from ..polygon import polygon
 from ..simulation import Simulation
@@ -139,7 +140,12 @@ class Scene:
         x = read_vertices(c["vertices"], "cloth.vertices")
         tris = (read_triangles(c["triangles"], "cloth.triangles", c["index_base"], len(x))
                 if "triangles" in c else np.zeros((0, 3), np.int64))
-        return Mesh(x, tris)
+        mesh = Mesh(x, tris)
+        try:  # the checks of a mesh file (errors only: a table's strands are not known yet)
+            check_mesh(mesh, field="cloth.triangles", warn=False)
+        except InputError as exc:
+            raise Invalid("cloth.triangles", str(exc).split(": ", 1)[1]) from None
+        return mesh
 
     def _spring_table(self, vertex_count: int):
         sp = self.data["springs"]
