@@ -141,8 +141,10 @@ class Scene:
         tris = (read_triangles(c["triangles"], "cloth.triangles", c["index_base"], len(x))
                 if "triangles" in c else np.zeros((0, 3), np.int64))
         mesh = Mesh(x, tris)
-        try:  # the checks of a mesh file (errors only: a table's strands are not known yet)
-            check_mesh(mesh, field="cloth.triangles", warn=False)
+        scale = float(np.abs(x).max()) if x.size else 0.0
+        try:  # a mesh file's checks (errors only), on the cloth scaled to 1 (no overflow)
+            check_mesh(Mesh(x / scale, tris) if scale > 0 else mesh, field="cloth.triangles",
+                       warn=False)
         except InputError as exc:
             raise Invalid("cloth.triangles", str(exc).split(": ", 1)[1]) from None
         return mesh
