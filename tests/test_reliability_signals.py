@@ -61,3 +61,31 @@ def test_a_nohup_run_survives_sighup(tmp_path):
         proc.send_signal(signal.SIGTERM)
         _, err = proc.communicate(timeout=60)
     assert proc.returncode == 143 and "interrupted (SIGTERM)" in err
+
+
+def test_resume_after_sigkill_is_bit_for_bit_with_one_record_per_frame(tmp_path):
+    import numpy as np
+
+    from clothsim.runner import run_scene
+
+    scene = write_scene(tmp_path, "local-global")
+    out = tmp_path / "killed"
+    env = {**os.environ, "PYTHONPATH": str(REPO)}
+    proc = subprocess.Popen([sys.executable, "-m", "clothsim", "run", str(scene), "--out",
+                             str(out), "--no-preview", "--frames", "400"], env=env,
+                            stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
+    try:
+        wait_for_frame(out, 3, proc)
+    finally:
+        proc.kill()  # SIGKILL: nothing can be cleaned up
+        proc.communicate(timeout=60)
+    frames = 12
+    run_scene(str(scene), out, frames=frames, resume=True, preview=False)
+    full = tmp_path / "full"
+    run_scene(str(scene), full, frames=frames, preview=False)
+    a, b = np.load(out / "trajectory.npz"), np.load(full / "trajectory.npz")
+    for key in ("positions", "velocities"):
+        assert np.array_equal(a[key], b[key]), key
+    run = json.loads((out / "run.json").read_text())
+    assert run["status"] == "completed"
+    assert [r["frame"] for r in run["frames"]] == list(range(1, frames + 1))
