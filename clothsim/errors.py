@@ -104,9 +104,15 @@ def check_finite(name: str, value) -> np.ndarray:
     Raises
     ------
     InputError
-        When an entry is NaN or infinite, e.g. "vertex_mass[3]: must be a finite number".
+        When an entry is NaN or infinite, e.g. "vertex_mass[3]: must be a finite number",
+        or ``value`` is not real numbers (booleans, complex numbers, text are not coerced).
     """
-    arr = np.asarray(value, dtype=np.float64)
+    raw = np.asarray(value)
+    if raw.dtype.kind not in "iuf" and not (raw.dtype == object and raw.size == 0):
+        what = {"b": "booleans", "c": "complex numbers", "U": "text", "S": "bytes",
+                "O": "Python objects"}.get(raw.dtype.kind, str(raw.dtype))
+        raise InputError(f"{name}: must be real numbers, got {what}", field=name)
+    arr = np.asarray(raw, dtype=np.float64)
     bad = ~np.isfinite(arr)
     if bad.any():
         index = np.unravel_index(int(np.flatnonzero(bad)[0]), arr.shape)

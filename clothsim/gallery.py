@@ -66,7 +66,8 @@ def grid_cloth(n: int = 5, *, k: float = 800.0, bending: float | None = None,
     springs = grid_springs(mesh, structural=k, shear=k,
                            bending=k / 10 if bending is None else bending,
                            bending_pattern=bending_pattern)
-    return Model.build(mesh, springs, total_mass=total_mass, vertex_mass=vertex_mass)
+    return Model.build(mesh, springs, total_mass=None if vertex_mass is not None else total_mass,
+                       vertex_mass=vertex_mass)
 
 
 def top_corners(n: int, plane: str = "xy") -> list[int]:

@@ -2,7 +2,9 @@
 
 :func:`handle_signals` makes the three signals raise :class:`SignalInterrupt` (a
 :class:`KeyboardInterrupt`); :func:`signals_deferred` holds them while a frame's files and
-its record are written, so a signal never separates the two.
+its record are written, so a signal never separates the two. A signal the process inherited
+as ignored (``SIG_IGN``: ``nohup`` ignores SIGHUP, a background job of a non-interactive
+shell ignores SIGINT) stays ignored.
 """
 
 from __future__ import annotations
@@ -34,7 +36,8 @@ class SignalInterrupt(KeyboardInterrupt):
 def handle_signals() -> Iterator[None]:
     """Within the block, SIGINT, SIGTERM and SIGHUP raise :class:`SignalInterrupt` (once:
     a second signal while the run cleans up is ignored), so all three take Ctrl-C's path.
-    Does nothing outside the main thread.
+    A signal whose handler is ``SIG_IGN`` (inherited, e.g. SIGHUP under ``nohup``) stays
+    ignored. Does nothing outside the main thread.
 
     Yields
     ------
@@ -56,12 +59,17 @@ def handle_signals() -> Iterator[None]:
             fired.append(signum)
             raise SignalInterrupt(signum)
 
-    old = {s: signal.signal(s, handler) for s in SIGNALS}
+    old = {s: signal.signal(s, handler) for s in _not_ignored()}
     try:
         yield
     finally:
         for s, h in old.items():
             signal.signal(s, h)
+
+
+def _not_ignored() -> list[int]:
+    """The signals of :data:`SIGNALS` whose current handler is not ``SIG_IGN``."""
+    return [s for s in SIGNALS if signal.getsignal(s) != signal.SIG_IGN]
 
 
 @contextmanager
@@ -85,7 +93,7 @@ def signals_deferred() -> Iterator[None]:
     def hold(signum, frame):
         pending.append(signum)
 
-    old = {s: signal.signal(s, hold) for s in SIGNALS}
+    old = {s: signal.signal(s, hold) for s in _not_ignored()}
     try:
         yield
     finally:

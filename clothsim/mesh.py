@@ -56,8 +56,8 @@ class Mesh:
         v = check_finite("vertices", self.vertices)
         if v.ndim != 2 or v.shape[1] != 3:
             raise InputError(f"vertices: expected shape (n, 3), got {v.shape}")
-        t = np.asarray(self.triangles, dtype=np.int64).reshape(-1, 3)
-        s = np.asarray(self.strands, dtype=np.int64).reshape(-1, 2)
+        t = _indices("triangles", self.triangles, 3)
+        s = _indices("strands", self.strands, 2)
         n = len(v)
         for name, cells in (("triangles", t), ("strands", s)):
             if cells.size and (cells.min() < 0 or cells.max() >= n):
@@ -172,6 +172,22 @@ class Mesh:
         s = self.strands
         length = np.linalg.norm(self.vertices[s[:, 0]] - self.vertices[s[:, 1]], axis=1)
         return np.bincount(s.ravel(), weights=np.repeat(length / 2.0, 2), minlength=n)
+
+
+def _indices(name: str, cells, width: int) -> np.ndarray:
+    """Vertex indices, shape (k, width), int64: integers only (no truncation, no bools)."""
+    a = np.asarray(cells)
+    if a.size == 0:
+        return np.zeros((0, width), np.int64)
+    if a.ndim != 2 or a.shape[1] != width:
+        raise InputError(f"{name}: expected shape (k, {width}), got {a.shape}")
+    if a.dtype.kind == "f" and np.all(np.isfinite(a)) and np.all(a == np.round(a)):
+        a = a.astype(np.int64)  # whole numbers stored as floats (e.g. from loadtxt)
+    if a.dtype.kind not in "iu":
+        r, c = np.argwhere(a != np.round(a))[0] if a.dtype.kind == "f" else (0, 0)
+        raise InputError(f"{name}[{r}, {c}]: vertex indices must be integers, got "
+                         f"{a.dtype} {a[r, c]!r}"[:200])
+    return np.array(a, dtype=np.int64)
 
 
 def place_in_plane(u: np.ndarray, v: np.ndarray, center, plane: str) -> np.ndarray:

@@ -11,6 +11,8 @@ non-manifold edges
     bending springs) is undefined there.
 zero-area triangles
     Area <= 1e-12 × (bounding-box diagonal)², including triangles that repeat a vertex.
+duplicate triangles
+    The same three vertices as an earlier triangle (in any order).
 self-loop strands
     A strand from a vertex to itself (a spring with no direction).
 
@@ -121,6 +123,14 @@ def check_mesh(mesh: Mesh, *, field: str = "mesh", warn: bool = True) -> MeshRep
     if len(zero):
         raise InputError(f"{field}: {len(zero)} zero-area triangles, indices "
                          f"{_listing([str(i) for i in zero.tolist()], len(zero))}")
+    if len(t):  # the same face twice doubles its mass, its springs and its wind force
+        faces = np.sort(t, axis=1)
+        _, first, inverse = np.unique(faces, axis=0, return_index=True, return_inverse=True)
+        dup = np.flatnonzero(first[inverse.ravel()] != np.arange(len(t)))
+        if len(dup):
+            raise InputError(f"{field}: {len(dup)} duplicate triangles (the same three "
+                             f"vertices as an earlier one), indices "
+                             f"{_listing([str(i) for i in dup.tolist()], len(dup))}")
     keys, _ = mesh.edge_triangles
     boundary_edges = 0
     if len(keys):

@@ -41,7 +41,8 @@ class Model:
     def __post_init__(self):
         m = check_positive("vertex_mass", self.vertex_mass, allow_zero=True)
         n = self.mesh.vertex_count
-        m = np.broadcast_to(m, (n,)).copy() if m.ndim == 0 else m
+        m = np.broadcast_to(m, (n,)).copy() if m.ndim == 0 else m.copy()  # the caller's
+        # array stays theirs: writable and unchanged
         if m.shape != (n,):
             raise InputError(f"vertex_mass: expected {n} values (one per vertex), got {m.shape}")
         if not isinstance(self.springs, Springs):
@@ -85,13 +86,16 @@ class Model:
         total_mass : float, optional
             Total mass [kg] spread over the vertices by ``mass_lumping``.
         vertex_mass : float or (n,) array_like, optional
-            Mass of each vertex [kg]; overrides ``total_mass``.
+            Mass of each vertex [kg]; not together with ``total_mass``.
         mass_lumping : {"uniform", "area"}
             ``"uniform"``: every vertex the same (the student report). ``"area"``: proportional to a
             third of the adjacent triangles' area (strand length for strand meshes).
         """
         if vertex_mass is not None:
-            return cls(mesh, springs, np.asarray(vertex_mass, dtype=np.float64))
+            if total_mass is not None:
+                raise InputError("total_mass: give either total_mass or vertex_mass, not both")
+            return cls(mesh, springs, check_positive("vertex_mass", vertex_mass,
+                                                     allow_zero=True))
         if total_mass is None:
             total_mass = 1.0
         total = float(check_positive("mass", total_mass))

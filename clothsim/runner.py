@@ -33,7 +33,6 @@ import copy
 import hashlib
 import json
 import logging
-import re
 import time as _time
 from collections.abc import Callable
 from dataclasses import dataclass, field
@@ -45,9 +44,9 @@ import numpy as np
 from .display import OBSTACLES_NAME, pinned_mask, write_obstacles
 from .errors import InputError, NonFiniteStateError
 from .interrupts import SignalInterrupt, handle_signals, signals_deferred
+from .io.folders import FolderLock, claim_folder
 from .io.frames import PVD_NAME, FrameWriter, read_frame
 from .io.runfiles import (
-    FolderLock,
     RunRecord,
     TrajectoryStore,
     package_versions,
@@ -56,16 +55,19 @@ from .io.runfiles import (
     write_trajectory,
 )
 from .plotting import write_final_image, write_preview
+from .runfolder import (
+    RESULT_FILES,
+    STALE_FILES,
+    clear_earlier_run,
+    completed_frames,
+    resume_point,
+)
 from .scene import Scene, load_scene
+from .scene.inputs import input_hashes
+from .scene.schema import MAX_FRAMES
 from .simulation import State
 
 log = logging.getLogger(__name__)
-
-FRAME_PATTERN = re.compile(r"frame_(\d{6})\.vtu")
-RESULT_FILES = ("trajectory.pvd", "trajectory.npz", "preview.gif", "final.png", "run.json")
-#: Files of an earlier run that a fresh run removes (besides its frame files).
-STALE_FILES = RESULT_FILES + (OBSTACLES_NAME,)
-
 
 @dataclass
 class RunResult:
@@ -118,32 +120,9 @@ def scene_hash(scene: Scene, model) -> str:
     return digest.hexdigest()[:16]
 
 
-def completed_frames(out_dir) -> int | None:
-    """Index of the last frame k such that frames 0..k all exist in ``out_dir`` (None: none).
-
-    The ``frame_%06d.vtu`` files on disk count (each is written atomically, so each one
-    present is complete), whether or not ``trajectory.pvd`` is readable.
-
-    Parameters
-    ----------
-    out_dir : str or Path
-        A run folder.
-
-    Returns
-    -------
-    int or None"""
-    out = Path(out_dir)
-    indices = {int(m.group(1)) for p in out.glob("frame_*.vtu")
-               if (m := FRAME_PATTERN.fullmatch(p.name))}
-    k = -1
-    while k + 1 in indices:
-        k += 1
-    return None if k < 0 else k
-
-
 def run_scene(scene, out_dir, *, frames: int | None = None,
               progress: Callable[[int, int], None] | None = None, resume: bool = False,
-              preview: bool = True) -> RunResult:
+              preview: bool = True, force: bool = False) -> RunResult:
     """Simulate ``scene`` and write every result file into ``out_dir``.
 
     Parameters
@@ -166,6 +145,10 @@ def run_scene(scene, out_dir, *, frames: int | None = None,
         (frame files are kept).
     preview : bool
         Write preview.gif and final.png (matplotlib) after a completed run.
+    force : bool
+        Write into a folder clothsim does not own (files with the names of a run's files
+        are replaced); without it such a folder is refused
+        (:func:`clothsim.io.folders.claim_folder`).
 
     Returns
     -------
@@ -185,34 +168,40 @@ def run_scene(scene, out_dir, *, frames: int | None = None,
     """
     if not isinstance(scene, Scene):
         scene = load_scene(scene)
+    if frames is not None and (isinstance(frames, bool) or not isinstance(frames, int | np.integer)
+                               or not 0 <= frames <= MAX_FRAMES):
+        raise InputError(f"frames: must be an integer between 0 and {MAX_FRAMES:.0e}, got "
+                         f"{frames!r}"[:200])
     frames = scene.frames if frames is None else int(frames)
-    if frames < 0:
-        raise InputError(f"frames: must be >= 0, got {frames}")
     model = scene.build_model()
     sim = scene.build_simulation(model)
-    out = Path(out_dir)
+    out = claim_folder(out_dir, "run", force=force)  # before anything is written there
     out.mkdir(parents=True, exist_ok=True)
     with FolderLock(out):
-        return _run_locked(scene, model, sim, out, frames, progress, resume, preview)
+        claim_folder(out, "run", force=force)  # again, now that no other run can write
+        return _run_locked(scene, model, sim, out, frames, progress, resume, preview, force)
 
 
 def _run_locked(scene, model, sim, out: Path, frames: int, progress, resume: bool,
-                preview: bool) -> RunResult:
+                preview: bool, force: bool = False) -> RunResult:
     fps, substeps, n = scene.fps, scene.substeps, model.vertex_count
     shash = scene_hash(scene, model)
+    inputs = input_hashes(scene)  # every file the scene reads, by content
     previous = read_json(out / "run.json")
     ours = previous is not None and "clothsim_run" in previous
-    start = _resume_point(out, previous, shash, frames) if resume else None
+    start = resume_point(out, previous, shash, frames, inputs) if resume else None
+    if start is not None:  # one record per frame: recompute frames without one (bit for bit)
+        start = _recorded_through(previous, start)
     resuming = start is not None
     if not resuming:
         if resume:
             log.info("nothing to resume in %s; starting from frame 0", out)
-        _clear_earlier_run(out, ours)
+        clear_earlier_run(out, ours or force)
         start = 0
     info = {
         "clothsim_run": 1, "scene": scene.to_dict(), "scene_hash": shash,
         "overrides": list(scene.overrides),
-        "source": scene.source, "out_dir": str(out.resolve()),
+        "source": scene.source, "inputs": inputs, "out_dir": str(out.resolve()),
         "h": sim.h, "fps": fps, "substeps": substeps, "frames_requested": frames,
         "vertex_count": n, "spring_count": model.spring_count,
         "triangle_count": model.mesh.triangle_count, "total_mass": model.total_mass,
@@ -286,15 +275,32 @@ def _run_locked(scene, model, sim, out: Path, frames: int, progress, resume: boo
     except BaseException as exc:
         if run.status in ("completed", "interrupted", "failed"):
             raise  # the record is final already (an error in the previews)
-        status = "failed" if isinstance(exc, NonFiniteStateError) else "interrupted"
+        # an interruption can be resumed as is; an error (a blow-up, a full disk) failed
+        status = "interrupted" if isinstance(exc, KeyboardInterrupt) else "failed"
         error = f"{type(exc).__name__}: {' '.join(str(exc).split())}".rstrip(": ")
         log.info("run of %s stopped at frame %d: %s", scene.name, run.done + 1, error)
         if run.done >= 0 or not resuming:  # else the earlier run.json stays as it was
-            with signals_deferred():
-                run.finish(store, model, fps, status, error)
+            try:
+                with signals_deferred():
+                    run.finish(store, model, fps, status, error)
+            except OSError as again:  # e.g. still no space: the first error is the news
+                log.warning("could not record the %s run in %s: %s", status, out,
+                            again.strerror or again)
         raise
     finally:
         store.close()
+
+
+def _recorded_through(previous: dict, start: int) -> int:
+    """The last frame k <= start with records for frames 1..k in ``previous`` (run.json):
+    after SIGKILL, a full disk or ``--frames`` down then up, frames on disk may lack one."""
+    recorded = {r.get("frame") for r in previous.get("frames", []) if isinstance(r, dict)}
+    k = 0
+    while k < start and k + 1 in recorded:
+        k += 1
+    if k < start:
+        log.info("frames %d..%d have no record in run.json; recomputing them", k + 1, start)
+    return k
 
 
 def _advance(sim, substeps: int, k: int) -> list:
@@ -337,48 +343,6 @@ def _previews(out: Path, scene, sim, store: TrajectoryStore, fps: float, done: i
             write_final_image(out / "final.png", np.array(positions[-1]), mesh,
                               title=f"{scene.name}, t = {times[-1]:.2f} s",
                               effects=sim.effects, t=float(times[-1]))]
-
-
-def _resume_point(out: Path, previous: dict | None, shash: str, frames: int) -> int | None:
-    """The frame to resume from (None: no frame on disk); raises when the folder holds
-    another scene's run or frames no run record describes. Never beyond ``frames``."""
-    last = completed_frames(out)
-    if last is None:
-        return None
-    if previous is None or "clothsim_run" not in previous:
-        raise InputError(f"{out}: frame files but no readable run.json; cannot check they are "
-                         "this scene's, so cannot resume (run without --resume into another "
-                         "folder)")
-    if "scene_hash" not in previous:
-        raise InputError(f"{out}: its run.json has no scene hash (an older clothsim wrote it), "
-                         "so it cannot be checked to be this scene; cannot resume")
-    if previous["scene_hash"] != shash:
-        raise InputError(f"{out}: holds a run of a different scene (scene hash "
-                         f"{previous['scene_hash']} here, {shash} now); cannot resume")
-    k = 0
-    while k < min(last, frames):  # the frames must read back; stop before the first bad one
-        try:
-            read_frame(out / f"frame_{k + 1:06d}.vtu")
-        except InputError as exc:
-            log.warning("resuming before %s", exc)
-            break
-        k += 1
-    return k
-
-
-def _clear_earlier_run(out: Path, ours: bool) -> None:
-    """A fresh run replaces an earlier one: remove its frames and result files. Frame files
-    without a clothsim run.json beside them are not this program's: refuse."""
-    frames = [p for p in out.glob("frame_*.vtu") if FRAME_PATTERN.fullmatch(p.name)]
-    if frames and not ours:
-        raise InputError(f"{out}: holds {len(frames)} frame files and no clothsim run.json; "
-                         "refusing to delete files clothsim did not write (choose another "
-                         "--out or remove them)")
-    stale = frames + [out / name for name in STALE_FILES if (out / name).exists()]
-    for p in stale:
-        p.unlink()
-    if stale:
-        log.info("removed %d files of an earlier run in %s", len(stale), out)
 
 
 __all__ = ["run_scene", "RunResult", "completed_frames", "package_versions", "scene_hash",

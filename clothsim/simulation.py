@@ -134,6 +134,11 @@ class Simulation:
         self.h = float(check_finite("h", h))
         if self.h <= 0:
             raise InputError(f"h: the time step must be positive, got {self.h!r}")
+        if isinstance(iterations, bool) or not isinstance(iterations, int | np.integer):
+            raise InputError(f"solver.iterations: must be an integer, got "
+                             f"{type(iterations).__name__}")
+        if tolerance is not None:
+            check_finite("solver.tolerance", tolerance)
         if isinstance(solver, Solver):
             self.solver = solver
         else:

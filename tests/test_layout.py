@@ -31,7 +31,7 @@ STAGES = [
     {"io"},
     {"scene"},
     {"display", "camera", "painter", "plotting"},
-    {"runner", "interrupts"},
+    {"runner", "runfolder", "interrupts"},
     {"accuracy", "ports"},
     {"cli", "__main__", "__init__"},
 ]

@@ -3,11 +3,11 @@
 ::
 
     clothsim [--version] [-v | -vv] COMMAND [-v | -vv] ...
-    clothsim run [SCENE] [--out DIR] [--frames N] [--resume] [--no-preview]
+    clothsim run [SCENE] [--out DIR] [--frames N] [--resume] [--no-preview] [--force]
     clothsim scenes [--show NAME]
     clothsim validate SCENE
     clothsim accuracy [SCENE] [...]
-    clothsim export SCENE [--out DIR] [--frames N] [--iterate-steps K]
+    clothsim export SCENE [--out DIR] [--frames N] [--iterate-steps K] [--force]
     clothsim compare TRAJECTORY REFERENCE [--key K] [--precision P] [--rtol R] [--atol A] ...
     clothsim check SCENE PORT [--precision float32|float64] [--tolerance T]
     clothsim diff-model A B
@@ -41,7 +41,8 @@ from pathlib import Path
 
 from .. import __version__
 from ..errors import InputError
-from .common import PROG, _fail, _Parser, _UsageError, add_set_option, log
+from ..scene.schema import MAX_FRAMES, MAX_VERTICES
+from .common import PROG, _fail, _Parser, _UsageError, add_set_option, count, log, os_error_line
 from .logs import _configure_logging, _no_progress_bars_off_terminal, _warnings_to_log
 from .ports import (
     _add_port_commands,
@@ -84,13 +85,16 @@ def build_parser() -> argparse.ArgumentParser:
                      help="scene file or built-in name (default: drop-on-square)")
     run.add_argument("--out", metavar="DIR", default=None,
                      help="output directory (default: out/<scene-name>)")
-    run.add_argument("--frames", type=int, metavar="N", default=None,
+    run.add_argument("--frames", type=count(0, MAX_FRAMES), metavar="N", default=None,
                      help="frames after the initial one (default: the scene's)")
     run.add_argument("--resume", action="store_true",
                      help="continue from the last complete frame in the output directory")
     run.add_argument("--no-preview", action="store_true",
                      help="skip preview.gif and final.png")
     add_set_option(run)
+    run.add_argument("--force", action="store_true",
+                     help="write into DIR even when it holds files that are not a clothsim "
+                     "run's (files named like a run's are replaced)")
 
     scn = sub.add_parser("scenes", help="list the built-in scenes (or print one: --show NAME)")
     scn.add_argument("--show", metavar="NAME", default=None,
@@ -110,14 +114,15 @@ def build_parser() -> argparse.ArgumentParser:
     acc.add_argument("--methods", default=None,
                      help="comma-separated solvers (default: local-global,chebyshev,anderson,"
                           "lbfgs,newton)")
-    acc.add_argument("--problems", type=int, default=8,
+    acc.add_argument("--problems", type=count(1, 10_000), default=8,
                      help="step problems recorded along the run (default 8)")
-    acc.add_argument("--frames", type=int, default=None,
+    acc.add_argument("--frames", type=count(0, MAX_FRAMES), default=None,
                      help="frames of the recorded run (default: the scene's)")
-    acc.add_argument("--repeats", type=int, default=5, help="interleaved timing repeats (5)")
+    acc.add_argument("--repeats", type=count(1, 10_000), default=5,
+                     help="interleaved timing repeats (5)")
     acc.add_argument("--target", type=float, default=None,
                      help="report only this solver-error level (e.g. 1e-6)")
-    acc.add_argument("--jobs", type=int, default=1, help="parallel workers (joblib)")
+    acc.add_argument("--jobs", type=count(1, 1024), default=1, help="parallel workers (joblib)")
     acc.add_argument("--scheduler", default=None, metavar="ADDRESS",
                      help="Dask scheduler address (joblib's dask backend)")
     acc.add_argument("--no-time-steps", action="store_true",
@@ -127,7 +132,8 @@ def build_parser() -> argparse.ArgumentParser:
                      help="few problems, budgets and repeats (a first look, not for a referee)")
     acc.add_argument("--paper", action="store_true",
                      help="the paper's Fig. 1 setup: local/global against Newton (crossover)")
-    acc.add_argument("--paper-size", type=int, default=41, help="vertices per side (--paper)")
+    acc.add_argument("--paper-size", type=count(2, int(MAX_VERTICES ** 0.5)), default=41,
+                     help="vertices per side (--paper)")
     add_set_option(acc)
     return parser
 
@@ -170,7 +176,9 @@ def _cmd_run(args) -> int:
     if args.frames is not None and args.frames < 0:
         return _fail(f"--frames: must be >= 0, got {args.frames}", 2)
     scene = load_scene(args.scene or DEFAULT_SCENE, args.set)
-    if args.out:
+    if args.out == "":
+        return _fail("--out: empty; name a folder", 2)
+    if args.out is not None:
         out = Path(args.out)
     else:  # out/<scene name>, and never anywhere else
         base = Path("out")
@@ -195,7 +203,8 @@ def _cmd_run(args) -> int:
     try:
         with handle_signals():
             result = run_scene(scene, out, frames=frames, progress=progress,
-                               resume=args.resume, preview=not args.no_preview)
+                               resume=args.resume, preview=not args.no_preview,
+                               force=args.force)
     except KeyboardInterrupt as exc:  # Ctrl-C, SIGTERM, SIGHUP: exit 128 + signal number
         signum = getattr(exc, "signum", signal.SIGINT)
         name = signal.Signals(signum).name
@@ -203,6 +212,10 @@ def _cmd_run(args) -> int:
                      128 + signum)
     except NonFiniteStateError as exc:
         return _fail(f"{exc}; run.json (status failed) is in {out}", 1)
+    except OSError as exc:  # full disk, read-only folder, file too large, ...
+        log.debug("I/O error", exc_info=True)
+        return _fail(f"{os_error_line(exc, out)}; frames written so far stay (run.json says "
+                     "failed when it could be written; --resume continues)", 1)
     finally:
         if bar is not None:
             bar.close()
@@ -270,6 +283,11 @@ def main(argv: list[str] | None = None) -> int:
     except BrokenPipeError:  # the reader went away (`clothsim scenes | head`): stop quietly
         sys.stdout = open(os.devnull, "w")  # noqa: SIM115 - no flush error at exit
         return 141
+    except OSError as exc:  # a path and its cause, not "OSError: [Errno 28] ..."
+        log.debug("I/O error", exc_info=True)
+        return _fail(os_error_line(exc), 1)
+    except MemoryError:
+        return _fail("out of memory", 1)
     except Exception as exc:  # one line, no traceback; -vv logs it in full
         log.debug("unhandled error", exc_info=True)
         return _fail(f"{type(exc).__name__}: {exc}", 1)

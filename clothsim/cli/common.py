@@ -42,3 +42,55 @@ def add_set_option(parser) -> None:
                         help="change a scene key, e.g. springs.structural=50, "
                         "solver.iterations=20, effects[1].strength=2 (a TOML value; "
                         "repeatable; validated like the file)")
+
+
+def count(low: int, high: int):
+    """An argparse ``type``: an integer flag within ``[low, high]`` (the scene schema's limits).
+
+    Parameters
+    ----------
+    low, high : int
+        Inclusive bounds.
+
+    Returns
+    -------
+    callable
+        ``str -> int``; raises :class:`argparse.ArgumentTypeError` with ``must be an integer
+        between low and high, got …`` (argparse names the flag).
+    """
+    from ..scene.schema import sci
+
+    def parse(text: str) -> int:
+        try:
+            value = int(text)
+        except ValueError:
+            value = None
+        if value is None or not low <= value <= high:
+            raise argparse.ArgumentTypeError(
+                f"must be an integer between {low} and {sci(high)}, got {text[:40]!r}")
+        return value
+
+    parse.__name__ = "count"
+    return parse
+
+
+def os_error_line(exc: OSError, where=None) -> str:
+    """One line for an I/O error: the path and the cause, no Python type name.
+
+    Parameters
+    ----------
+    exc : OSError
+    where : path, optional
+        The folder or file the command was writing (named first, e.g. the run folder).
+
+    Returns
+    -------
+    str
+        E.g. ``"out/run: cannot write: No space left on device (out/run/frame_000003.vtu)"``.
+    """
+    cause = exc.strerror or " ".join(str(exc).split()) or type(exc).__name__
+    name = exc.filename if exc.filename is not None else None
+    if where is None:
+        return f"{name}: {cause}" if name is not None else cause
+    detail = f" ({name})" if name is not None and str(name) != str(where) else ""
+    return f"{where}: {cause}{detail}"

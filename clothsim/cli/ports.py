@@ -3,9 +3,11 @@
 
 from __future__ import annotations
 
+import math
 from pathlib import Path
 
-from .common import _fail, add_set_option
+from ..scene.schema import MAX_FRAMES, MAX_VERTICES
+from .common import _fail, add_set_option, count
 
 
 def _add_port_commands(sub) -> None:
@@ -16,11 +18,13 @@ def _add_port_commands(sub) -> None:
     exp.add_argument("scene", metavar="SCENE", help="scene file or built-in name")
     exp.add_argument("--out", metavar="DIR", default=None,
                      help="output directory (default: out/<scene-name>/export)")
-    exp.add_argument("--frames", type=int, metavar="N", default=None,
+    exp.add_argument("--frames", type=count(0, MAX_FRAMES), metavar="N", default=None,
                      help="steps of the reference trajectory (default: the scene's)")
     add_set_option(exp)
-    exp.add_argument("--iterate-steps", type=int, metavar="K", default=3,
+    exp.add_argument("--iterate-steps", type=count(0, MAX_FRAMES), metavar="K", default=3,
                      help="steps whose local/global iterates are written (3)")
+    exp.add_argument("--force", action="store_true",
+                     help="write into DIR even when it is not an export folder of clothsim")
 
     cmp_ = sub.add_parser("compare", help="compare a trajectory with a reference: per-vertex "
                           "distance per frame, relative to the cloth size")
@@ -35,7 +39,7 @@ def _add_port_commands(sub) -> None:
                       help="format of TRAJECTORY when its name does not say")
     cmp_.add_argument("--dtype", default=None, choices=("float32", "float64"),
                       help="raw files: element type")
-    cmp_.add_argument("--vertices", type=int, default=None, metavar="N",
+    cmp_.add_argument("--vertices", type=count(1, MAX_VERTICES), default=None, metavar="N",
                       help="raw files: vertex count n")
     cmp_.add_argument("--precision", default="float64", choices=("float64", "float32"),
                       help="float32: tolerance from κ(M + h²L) ε32 |x| (needs --scene, "
@@ -45,7 +49,7 @@ def _add_port_commands(sub) -> None:
     cmp_.add_argument("--rtol", type=float, default=None,
                       help="tolerance relative to the cloth size (1e-9)")
     cmp_.add_argument("--atol", type=float, default=None, help="absolute tolerance [m]")
-    cmp_.add_argument("--frames", type=int, default=None, metavar="N",
+    cmp_.add_argument("--frames", type=count(1, MAX_FRAMES), default=None, metavar="N",
                       help="compare only the first N frames")
     cmp_.add_argument("--match-vertices", action="store_true",
                       help="pair vertices by their initial positions (other vertex order)")
@@ -68,7 +72,8 @@ def _add_port_commands(sub) -> None:
     add_set_option(chk)
     chk.add_argument("--tolerance", type=float, default=None,
                      help="allowed per-vertex distance [m] (default from --precision)")
-    chk.add_argument("--steps", type=int, default=None, help="check only the first N steps")
+    chk.add_argument("--steps", type=count(0, MAX_FRAMES), default=None,
+                     help="check only the first N steps")
     chk.add_argument("--optimality", type=float, default=1e-6,
                      help="largest relative gradient |grad g(x)| / |grad g(x0)| of a port's "
                      "answer counted as a minimizer (1e-6)")
@@ -92,9 +97,23 @@ def _add_port_commands(sub) -> None:
 def _positive(args, names) -> str | None:
     for name in names:
         value = getattr(args, name)
-        if value is not None and not value >= 0:
-            return f"--{name.replace('_', '-')}: must be a non-negative number, got {value}"
+        if value is not None and not (value >= 0 and math.isfinite(value)):
+            return (f"--{name.replace('_', '-')}: must be a finite non-negative number, "
+                    f"got {value}")
     return None
+
+
+MODEL_FILES = ("vertices.txt", "x0.txt", "springs.txt", "pins.txt", "masses.txt")
+
+
+def _refuse_special(*paths) -> None:
+    """A FIFO, device or socket among the inputs (or directly in an input folder) is
+    refused at once: reading it would block."""
+    from ..io.common import refuse_special
+
+    for p in paths:
+        if p is not None:
+            refuse_special(p, inside=True)
 
 
 def _cmd_export(args) -> int:
@@ -104,10 +123,13 @@ def _cmd_export(args) -> int:
     bad = _positive(args, ("frames", "iterate_steps"))
     if bad:
         return _fail(bad, 2)
+    if args.out == "":
+        return _fail("--out: empty; name a folder", 2)
     scene = load_scene(args.scene, args.set)
-    out = Path(args.out) if args.out else Path("out") / scene.name / "export"
+    out = Path(args.out) if args.out is not None else Path("out") / scene.name / "export"
     frames = scene.frames if args.frames is None else args.frames
-    manifest = export_port(scene, out, frames=frames, iterate_steps=args.iterate_steps)
+    manifest = export_port(scene, out, frames=frames, iterate_steps=args.iterate_steps,
+                           force=args.force)
     print(f"{scene.name}: {len(manifest['files'])} files for n = {manifest['vertex_count']}, "
           f"s = {manifest['spring_count']}, h = {manifest['h']:.6g} s, {frames} frames, "
           f"κ(M + h²L) = {manifest['condition_number']:.4g} written to {out}")
@@ -120,6 +142,7 @@ def _cmd_compare(args) -> int:
     bad = _positive(args, ("rtol", "atol", "kappa"))
     if bad:
         return _fail(bad, 2)
+    _refuse_special(args.trajectory, args.reference, args.scene)
     if Path(args.trajectory).suffix == ".mtx":
         from ..ports.matrices import compare_matrices
 
@@ -158,6 +181,7 @@ def _cmd_check(args) -> int:
     bad = _positive(args, ("tolerance", "steps", "optimality"))
     if bad:
         return _fail(bad, 2)
+    _refuse_special(args.scene, args.port)
     scene = load_scene(args.scene, args.set)
     x = read_trajectory(args.port)
     v = read_velocities(args.port)
@@ -173,9 +197,23 @@ def _cmd_check(args) -> int:
 
 
 def _cmd_diff_model(args) -> int:
+    from ..errors import InputError
     from ..ports.diff import diff_models
+    from ..ports.formats import check_number_table
 
-    result = diff_models(args.a, args.b)
+    _refuse_special(args.a, args.b)
+    for folder in (Path(args.a), Path(args.b)):
+        if folder.is_dir():  # a port's model files: numbers, or one line naming the line
+            for name in MODEL_FILES:
+                if (folder / name).is_file():
+                    check_number_table(folder / name)
+    try:
+        result = diff_models(args.a, args.b)
+    except InputError:
+        raise
+    except (ValueError, IndexError, KeyError, TypeError, MemoryError) as exc:
+        kind = "too large" if isinstance(exc, MemoryError) else "shapes or values do not fit"
+        return _fail(f"{args.a} / {args.b}: cannot read the model files ({kind})", 2)
     print(result.report())
     return 0 if result.identical else 1
 

@@ -4,9 +4,67 @@ quiet, one-line messages, and atomic writes (temporary file, then :func:`os.repl
 from __future__ import annotations
 
 import os
+import stat
 from contextlib import contextmanager, redirect_stderr, redirect_stdout
 from io import StringIO
 from pathlib import Path
+
+_SPECIAL = ((stat.S_ISFIFO, "a FIFO (named pipe)"), (stat.S_ISCHR, "a character device"),
+            (stat.S_ISBLK, "a block device"), (stat.S_ISSOCK, "a socket"))
+
+
+def special_file(path) -> str | None:
+    """What kind of special file ``path`` is, without opening it (opening a FIFO blocks).
+
+    Parameters
+    ----------
+    path : str or path-like
+
+    Returns
+    -------
+    str or None
+        E.g. ``"a FIFO (named pipe)"``; None for a regular file, a folder, or a path that
+        does not exist or cannot be examined.
+    """
+    try:
+        mode = os.stat(path).st_mode
+    except (OSError, ValueError):
+        return None
+    return next((what for test, what in _SPECIAL if test(mode)), None)
+
+
+def refuse_special(path, *, inside: bool = False) -> None:
+    """Raise when ``path`` (or, with ``inside``, an entry of the folder ``path``) is a
+    FIFO, device or socket: clothsim reads only regular files and folders, and would wait
+    forever on a FIFO.
+
+    Parameters
+    ----------
+    path : str or path-like
+    inside : bool
+        Also examine the entries of ``path`` when it is a folder (not recursively).
+
+    Returns
+    -------
+    None
+
+    Raises
+    ------
+    InputError
+        Naming the file and its kind, in one line.
+    """
+    from ..errors import InputError
+
+    what = special_file(path)
+    if what:
+        raise InputError(f"{path}: is {what}, not a regular file; give a file or a folder")
+    if inside and os.path.isdir(path):
+        try:
+            entries = sorted(os.scandir(path), key=lambda e: e.name)
+        except OSError as exc:
+            raise InputError(f"{path}: cannot list the folder ({exc.strerror})") from None
+        for entry in entries:
+            refuse_special(entry.path)
 
 
 def load_meshio():

@@ -1,20 +1,17 @@
-"""The files of a run besides its frames: ``run.json``, ``trajectory.npz``, the folder lock.
+"""The files of a run besides its frames: ``run.json`` and ``trajectory.npz``.
 
 :class:`TrajectoryStore` appends positions and velocities frame by frame to two raw float64
 files (a run never holds its trajectory in memory) and assembles ``trajectory.npz`` from
-them in chunks. :class:`FolderLock` is an exclusive :func:`fcntl.flock` on
-``<folder>/.clothsim.lock`` for the whole run; a second writer gets an
-:class:`~clothsim.errors.InputError` naming the folder and the holder's process id.
+them in chunks. The folder lock (:class:`FolderLock`) and the ownership checks are in
+:mod:`clothsim.io.folders`.
 :func:`write_json` writes ``run.json`` atomically (strict JSON: non-finite floats become
 strings); :func:`read_json` reads it.
 """
 
 from __future__ import annotations
 
-import fcntl
 import json
 import math
-import os
 import platform
 import time as _time
 import zipfile
@@ -25,8 +22,8 @@ import numpy as np
 
 from ..errors import InputError
 from .common import atomic_path
+from .folders import LOCK_NAME, FolderLock  # noqa: F401 - re-exported (their old home)
 
-LOCK_NAME = ".clothsim.lock"
 _CHUNK = 1 << 18  # bytes copied at a time when assembling trajectory.npz (256 kB)
 
 
@@ -340,60 +337,6 @@ class RunRecord:
         if self.done >= 0:
             self.save_npz(store, model, fps, force=True)
         self.write(status, error)
-
-
-class FolderLock:
-    """Exclusive lock on a run folder, held from :meth:`acquire` to :meth:`release`.
-
-    Parameters
-    ----------
-    folder : Path
-        The run folder (exists).
-
-    Raises
-    ------
-    InputError
-        From :meth:`acquire`, when another process holds the lock: names the folder and
-        that process's id.
-    """
-
-    def __init__(self, folder):
-        self.path = Path(folder) / LOCK_NAME
-        self._fd: int | None = None
-
-    def acquire(self) -> FolderLock:
-        """Take the lock (without waiting) and write this process's id into the lock file.
-
-        Returns
-        -------
-        FolderLock
-            ``self``.
-        """
-        fd = os.open(self.path, os.O_RDWR | os.O_CREAT, 0o644)
-        try:
-            fcntl.flock(fd, fcntl.LOCK_EX | fcntl.LOCK_NB)
-        except OSError:
-            holder = os.pread(fd, 64, 0).decode("ascii", "replace").strip() or "unknown"
-            os.close(fd)
-            raise InputError(f"{self.path.parent}: another clothsim run (pid {holder}) is "
-                             "writing into this folder; wait for it or choose another "
-                             "--out") from None
-        os.ftruncate(fd, 0)
-        os.pwrite(fd, f"{os.getpid()}\n".encode("ascii"), 0)
-        self._fd = fd
-        return self
-
-    def release(self) -> None:
-        """Release the lock (no-op when not held); the lock file stays."""
-        if self._fd is not None:
-            os.close(self._fd)  # closing the descriptor releases the flock
-            self._fd = None
-
-    def __enter__(self) -> FolderLock:
-        return self.acquire()
-
-    def __exit__(self, *exc) -> None:
-        self.release()
 
 
 __all__ = ["TrajectoryStore", "FolderLock", "RunRecord", "write_json", "read_json",

@@ -27,6 +27,7 @@ import scipy.sparse as sp
 
 from .. import matrices
 from ..errors import InputError
+from .plots import plot_deviation  # noqa: F401 - its home before clothsim.ports.plots
 
 EPS32 = float(np.finfo(np.float32).eps)
 RTOL64 = 1e-9
@@ -69,6 +70,8 @@ class Comparison:
     worst_vertex: int
     max_abs_error: float
     notes: list[str] = field(default_factory=list)
+    frame_counts: tuple[int, int] | None = None
+    """(trajectory, reference) frame counts when they differ: the verdict is FAIL."""
 
     def table(self) -> str:
         """The per-frame table: max and RMS error, absolute and relative to the size.
@@ -99,7 +102,12 @@ class Comparison:
         head = (f"{'PASS' if self.passed else 'FAIL'}: {self.field}, {self.frames} frames, "
                 f"max error {worst:.3e} {u} ({worst / self.size:.2e} of the {what} "
                 f"{self.size:.3g} {u})")
-        if self.passed:
+        if self.frame_counts is not None:
+            got, want = self.frame_counts
+            head = (f"FAIL: the trajectory has {got} frames, the reference has {want} "
+                    f"(--frames N compares only the first N); in the {self.frames} common "
+                    f"frames: " + head.split(": ", 1)[1])
+        if self.passed or self.first_frame is None:
             return head
         f, v = self.first_frame, self.first_vertex
         return (f"{head}; first failing frame {f} vertex {v}: error "
@@ -339,53 +347,22 @@ def compare_trajectories(path, reference, *, key: str = "positions", frames: int
     if kappa is None and manifest.is_file():
         kappa = json.loads(manifest.read_text()).get("condition_number")
     notes = []
-    if frames is not None:
+    counts = None
+    if frames is not None:  # on request: only the first `frames` frames
         if frames < 1 or frames > min(len(a), len(b)):
             raise InputError(f"frames: must be between 1 and {min(len(a), len(b))}, got {frames}")
         a, b = a[:frames], b[:frames]
-    elif len(a) != len(b):
+    elif len(a) != len(b):  # a verdict is about the whole input: a short run fails
+        counts = (len(a), len(b))
         n = min(len(a), len(b))
-        notes.append(f"compared the first {n} frames ({path} has {len(a)}, {reference} has "
-                     f"{len(b)})")
+        notes.append(f"{path} has {len(a)} frames, {reference} has {len(b)}: FAIL (compared "
+                     f"the first {n} only to report the error there)")
         a, b = a[:n], b[:n]
     if key == "velocities" and options.get("precision") == "float32":
         raise InputError("precision: the float32 bound is for positions; compare velocities "
                          "with --rtol/--atol")
     result = compare_arrays(a, b, kappa=kappa, field=key, match=match, **options)
     result.notes = notes
+    if counts is not None:
+        result.frame_counts, result.passed = counts, False
     return result
-
-
-def plot_deviation(comparison: Comparison, path) -> None:
-    """Write the max and RMS error per frame, with the tolerance, as an image (log scale).
-
-    Parameters
-    ----------
-    comparison : Comparison
-    path : path
-        Image file (``.png``, ``.svg``, … by matplotlib).
-
-    Returns
-    -------
-    None
-        The figure is written to ``path``.
-    """
-    from matplotlib.figure import Figure  # no pyplot: the user's backend is left alone
-
-    f = np.arange(comparison.frames)
-    fig = Figure(figsize=(6, 3.5))
-    ax = fig.add_subplot()
-
-    def positive(e):  # exact zeros (frame 0) are left out of the log scale
-        return np.where(e > 0, e, np.nan)
-
-    ax.semilogy(f, positive(comparison.max_error), ".-", label="max error")
-    ax.semilogy(f, positive(comparison.rms_error), ".-", label="RMS error")
-    ax.semilogy(f, comparison.tolerance, "k--", label="tolerance")
-    if comparison.first_frame is not None:
-        ax.axvline(comparison.first_frame, color="r", lw=0.8, label="first failure")
-    ax.set_xlabel("frame")
-    ax.set_ylabel(f"{comparison.field} error [m]")
-    ax.legend(fontsize=8)
-    fig.tight_layout()
-    fig.savefig(path, dpi=100)

@@ -189,11 +189,10 @@ def write_conformance(out_dir, *, frames: int = 20, iterate_steps: int = 2,
     for name in names:
         doc = CASES[name]
         d = out / name
-        d.mkdir(exist_ok=True)
-        (d / "scene.toml").write_text(to_toml(doc))
         scene = Scene.from_dict(doc, source=str(d / "scene.toml"), base_dir=d)
         export_port(lambda n=name, s=scene: case_simulation(n, s), d, frames=frames,
-                    iterate_steps=iterate_steps)
+                    iterate_steps=iterate_steps)  # an export folder: then the scene beside it
+        (d / "scene.toml").write_text(to_toml(doc))
         if name == "springs-stretch":
             np.savetxt(d / "initial-state.txt", np.load(d / "trajectory.npz")["positions"][0],
                        fmt="%.17g")

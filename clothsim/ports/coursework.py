@@ -30,6 +30,7 @@ from pathlib import Path
 import numpy as np
 
 from ..io.assignment import scene_dict
+from ..io.folders import claim_folder
 from ..scene import Scene
 from .conformance import to_toml
 from .export import export_port
@@ -133,7 +134,7 @@ def write_coursework(out_dir, *, frames: int = 30, cases=None) -> list[str]:
     lines = []
     for name in names:
         (x, faces), spec, description = table[name]
-        d = out / name
+        d = claim_folder(out / name, "export")   # new, empty, or an earlier case's export
         d.mkdir(exist_ok=True)
         _write_obj(d / "case.obj", x, faces)
         doc = {"obj": "case.obj", **spec, "b": [v + 1 for v in spec["b"]]}
@@ -143,7 +144,7 @@ def write_coursework(out_dir, *, frames: int = 30, cases=None) -> list[str]:
         scene_doc["cloth"]["file"] = "case.json"
         (d / "scene.toml").write_text(to_toml(scene_doc))
         scene = Scene.from_dict(scene_doc, source=str(d / "scene.toml"), base_dir=d)
-        export_port(scene, d, frames=frames, iterate_steps=0)
+        export_port(scene, d, frames=frames, iterate_steps=0, force=True)  # beside case.*
         lines.append(f"- `{name}`: {description}")
     (out / "README.md").write_text(README + "\n".join(lines) + "\n")
     return names

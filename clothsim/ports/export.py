@@ -217,7 +217,8 @@ def record_iterates(sim, steps: int) -> list[dict]:
     return out
 
 
-def export_port(source, out_dir, *, frames: int = 60, iterate_steps: int = 3) -> dict:
+def export_port(source, out_dir, *, frames: int = 60, iterate_steps: int = 3,
+                force: bool = False) -> dict:
     """Write matrices, model, settings, reference trajectory and iterates to ``out_dir``.
 
     Parameters
@@ -229,15 +230,35 @@ def export_port(source, out_dir, *, frames: int = 60, iterate_steps: int = 3) ->
         Steps of the reference trajectory (frames 0 … frames are written).
     iterate_steps : int, default 3
         Steps whose local/global iterates are written.
+    force : bool
+        Write into a folder clothsim does not own; without it only a missing or empty folder
+        or an earlier export is written into (:func:`clothsim.io.folders.claim_folder`).
 
     Returns
     -------
     dict
         The manifest (also ``manifest.json``).
+
+    Raises
+    ------
+    InputError
+        The folder is not clothsim's export folder (and not ``force``), or another clothsim
+        process (a run, an export) holds its lock.
     """
+    from ..io.folders import FolderLock, claim_folder
+
     sim = as_simulation(source)
+    out = claim_folder(out_dir, "export", force=force)
+    out.mkdir(parents=True, exist_ok=True)
+    with FolderLock(out):
+        claim_folder(out, "export", force=force)
+        # the folder is an export folder before any other file is written
+        (out / "manifest.json").write_text(json.dumps({"layout": LAYOUT, "status": "writing"}))
+        return _export_locked(source, sim, out, frames, iterate_steps)
+
+
+def _export_locked(source, sim, out: Path, frames: int, iterate_steps: int) -> dict:
     model, h = sim.model, sim.h
-    out = Path(out_dir)
     (out / "iterates").mkdir(parents=True, exist_ok=True)
     p = sim.problem(sim.state)
     kappa = system_condition_number(sim)  # of the first step's system, pins included

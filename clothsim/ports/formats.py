@@ -25,12 +25,14 @@ a folder of per-frame text files
 from __future__ import annotations
 
 import re
+import zipfile
 from pathlib import Path
 
 import numpy as np
 
 from .. import io
 from ..errors import InputError
+from ..io.common import refuse_special
 
 TEXT_SUFFIXES = (".txt", ".csv", ".dat")
 RAW_SUFFIXES = (".bin", ".raw", ".f64", ".f32")
@@ -38,7 +40,12 @@ FORMATS = ("npz", "npy", "text", "frames", "raw", "pvd")
 
 
 def _as_frames(a: np.ndarray, source: str, vertex_count: int | None = None) -> np.ndarray:
-    a = np.asarray(a, dtype=np.float64)
+    a = np.asarray(a)
+    if a.dtype.kind not in "iuf":
+        raise InputError(f"{source}: holds {a.dtype} values, not real numbers")
+    a = a.astype(np.float64, copy=False)
+    if a.size == 0:
+        raise InputError(f"{source}: holds no numbers (shape {a.shape})")
     if a.ndim == 3 and a.shape[2] == 3:
         out = a
     elif a.ndim == 2 and a.shape[1] % 3 == 0 and not (a.shape[1] == 3 and vertex_count is None
@@ -57,21 +64,55 @@ def _as_frames(a: np.ndarray, source: str, vertex_count: int | None = None) -> n
 
 
 def _read_text(path: Path) -> np.ndarray:
-    text = path.read_text()
-    rows = []
-    for line in text.splitlines():
+    refuse_special(path)
+    try:
+        text = path.read_bytes().decode("utf-8")
+    except UnicodeDecodeError as exc:
+        raise InputError(f"{path}: not a text file: byte {exc.start} is not UTF-8") from None
+    rows, numbers = [], []
+    for n, line in enumerate(text.splitlines(), start=1):
         line = line.split("#", 1)[0].strip()
         if line:
-            rows.append(line.replace(",", " ").split())
+            rows.append((n, line.replace(",", " ").split()))
     if not rows:
         raise InputError(f"{path}: no numbers")
-    widths = {len(r) for r in rows}
-    if len(widths) != 1:
-        raise InputError(f"{path}: lines hold different counts of numbers ({sorted(widths)})")
+    width = len(rows[0][1])
+    for n, tokens in rows:
+        if len(tokens) != width:
+            raise InputError(f"{path}: line {n}: {len(tokens)} numbers where line "
+                             f"{rows[0][0]} has {width} (lines hold different counts)")
+        try:
+            numbers.append([float(t) for t in tokens])
+        except ValueError:
+            bad = next(t for t in tokens if not _is_number(t))
+            raise InputError(f"{path}: line {n}: not a number: {bad[:40]!r}") from None
+    return np.array(numbers, dtype=np.float64)
+
+
+def _is_number(token: str) -> bool:
     try:
-        return np.array(rows, dtype=np.float64)
-    except ValueError as exc:
-        raise InputError(f"{path}: not numbers ({exc})") from None
+        float(token)
+    except ValueError:
+        return False
+    return True
+
+
+def _why(exc: BaseException) -> str:
+    """What went wrong reading a file, in words (never the file's content)."""
+    text = str(exc)
+    if isinstance(exc, EOFError):
+        return "the file ends early"
+    if isinstance(exc, MemoryError):
+        return "too large to read into memory"
+    if isinstance(exc, UnicodeDecodeError):
+        return f"byte {exc.start} is not text"
+    if isinstance(exc, OSError):
+        return exc.strerror or "cannot be read"
+    if isinstance(exc, zipfile.BadZipFile):
+        return "not a valid .npz (zip) archive"
+    if "pickle" in text:
+        return "holds pickled Python objects, not an array of numbers"
+    return f"not a valid file of this format ({type(exc).__name__})"
 
 
 def _frame_number(p: Path) -> tuple[int, str]:
@@ -100,10 +141,28 @@ def read_trajectory(path, *, key: str = "positions", fmt: str | None = None,
     Returns
     -------
     ndarray, shape (frames, n, 3), float64
+
+    Raises
+    ------
+    InputError
+        One line naming the file (and the line of a text file) for anything it cannot
+        read: a missing or special file, a malformed, truncated or pickled one, a wrong
+        shape.
     """
+    try:
+        return _read_trajectory(path, key, fmt, dtype, vertex_count)
+    except InputError:
+        raise
+    except (ValueError, TypeError, IndexError, KeyError, EOFError, OSError, MemoryError,
+            zipfile.BadZipFile, RecursionError) as exc:
+        raise InputError(f"{path}: cannot read: {_why(exc)}") from None
+
+
+def _read_trajectory(path, key, fmt, dtype, vertex_count) -> np.ndarray:
     p = Path(path)
     if not p.exists():
         raise InputError(f"{path}: file not found")
+    refuse_special(p, inside=True)  # a FIFO would block the read forever
     if p.is_dir() and fmt in (None, "frames"):
         name = "velocities" if key == "velocities" else "positions"
         for cand in (p / f"{name}.txt", p / "trajectory.npz", p / "trajectory.pvd"):
@@ -113,7 +172,11 @@ def read_trajectory(path, *, key: str = "positions", fmt: str | None = None,
         if not files:
             raise InputError(f"{path}: no positions.txt, trajectory.npz, trajectory.pvd or "
                              f"per-frame text files in this folder")
-        return _as_frames(np.stack([_read_text(f) for f in files]), str(p), vertex_count)
+        frames = [_read_text(f) for f in files]
+        if len({f.shape for f in frames}) != 1:
+            raise InputError(f"{path}: the per-frame files hold different numbers of "
+                             f"vertices ({files[0].name}: {len(frames[0])} lines)")
+        return _as_frames(np.stack(frames), str(p), vertex_count)
     suffix = p.suffix.lower()
     if fmt is None:
         fmt = {".npz": "npz", ".npy": "npy", ".pvd": "pvd"}.get(suffix)
@@ -123,29 +186,58 @@ def read_trajectory(path, *, key: str = "positions", fmt: str | None = None,
         raise InputError(f"{path}: unknown trajectory format (use --format one of "
                          f"{', '.join(FORMATS)})")
     if fmt == "npz":
-        with np.load(p) as data:
+        with np.load(p, allow_pickle=False) as data:
             if key not in data:
                 raise InputError(f"{p}: has no array {key!r} (has {', '.join(data.files)}); "
                                  f"choose one with --key")
             return _as_frames(data[key], str(p), vertex_count)
     if fmt == "npy":
-        return _as_frames(np.load(p), str(p), vertex_count)
+        a = np.load(p, allow_pickle=False)
+        if not isinstance(a, np.ndarray):
+            raise InputError(f"{p}: an .npz archive, not an .npy array (use --format npz)")
+        return _as_frames(a, str(p), vertex_count)
     if fmt == "text":
         a = _read_text(p)
         return _as_frames(a if a.shape[1] != 3 else a[None], str(p), vertex_count)
     if fmt == "pvd":
         which = 1 if key == "velocities" else 0
-        return np.stack([io.read_frame(f)[which] for _, f in io.read_pvd(p)])
+        frames = [io.read_frame(f)[which] for _, f in io.read_pvd(p)]
+        if not frames or len({f.shape for f in frames}) != 1:
+            raise InputError(f"{p}: no frames, or frames with different vertex counts")
+        return _as_frames(np.stack(frames), str(p), vertex_count)
     dtype = dtype or {".f32": "float32", ".f64": "float64"}.get(suffix)
     if dtype not in ("float32", "float64"):
         raise InputError(f"{path}: a raw file needs --dtype float32 or float64")
     if not vertex_count:
         raise InputError(f"{path}: a raw file needs --vertices N (the frame count follows)")
+    frame_bytes = 3 * vertex_count * np.dtype(dtype).itemsize
+    size = p.stat().st_size
+    if size == 0 or size % frame_bytes:
+        raise InputError(f"{path}: {size} bytes is not a whole number of frames of "
+                         f"{vertex_count} vertices of {dtype} (at least one)")
     raw = np.fromfile(p, dtype=np.dtype(dtype).newbyteorder("<"))
-    if raw.size % (3 * vertex_count):
-        raise InputError(f"{path}: {raw.size} numbers is not a whole number of frames of "
-                         f"{vertex_count} vertices")
     return raw.astype(np.float64).reshape(-1, vertex_count, 3)
+
+
+def check_number_table(path) -> None:
+    """Check that a text file is a table of numbers (``#`` comments allowed), as a port's
+    model files are, so a reader that trusts it cannot fail with Python text.
+
+    Parameters
+    ----------
+    path : str or Path
+        The text file.
+
+    Returns
+    -------
+    None
+
+    Raises
+    ------
+    InputError
+        One line naming the file and the first bad line.
+    """
+    _read_text(Path(path))
 
 
 def write_trajectory(path, frames, *, key: str = "positions", fmt: str | None = None,
@@ -224,9 +316,12 @@ def read_velocities(path, **options) -> np.ndarray | None:
                                                 "trajectory.pvd")):
             return None
     elif p.suffix.lower() == ".npz":
-        with np.load(p) as data:
-            if "velocities" not in data:
-                return None
+        try:
+            with np.load(p, allow_pickle=False) as data:
+                if "velocities" not in data:
+                    return None
+        except (ValueError, OSError, EOFError, zipfile.BadZipFile, MemoryError) as exc:
+            raise InputError(f"{p}: cannot read: {_why(exc)}") from None
     elif p.suffix.lower() != ".pvd":
         return None
     return read_trajectory(p, key="velocities", **options)

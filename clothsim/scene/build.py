@@ -19,6 +19,7 @@ from ..errors import InputError, SceneError
 from ..io.assignment import read_assignment, read_pins
 from ..io.meshes import load_mesh
 from ..mesh import Mesh, grid
+from ..mesh_checks import check_mesh
 from ..model import Model
 from ..polygon import polygon
 from ..simulation import Simulation
@@ -26,6 +27,7 @@ from ..springs import FAMILIES, Springs, grid_springs, mesh_springs, springs_fro
 from .checks import Invalid, integer, locate
 from .effects import constructor_params
 from .pins import declared_pins
+from .scale import lost_mass, overflow_problem, scene_key
 from .schema import MAX_SUBSTEPS
 from .tables import read_index_list, read_spring_table, read_triangles, read_values, read_vertices
 from .validate import validate, validate_solver
@@ -142,7 +144,14 @@ class Scene:
         x = read_vertices(c["vertices"], "cloth.vertices")
         tris = (read_triangles(c["triangles"], "cloth.triangles", c["index_base"], len(x))
                 if "triangles" in c else np.zeros((0, 3), np.int64))
-        return Mesh(x, tris)
+        mesh = Mesh(x, tris)
+        scale = float(np.abs(x).max()) if x.size else 0.0
+        try:  # a mesh file's checks (errors only), on the cloth scaled to 1 (no overflow)
+            check_mesh(Mesh(x / scale, tris) if scale > 0 else mesh, field="cloth.triangles",
+                       warn=False)
+        except InputError as exc:
+            raise Invalid("cloth.triangles", str(exc).split(": ", 1)[1]) from None
+        return mesh
 
     def _spring_table(self, vertex_count: int):
         sp = self.data["springs"]
@@ -311,6 +320,8 @@ class Scene:
             h = 1.0 / (self.fps * substeps)
         model = self.build_model() if model is None else model
         self._check_stiffness(model, h)
+        if (problem := overflow_problem(model, h)) is not None:  # no silent freeze
+            raise self._error(scene_key(problem[0], self.data), problem[1])
         effects = self.build_effects(model)
         try:
             sim = Simulation(model, h=h, effects=effects, solver=solver["method"],
@@ -334,17 +345,11 @@ class Scene:
         factorization fails or its answer is noise. The key of the stiffest spring at the
         worst vertex is named.
         """
-        sv, k = model.springs.spring_vertices, model.springs.spring_stiffness
-        if not len(k):
+        found = lost_mass(model, h)
+        if found is None:
             return
-        n, m = model.vertex_count, model.vertex_mass
-        diag = np.bincount(sv[:, 0], k, n) + np.bincount(sv[:, 1], k, n)
-        ratio = np.divide((h * h) * diag, m, out=np.zeros(n), where=m > 0)  # m = 0: pinned
-        v = int(np.argmax(ratio))
-        if ratio[v] * EPS < 1.0:
-            return
-        at = np.flatnonzero((sv[:, 0] == v) | (sv[:, 1] == v))
-        i = int(at[np.argmax(k[at])])
+        v, i, ratio = found
+        n, m, k = model.vertex_count, model.vertex_mass, model.springs.spring_stiffness
         shape = self.data["cloth"]["shape"]
         generated = model.spring_count - (len(self._spring_table(n).pairs)
                                           if "table" in self.data["springs"] else 0)
@@ -352,7 +357,7 @@ class Scene:
                else f"springs.{FAMILIES[model.springs.spring_family[i]]}")
         raise self._error(key, f"stiffness {float(k[i]):.3g} N/m is too large for h = {h:.3g} s "
                                f"and vertex {v}'s mass {float(m[v]):.3g} kg: h²L_ii/m_i = "
-                               f"{float(ratio[v]):.3g} is beyond 1/ε = {1 / EPS:.3g}, so the "
+                               f"{ratio:.3g} is beyond 1/ε = {1 / EPS:.3g}, so the "
                                f"mass is lost in M + h²L, which cannot be factored in float64")
 
     def _locate(self, exc: InputError, model, h: float) -> SceneError:

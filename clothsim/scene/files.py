@@ -66,6 +66,19 @@ def _data_candidates(rel: str) -> list[Path]:
     return out
 
 
+def _inside_data_root(p: Path, root: Path) -> bool:
+    """``p`` (links followed) lies inside the data root (or, when the root is the old
+    ``jacobson-a8`` folder itself, inside its parent)."""
+    try:
+        real = p.resolve()
+        roots = [root.resolve()]
+        if root.name == ASSIGNMENT_FOLDER:
+            roots.append(root.parent.resolve())
+    except (OSError, RuntimeError):
+        return False
+    return any(real == r or real.is_relative_to(r) for r in roots)
+
+
 def resolve_path(value: str, base_dir: Path, path: str) -> Path:
     """An existing file named in a scene: ``data:...``, absolute, or relative to the scene.
 
@@ -98,6 +111,9 @@ def resolve_path(value: str, base_dir: Path, path: str) -> Path:
                                 f"folder holding the shared data (jacobson-a8, liu13-port)")
         candidates = _data_candidates(rel)
         p = next((c for c in candidates if c.exists()), candidates[0])
+        if not _inside_data_root(p, root):
+            raise Invalid(path, f"a data: path must stay inside the data root {root}, got "
+                                f"{shorten(value)}")
     else:
         p = Path(value).expanduser()
         p = p if p.is_absolute() else base_dir / p

@@ -21,7 +21,8 @@ from pathlib import Path
 
 import numpy as np
 
-from .checks import Invalid, shorten
+from .checks import Invalid
+from .effects import MAX_LENGTH
 
 
 def _rows(path, key: str) -> list[tuple[int, list[float]]]:
@@ -40,16 +41,21 @@ def _rows(path, key: str) -> list[tuple[int, list[float]]]:
             values = [float(w) for w in words]
         except ValueError:
             bad = next(w for w in words if not _is_float(w))
-            raise Invalid(key, f"line {i} of {p.name}: not a number: "
-                               f"{shorten(repr(bad))}") from None
+            raise Invalid(key, f"line {i} of {p.name}: not a number: {_token(bad)}") from None
         for w, v in zip(words, values):
             if not np.isfinite(v):
                 raise Invalid(key, f"line {i} of {p.name}: must be a finite number, got "
-                                   f"{shorten(w)}")
+                                   f"{w if len(w) <= 24 else _token(w)}")
         out.append((i, values))
     if not out:
         raise Invalid(key, f"{p.name} holds no numbers")
     return out
+
+
+def _token(w: str) -> str:
+    """The offending word for a message: short printable words as they are, others by
+    length only (a file that is no table, e.g. ``/proc/self/environ``, is not echoed)."""
+    return repr(w) if len(w) <= 24 and w.isprintable() else f"a {len(w)}-character word"
 
 
 def _is_float(w: str) -> bool:
@@ -82,12 +88,19 @@ def read_vertices(path, key: str) -> np.ndarray:
         if len(values) % 3:
             raise Invalid(key, f"line {line} of {name}: one line must hold 3n numbers "
                                f"(x y z per vertex), got {len(values)}")
-        return np.asarray(values, dtype=np.float64).reshape(-1, 3)
-    for line, values in rows:
-        if len(values) != 3:
-            raise Invalid(key, f"line {line} of {name}: expected 3 numbers (x y z), got "
-                               f"{len(values)}")
-    return np.asarray([v for _, v in rows], dtype=np.float64)
+        x = np.asarray(values, dtype=np.float64).reshape(-1, 3)
+        lines = [line] * len(x)
+    else:
+        for line, values in rows:
+            if len(values) != 3:
+                raise Invalid(key, f"line {line} of {name}: expected 3 numbers (x y z), got "
+                                   f"{len(values)}")
+        x, lines = np.asarray([v for _, v in rows], dtype=np.float64), [r[0] for r in rows]
+    far = np.flatnonzero((np.abs(x) > MAX_LENGTH).any(axis=1))
+    if len(far):  # squares of such coordinates overflow float64 in every step
+        raise Invalid(key, f"line {lines[far[0]]} of {name}: coordinates must be within "
+                           f"±{MAX_LENGTH:g} m, got {float(np.abs(x[far[0]]).max()):.3g}")
+    return x
 
 
 def _indices(values, line: int, name: str, key: str, base: int, count: int | None,

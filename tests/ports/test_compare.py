@@ -87,8 +87,8 @@ def test_cli_compare_prints_table_and_plot(traj, tmp_path, capsys):
                  "--precision", "float32"]) == 2
     np.save(tmp_path / "short.npy", traj[:5])
     assert main(["compare", str(tmp_path / "short.npy"), str(tmp_path / "b.csv"),
-                 "--no-table"]) == 0
-    assert "note: compared the first 5 frames" in capsys.readouterr().out
+                 "--no-table"]) == 1
+    assert "has 5 frames" in capsys.readouterr().out
 
 
 def test_sparse_matrices_with_attachment_columns():

@@ -101,7 +101,7 @@ def test_defaults_and_roundtrip():
                           "substeps": 1}
     assert d["cloth"]["resolution"] == [21, 21] and d["cloth"]["mass"] == 1.0
     assert d["solver"] == {"method": "local-global", "iterations": 10, "tolerance": None,
-                           "backend": "auto", "initial_guess": "y"}
+                           "backend": "auto", "initial_guess": "y", "cholmod_mode": "auto"}
     assert d["effects"] == [] and d["springs"] == {"bending_pattern": "every"}
     json.dumps(d)  # JSON-ready
     again = Scene.from_dict(d)
