@@ -68,6 +68,7 @@ import numpy as np
 from ..errors import InputError, check_finite
 from ..model import Model
 from .base import Iterate, StepProblem, gradient_noise_floor
+from .fused import FusedStep
 from .local_global import LocalGlobalSolver
 
 log = logging.getLogger(__name__)
@@ -259,12 +260,14 @@ class ChebyshevSolver(LocalGlobalSolver):
     def iterates(self, problem: StepProblem, x0: np.ndarray | None = None) -> Iterator[Iterate]:
         """Yield the initial guess, then each accelerated iterate, without end.
 
-        Each iterate costs one local step, one gradient norm and one global step (the cost
-        of a local/global iteration). ρ is estimated first when not known. With
-        G(x_k) the plain local/global iterate from x_k (Wang 2015, shifted as in the module
-        docstring),
+        Each iterate costs one local/global iteration of :class:`~.fused.FusedStep` and one
+        linear combination of three rows (its ‖∇g‖ comes for free). ρ is estimated first
+        when not known. With G(x_k) the plain local/global iterate from x_k (Wang 2015,
+        shifted as in the module docstring),
 
-            x_{k+1} = ω_{k+1} (γ (G(x_k) − x_k) + x_k − x_{k−1}) + x_{k−1}.
+            x_{k+1} = ω_{k+1} (γ_k (G(x_k) − x_k) + x_k − x_{k−1}) + x_{k−1},
+
+        γ_k = 1 for k < S (plain local/global before acceleration), γ after.
 
         Parameters
         ----------
@@ -284,16 +287,35 @@ class ChebyshevSolver(LocalGlobalSolver):
             self.rho = estimate_spectral_radius(self.model, problem, solver=self)
             self.rho_estimations += 1
         gamma = self.gamma
-        x = problem.initial_guess() if x0 is None else np.array(x0, dtype=np.float64)
-        x_prev = x
+        step = FusedStep(self, problem, x0)
+        yield Iterate(0, step.x, step.norm0, d=step.current_directions())
+        # rows [δ | a] of G(x_k), x_k, x_{k−1} (δ_F = x_F − y_F, a = A_FF δ_F): the update
+        # is one linear combination of the three rows, and A_FF δ̂ = rhs(x_k) gives a for
+        # free, so ‖∇g(x_{k+1})‖ = ‖a_{k+1} − rhs(x_{k+1})‖ (clothsim.solvers.fused)
+        m = step.delta.size
+        rows = np.empty((3, 2 * m))
+        rows[1, :m], rows[1, m:] = step.delta.reshape(-1), step.a0.reshape(-1)
+        rows[2] = rows[1]
+        hat, cur, prev = 0, 1, 2
+        coef = np.zeros(3)
+        shape = step.delta.shape
+        delay, rho2 = self.delay, self.shifted_rho ** 2
         omega = 1.0
         k = 0
         while True:
-            d = self.local_step(x)
-            yield Iterate(k, x, float(np.linalg.norm(self.gradient(problem, x, d))), d)
-            x_hat = self.global_step(problem, d)
-            omega = self.omega(k, omega)
-            g = gamma if k >= self.delay else 1.0   # no over-relaxation before acceleration
-            x_next = omega * (g * (x_hat - x) + x - x_prev) + x_prev
-            x_prev, x = x, x_next
+            rows[hat, :m] = step.solve().reshape(-1)
+            rows[hat, m:] = step.rhs.reshape(-1)
+            # ω and γ as self.omega and the delay say (inlined: this loop is the hot path)
+            if k < delay:   # plain local/global: no over-relaxation before acceleration
+                omega, g = 1.0, 1.0
+            else:
+                omega = 2.0 / (2.0 - rho2) if k == delay else 4.0 / (4.0 - rho2 * omega)
+                g = gamma
+            coef[hat], coef[cur], coef[prev] = omega * g, omega * (1.0 - g), 1.0 - omega
+            new = coef @ rows
+            rows[prev] = new
+            cur, prev = prev, cur
+            step.advance(new[:m].reshape(shape))
             k += 1
+            yield Iterate(k, step.x, step.gradient_norm(new[m:].reshape(shape)),
+                          d=step.current_directions())
