@@ -155,6 +155,17 @@ class FusedStep:
         """δ̂ = A_FF⁻¹ rhs(x): the global step from the current x, shape (3, f) [m] (new)."""
         return self._solve_columns(self._rhs)
 
+    def solve_columns(self, bT: np.ndarray) -> np.ndarray:
+        """A_FF⁻¹ b for coordinate-major b of shape (3, f) (a new array, same shape)."""
+        return self._solve_columns(bT)
+
+    def apply(self, deltaT: np.ndarray) -> np.ndarray:
+        """A_FF δ for coordinate-major δ of shape (3, f) [kg·m] (a new array)."""
+        out = np.zeros_like(deltaT)
+        for c in range(3):
+            spmv_add(self.sysf.A_FF, deltaT[c], out[c])
+        return out
+
     def _place(self, deltaT: np.ndarray) -> np.ndarray:
         """x = y + δ over the free vertices of the spare buffer; returns the buffer."""
         xT = self._xT_spare
@@ -203,27 +214,26 @@ class FusedStep:
 
     # -- energy differences (Anderson, L-BFGS) ---------------------------------------------
     def _setup_energy(self, solver, problem) -> None:
-        free = self.free
         model = solver.model
-        self._mF = np.ascontiguousarray(model.vertex_mass[free])
+        self._m = model.vertex_mass
         self._k = model.springs.spring_stiffness
         self._two_r = 2.0 * model.springs.spring_rest_length
-        self._fFT = (None if problem.f_ext is None
-                     else np.ascontiguousarray(problem.f_ext[free].T))
+        self._fT = None if problem.f_ext is None else np.ascontiguousarray(problem.f_ext.T)
         self._anchor = None
         if len(problem.anchor_vertices):
-            where = np.full(model.vertex_count, -1)
-            where[free] = np.arange(len(free))
-            idx = where[problem.anchor_vertices]
-            keep = idx >= 0
-            self._anchor = (idx[keep], problem.anchor_vertices[keep],
-                            problem.anchor_positions[keep], problem.anchor_stiffness[keep])
+            self._anchor = (problem.anchor_vertices, problem.anchor_positions.T,
+                            problem.anchor_stiffness)
+        self._dxT = np.empty_like(self.yT)
+        self._dpT = np.empty_like(self.eT)
 
     def trial(self, deltaT: np.ndarray) -> float:
         """g(y + δ) − g(x) without cancellation, x the current iterate [J·s²].
 
-        Puts the candidate in the spare buffer with its spring vectors; :meth:`accept` then
-        moves there without recomputing them (until the next :meth:`trial`).
+        Puts the candidate x' in the spare buffer with its spring vectors; :meth:`accept`
+        then moves there without recomputing them (until the next :meth:`trial`). As in
+        :func:`~.descent.objective_difference`, everything is formed from Δx = x' − x (exact:
+        a difference of nearby floats) and the spring vectors' changes Δp = Δx_a − Δx_b, so
+        the comparison still resolves g's change far below 1e-8 relative residual.
 
         Parameters
         ----------
@@ -233,26 +243,28 @@ class FusedStep:
         Returns
         -------
         float
-            ½ Δδᵀ M (2δ + Δδ) + h² [Σ ½ k (l' − l)(l' + l − 2r) + anchors − Δδᵀ f], with
-            l' − l = (p + p')·(p' − p) / (l + l') (:func:`~.descent.objective_difference`).
+            ½ Δxᵀ M (2(x − y) + Δx) + h² [Σ ½ k (l' − l)(l' + l − 2r) + anchors − Δxᵀ f],
+            with l' − l = (2p + Δp)·Δp / (l + l').
         """
         xT = self._place(deltaT)
-        p, pn = self._p, self._p_trial
+        p, pn, dxT, dp = self._p, self._p_trial, self._dxT, self._dpT
         self.dirs.vectors_into(xT, pn)
+        np.subtract(xT, self._xT, out=dxT)
+        self.dirs.vectors_into(dxT, dp)
         ln = np.sqrt(np.einsum("ij,ij->j", pn, pn))
         self._l_trial, self._trial_delta = ln, deltaT
-        dd = deltaT - self.delta
         s = self._l + ln
-        num = np.einsum("ij,ij->j", p + pn, pn - p)
+        num = np.einsum("ij,ij->j", 2.0 * p + dp, dp)
         dl = np.divide(num, s, out=np.zeros_like(s), where=s > 0)
         e = 0.5 * float(np.dot(self._k * dl, s - self._two_r))
-        if self._fFT is not None:
-            e -= float(np.vdot(dd, self._fFT))
+        if self._fT is not None:
+            e -= float(np.vdot(dxT, self._fT))
         if self._anchor is not None:
-            idx, av, q, k = self._anchor
-            xa, da = self.yT[:, av].T + self.delta[:, idx].T, dd[:, idx].T
-            e += float(np.sum(k[:, None] * da * (xa - q + 0.5 * da)))
-        mass = 0.5 * float(np.einsum("ij,ij,j->", dd, 2.0 * self.delta + dd, self._mF))
+            av, qT, k = self._anchor
+            da = dxT[:, av]
+            e += float(np.sum(k * da * (self._xT[:, av] - qT + 0.5 * da)))
+        mass = 0.5 * float(np.einsum("ij,ij,j->", dxT, 2.0 * (self._xT - self.yT) + dxT,
+                                     self._m))
         return mass + self.h2 * e
 
     def accept(self) -> None:

@@ -29,7 +29,8 @@ import numpy as np
 from ..errors import InputError
 from ..model import Model
 from .base import Iterate, StepProblem
-from .descent import armijo
+from .descent import ARMIJO_C, MAX_HALVINGS
+from .fused import FusedStep
 from .local_global import LocalGlobalSolver
 
 
@@ -67,9 +68,6 @@ class LBFGSSolver(LocalGlobalSolver):
             raise InputError(f"solver.window: must be an integer >= 1, got {window!r}")
         self.window = int(window)
 
-    def _grad(self, problem: StepProblem, x: np.ndarray) -> np.ndarray:
-        return self.gradient(problem, x, self.local_step(x))
-
     def iterates(self, problem: StepProblem, x0: np.ndarray | None = None) -> Iterator[Iterate]:
         """Yield the initial guess, then each L-BFGS iterate, g never increasing.
 
@@ -77,7 +75,9 @@ class LBFGSSolver(LocalGlobalSolver):
         two-loop recursion from H₀ = (M + h² L)⁻¹ and the pairs (s_j, t_j) with
         ρ_j = 1 / (s_jᵀ t_j) > 0; then x_{k+1} = x_k + α p with α from a backtracking
         Armijo search (Liu, Bouaziz, Kavan 2017; Nocedal and Wright Alg. 7.4). Returns when
-        no step length along p decreases g.
+        no step length along p decreases g. Runs on local/global's fused iteration
+        (:class:`~.fused.FusedStep`): ∇g(x) = A_FF δ − rhs(x) from the local step that
+        the energy comparison of the accepted trial has already begun.
 
         Parameters
         ----------
@@ -92,36 +92,38 @@ class LBFGSSolver(LocalGlobalSolver):
             k, x of shape (n, 3) [m] (the solver's array: copy it to keep it) and
             ‖∇g(x)‖ over the free degrees of freedom [N·s²].
         """
-        sysf = self.system(problem)
-        free = sysf.free
-        solve = sysf.A_FF_factor.solve
-        x = problem.initial_guess() if x0 is None else np.array(x0, dtype=np.float64)
-        grad = self._grad(problem, x)
+        step = FusedStep(self, problem, x0, energy=True)
+        grad = step.a0 - step.rhs          # ∇g over the free vertices, coordinate-major
         k = 0
-        yield Iterate(k, x, float(np.linalg.norm(grad)))
+        yield Iterate(k, step.x, step.norm0)
         pairs: deque[tuple[np.ndarray, np.ndarray, float]] = deque(maxlen=self.window)
         while True:
             q = grad.copy()
             alphas = []
             for s, t, rho in reversed(pairs):
-                a = rho * float(np.sum(s * q))
+                a = rho * float(np.vdot(s, q))
                 alphas.append(a)
                 q -= a * t
-            r = solve(q)
+            r = step.solve_columns(q)
             for (s, t, rho), a in zip(pairs, reversed(alphas)):
-                r += (a - rho * float(np.sum(t * r))) * s
-            direction = np.zeros_like(x)
-            direction[free] = -r
-            found = armijo(self.model, problem, x, direction, -float(np.sum(grad * r)))
-            if found is None:
+                r += (a - rho * float(np.vdot(t, r))) * s
+            slope = -float(np.vdot(grad, r))
+            if not slope < 0.0:
+                return  # no descent direction at working precision: optimal to rounding
+            delta, alpha = step.delta, 1.0
+            for _ in range(MAX_HALVINGS):   # backtracking Armijo (descent.armijo), fused
+                if step.trial(delta - alpha * r) <= ARMIJO_C * alpha * slope:
+                    break
+                alpha *= 0.5
+            else:
                 return  # no decrease at working precision: optimal to rounding
-            step = found[0] * direction
-            x = x + step
-            grad_new = self._grad(problem, x)
-            s, t = step[free], grad_new - grad
-            st = float(np.sum(s * t))
+            step.accept()
+            grad_new = step.apply(step.delta)
+            grad_new -= step.rhs
+            s, t = -alpha * r, grad_new - grad
+            st = float(np.vdot(s, t))
             if st > 0.0:
                 pairs.append((s, t, 1.0 / st))
             grad = grad_new
             k += 1
-            yield Iterate(k, x, float(np.linalg.norm(grad)))
+            yield Iterate(k, step.x, float(np.linalg.norm(grad)))
