@@ -30,7 +30,6 @@ Anal. 49(4), 2011.
 
 from __future__ import annotations
 
-from collections import deque
 from collections.abc import Iterator
 
 import numpy as np
@@ -105,8 +104,7 @@ class AndersonSolver(LocalGlobalSolver):
         # in δ = x − y over the free vertices, coordinate-major; each point is kept as the
         # row [δ | a] with a = A_FF δ: G(x_j) = y + δ̂_j has a = rhs(x_j), and the
         # extrapolation combines rows, so ‖∇g‖ = ‖a − rhs(x)‖ comes for free (fused.py)
-        dF: deque[np.ndarray] = deque(maxlen=self.window)
-        dG: deque[np.ndarray] = deque(maxlen=self.window)
+        window = _Window(self.window, m)
         f_prev = g_prev = None
         k = 0
         while True:
@@ -116,13 +114,11 @@ class AndersonSolver(LocalGlobalSolver):
                 return  # a fixed point in floating point
             gx = np.concatenate((delta_hat.reshape(-1), step.rhs.reshape(-1)))
             if f_prev is not None:
-                dF.append(f - f_prev)
-                dG.append(gx - g_prev)
+                window.append(f - f_prev, gx - g_prev)
             f_prev, g_prev = f, gx
             new = gx
-            if dF:
-                theta = np.linalg.lstsq(np.column_stack(dF), f, rcond=None)[0]
-                cand = gx - np.column_stack(dG) @ theta
+            if window.count:
+                cand = gx - window.extrapolation(f)
                 cand_delta = cand[:m].reshape(shape)
                 if (np.all(np.isfinite(cand_delta))
                         and step.trial(cand_delta) < 0.0):
@@ -130,11 +126,49 @@ class AndersonSolver(LocalGlobalSolver):
                     new = cand
                 else:
                     self.rejections += 1  # safeguard: take the plain local/global iterate
-                    dF.clear()
-                    dG.clear()
+                    window.clear()
                     f_prev = g_prev = None
             if new is gx:
                 step.advance(delta_hat)
             k += 1
             yield Iterate(k, step.x, step.gradient_norm(new[m:].reshape(shape)),
                           d=step.current_directions())
+
+
+class _Window:
+    """The last m differences ΔF (rows of length M) and ΔG, with their Gram matrix ΔFᵀΔF.
+
+    θ = argmin ‖f − ΔF θ‖ from the normal equations (ΔFᵀΔF) θ = ΔFᵀ f, the Gram matrix
+    updated by one row per new difference (m dot products instead of a QR or SVD of the
+    M × m matrix each iteration); a singular or non-finite solve falls back to lstsq.
+    """
+
+    def __init__(self, size: int, length: int):
+        self.size, self.count, self.head = size, 0, 0
+        self.F = np.empty((size, length))
+        self.G = np.empty((size, 2 * length))
+        self.gram = np.empty((size, size))
+
+    def clear(self) -> None:
+        self.count = self.head = 0
+
+    def append(self, df: np.ndarray, dg: np.ndarray) -> None:
+        slot = self.head
+        self.F[slot], self.G[slot] = df, dg
+        self.count = min(self.count + 1, self.size)
+        row = self.F[:self.count] @ self.F[slot]
+        self.gram[slot, :self.count] = row
+        self.gram[:self.count, slot] = row
+        self.head = (slot + 1) % self.size
+
+    def extrapolation(self, f: np.ndarray) -> np.ndarray:
+        """ΔG θ with θ = argmin ‖f − ΔF θ‖ (rows of ΔG: [Δδ | ΔA δ])."""
+        n = self.count
+        F = self.F[:n]
+        try:
+            theta = np.linalg.solve(self.gram[:n, :n], F @ f)
+            if not np.all(np.isfinite(theta)):
+                raise np.linalg.LinAlgError
+        except np.linalg.LinAlgError:
+            theta = np.linalg.lstsq(F.T, f, rcond=None)[0]
+        return theta @ self.G[:n]

@@ -225,6 +225,19 @@ class FusedStep:
                             problem.anchor_stiffness)
         self._dxT = np.empty_like(self.yT)
         self._dpT = np.empty_like(self.eT)
+        # spring ends of all three coordinates at once, in (3, n) arrays read flat
+        n = self.yT.shape[1]
+        shift = (np.arange(3) * n)[:, None]
+        self._a3 = np.ascontiguousarray((self.dirs.a[None, :] + shift).reshape(-1))
+        self._b3 = np.ascontiguousarray((self.dirs.b[None, :] + shift).reshape(-1))
+        self._tmp = np.empty(self.eT.size)
+
+    def _vectors(self, xT: np.ndarray, pT: np.ndarray) -> None:
+        """p = x_a − x_b into pT, all coordinates in two takes (as SpringDirections does)."""
+        flat, out = xT.reshape(-1), pT.reshape(-1)
+        flat.take(self._a3, out=out, mode="clip")
+        flat.take(self._b3, out=self._tmp, mode="clip")
+        np.subtract(out, self._tmp, out=out)
 
     def trial(self, deltaT: np.ndarray) -> float:
         """g(y + δ) − g(x) without cancellation, x the current iterate [J·s²].
@@ -248,14 +261,17 @@ class FusedStep:
         """
         xT = self._place(deltaT)
         p, pn, dxT, dp = self._p, self._p_trial, self._dxT, self._dpT
-        self.dirs.vectors_into(xT, pn)
+        self._vectors(xT, pn)
         np.subtract(xT, self._xT, out=dxT)
-        self.dirs.vectors_into(dxT, dp)
+        self._vectors(dxT, dp)
         ln = np.sqrt(np.einsum("ij,ij->j", pn, pn))
         self._l_trial, self._trial_delta = ln, deltaT
         s = self._l + ln
-        num = np.einsum("ij,ij->j", 2.0 * p + dp, dp)
-        dl = np.divide(num, s, out=np.zeros_like(s), where=s > 0)
+        num = np.einsum("ij,ij->j", p + pn, dp)      # (2p + Δp)·Δp, Δp exact to rounding
+        if s.min() > 0:
+            dl = np.divide(num, s, out=num)
+        else:                                          # springs whose ends coincide twice
+            dl = np.divide(num, s, out=np.zeros_like(s), where=s > 0)
         e = 0.5 * float(np.dot(self._k * dl, s - self._two_r))
         if self._fT is not None:
             e -= float(np.vdot(dxT, self._fT))
@@ -263,8 +279,9 @@ class FusedStep:
             av, qT, k = self._anchor
             da = dxT[:, av]
             e += float(np.sum(k * da * (self._xT[:, av] - qT + 0.5 * da)))
-        mass = 0.5 * float(np.einsum("ij,ij,j->", dxT, 2.0 * (self._xT - self.yT) + dxT,
-                                     self._m))
+        two_mid = self._xT + xT                       # 2(x − y) + Δx = x + x' − 2y
+        two_mid -= 2.0 * self.yT
+        mass = 0.5 * float(np.einsum("ij,ij,j->", dxT, two_mid, self._m))
         return mass + self.h2 * e
 
     def accept(self) -> None:

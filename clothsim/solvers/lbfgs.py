@@ -21,7 +21,6 @@ J. Nocedal, S. J. Wright. Numerical Optimization, 2nd ed., Springer 2006, Alg. 7
 
 from __future__ import annotations
 
-from collections import deque
 from collections.abc import Iterator
 
 import numpy as np
@@ -93,20 +92,13 @@ class LBFGSSolver(LocalGlobalSolver):
             ‖∇g(x)‖ over the free degrees of freedom [N·s²].
         """
         step = FusedStep(self, problem, x0, energy=True)
-        grad = step.a0 - step.rhs          # ∇g over the free vertices, coordinate-major
+        a = step.a0                        # A_FF δ_F of the current iterate
+        grad = a - step.rhs                # ∇g over the free vertices, coordinate-major
         k = 0
         yield Iterate(k, step.x, step.norm0)
-        pairs: deque[tuple[np.ndarray, np.ndarray, float]] = deque(maxlen=self.window)
+        hist = _Pairs(self.window, grad.size)
         while True:
-            q = grad.copy()
-            alphas = []
-            for s, t, rho in reversed(pairs):
-                a = rho * float(np.vdot(s, q))
-                alphas.append(a)
-                q -= a * t
-            r = step.solve_columns(q)
-            for (s, t, rho), a in zip(pairs, reversed(alphas)):
-                r += (a - rho * float(np.vdot(t, r))) * s
+            r, r_parts = hist.inverse_hessian_times(grad, step.solve_columns)
             slope = -float(np.vdot(grad, r))
             if not slope < 0.0:
                 return  # no descent direction at working precision: optimal to rounding
@@ -118,12 +110,80 @@ class LBFGSSolver(LocalGlobalSolver):
             else:
                 return  # no decrease at working precision: optimal to rounding
             step.accept()
-            grad_new = step.apply(step.delta)
-            grad_new -= step.rhs
+            # ∇g(x_{k+1}) = A_FF δ_{k+1} − rhs(x_{k+1}), A_FF δ_{k+1} = A_FF δ_k − α A_FF r
+            # with A_FF r = q + Σ c_j A_FF s_j (H₀ = A_FF⁻¹; the pairs keep A_FF s_j)
+            As = -alpha * hist.apply_a(r_parts)
+            a_new = a + As
+            grad_new = a_new - step.rhs
             s, t = -alpha * r, grad_new - grad
             st = float(np.vdot(s, t))
             if st > 0.0:
-                pairs.append((s, t, 1.0 / st))
+                hist.append(s.reshape(-1), t.reshape(-1), 1.0 / st, As.reshape(-1))
+            a = a_new
             grad = grad_new
             k += 1
             yield Iterate(k, step.x, float(np.linalg.norm(grad)))
+
+
+class _Pairs:
+    """The last m pairs (s_j, t_j) with ρ_j and their products s_iᵀ t_j, for the two loops.
+
+    The two-loop recursion (Nocedal and Wright Alg. 7.4) rewritten on the inner products
+    it needs: with sᵢᵀ∇g, tᵢᵀ(H₀ q) and the kept matrix sᵢᵀtⱼ, each loop's scalars come
+    from an m × m triangle, and each loop's vector update is one product with the m stored
+    rows (instead of 2m dot products and 2m vector updates). Same H ∇g, to rounding.
+    """
+
+    def __init__(self, size: int, length: int):
+        self.size = size
+        self.S = np.zeros((size, length))
+        self.T = np.zeros((size, length))
+        self.ST = np.zeros((size, size))
+        self.rho = np.zeros(size)
+        self.U = np.zeros((size, length))   # A_FF s_j
+        self.order: list[int] = []     # slots, oldest first
+
+    def append(self, s: np.ndarray, t: np.ndarray, rho: float, u: np.ndarray) -> None:
+        if len(self.order) < self.size:
+            slot = len(self.order)
+        else:
+            slot = self.order.pop(0)
+        self.order.append(slot)
+        self.S[slot], self.T[slot], self.rho[slot], self.U[slot] = s, t, rho, u
+        self.ST[slot, :] = self.T @ s
+        self.ST[:, slot] = self.S @ t
+
+    def inverse_hessian_times(self, gT: np.ndarray, solve) -> np.ndarray:
+        """H ∇g by the two loops, H₀ applied by ``solve`` (coordinate-major, shape of gT),
+        and what :meth:`apply_a` needs."""
+        order = self.order
+        if not order:
+            return solve(gT), (gT, None)
+        g = gT.reshape(-1)
+        sg, ST, rho = (self.S @ g).tolist(), self.ST.tolist(), self.rho.tolist()
+        alpha = [0.0] * self.size
+        for n, i in enumerate(reversed(order)):         # newest first
+            acc = sg[i]
+            for j in order[len(order) - n:]:            # the newer pairs
+                acc -= alpha[j] * ST[i][j]
+            alpha[i] = rho[i] * acc
+        q = g - np.asarray(alpha) @ self.T
+        r = solve(q.reshape(gT.shape))
+        tr = (self.T @ r.reshape(-1)).tolist()
+        coef = [0.0] * self.size                        # α_j − β_j
+        for n, i in enumerate(order):                   # oldest first
+            acc = tr[i]
+            for j in order[:n]:                         # the older pairs
+                acc += coef[j] * ST[j][i]
+            coef[i] = alpha[i] - rho[i] * acc
+        coef = np.asarray(coef)
+        r += (coef @ self.S).reshape(gT.shape)
+        return r, (q.reshape(gT.shape), coef)
+
+    def apply_a(self, parts) -> np.ndarray:
+        """A_FF r for the r of :meth:`inverse_hessian_times`, from its ``parts``
+        (q, the coefficients of the s_j): q + Σ c_j A_FF s_j, without a product with A_FF."""
+        q, coef = parts
+        if coef is None:
+            return q.copy()
+        return q + (coef @ self.U).reshape(q.shape)
