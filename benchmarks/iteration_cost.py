@@ -5,9 +5,10 @@ held at two corners, mid-fall after 10 steps; :func:`benchmarks.performance.fall
 at 21² and 41², each method runs ``ITERATIONS`` iterations of its ``iterates`` on the same
 step problem, with the factor (and Chebyshev's ρ) computed before timing. The methods are
 interleaved in every repeat (order rotated), each repeat gives a ratio to the local/global
-run of the same repeat, and the median ratio over ``REPEATS`` is printed; every thread pool
-is limited to one thread (threadpoolctl). Targets (issue 20): Chebyshev ≤ 1.15, Anderson
-and L-BFGS ≤ 2.
+run of the same repeat, and the median ratio over ``REPEATS`` is printed, of wall time and
+(in brackets) of CPU time (``time.process_time``: less moved by other jobs on a shared
+machine); every thread pool is limited to one thread (threadpoolctl). Targets (issue 20):
+Chebyshev ≤ 1.15, Anderson and L-BFGS ≤ 2.
 """
 
 from __future__ import annotations
@@ -25,8 +26,8 @@ from . import ROOT
 from .performance import falling_sheet
 
 SIZES = (21, 41)
-ITERATIONS = 60
-REPEATS = 15
+ITERATIONS = 100
+REPEATS = 21
 METHODS = ("local-global", "chebyshev", "anderson", "lbfgs")
 
 
@@ -42,15 +43,16 @@ def commit() -> str:
         return "unknown"
 
 
-def per_iteration(solver, problem, iterations: int = ITERATIONS) -> float:
-    """Seconds per iteration of ``solver.iterates`` over ``iterations`` iterations."""
-    t0 = time.perf_counter()
+def per_iteration(solver, problem, iterations: int = ITERATIONS) -> tuple[float, float]:
+    """Wall and CPU seconds per iteration of ``solver.iterates`` over ``iterations``."""
+    t0, c0 = time.perf_counter(), time.process_time()
     k = 0
     for it in solver.iterates(problem):
         k = it.k
         if k >= iterations:
             break
-    return (time.perf_counter() - t0) / max(k, 1)
+    c1, t1 = time.process_time(), time.perf_counter()
+    return (t1 - t0) / max(k, 1), (c1 - c0) / max(k, 1)
 
 
 def measure(n: int, repeats: int = REPEATS) -> dict:
@@ -70,22 +72,25 @@ def measure(n: int, repeats: int = REPEATS) -> dict:
         order = METHODS[r % len(METHODS):] + METHODS[:r % len(METHODS)]
         for m in order:
             times[m].append(per_iteration(solvers[m], problem))
-    base = np.array(times["local-global"])
-    return {"n": n, "rho": rho, "local-global_s": float(np.median(base)),
-            "ratios": {m: float(np.median(np.array(times[m]) / base)) for m in METHODS}}
+    t = {m: np.array(v) for m, v in times.items()}     # (repeats, 2): wall, CPU
+    base = t["local-global"]
+    return {"n": n, "rho": rho, "local-global_s": float(np.median(base[:, 0])),
+            "ratios": {m: float(np.median(t[m][:, 0] / base[:, 0])) for m in METHODS},
+            "cpu_ratios": {m: float(np.median(t[m][:, 1] / base[:, 1])) for m in METHODS}}
 
 
 def main() -> list[dict]:
     import sksparse.cholmod  # noqa: F401  (load CHOLMOD's OpenMP and BLAS: limited too)
 
-    print(f"per-iteration cost / local/global's (median of {REPEATS} interleaved repeats, "
-          f"{ITERATIONS} iterations each, 1 thread), commit {commit()}")
+    print(f"per-iteration cost / local/global's, wall [CPU] (median of {REPEATS} "
+          f"interleaved repeats of {ITERATIONS} iterations, 1 thread), commit {commit()}")
     results = []
     with threadpool_limits(1):
         for n in SIZES:
             res = measure(n)
             results.append(res)
-            ratios = "  ".join(f"{m} {res['ratios'][m]:.2f}" for m in METHODS[1:])
+            ratios = "  ".join(f"{m} {res['ratios'][m]:.2f} [{res['cpu_ratios'][m]:.2f}]"
+                               for m in METHODS[1:])
             print(f"  {n}x{n}: local/global {1e6 * res['local-global_s']:.0f} us/iteration; "
                   f"{ratios}", flush=True)
     return results

@@ -33,6 +33,7 @@ from __future__ import annotations
 from collections.abc import Iterator
 
 import numpy as np
+from scipy.linalg import lapack
 
 from ..errors import InputError
 from ..model import Model
@@ -114,7 +115,7 @@ class AndersonSolver(LocalGlobalSolver):
                 return  # a fixed point in floating point
             gx = np.concatenate((delta_hat.reshape(-1), step.rhs.reshape(-1)))
             if f_prev is not None:
-                window.append(f - f_prev, gx - g_prev)
+                window.append(f, f_prev, gx, g_prev)
             f_prev, g_prev = f, gx
             new = gx
             if window.count:
@@ -135,6 +136,9 @@ class AndersonSolver(LocalGlobalSolver):
                           d=step.current_directions())
 
 
+_posv = lapack.get_lapack_funcs("posv", dtype=np.float64)
+
+
 class _Window:
     """The last m differences ΔF (rows of length M) and ΔG, with their Gram matrix ΔFᵀΔF.
 
@@ -152,9 +156,11 @@ class _Window:
     def clear(self) -> None:
         self.count = self.head = 0
 
-    def append(self, df: np.ndarray, dg: np.ndarray) -> None:
+    def append(self, f, f_prev, g, g_prev) -> None:
+        """Keep ΔF = f − f_prev and ΔG = g − g_prev (dropping the oldest when full)."""
         slot = self.head
-        self.F[slot], self.G[slot] = df, dg
+        np.subtract(f, f_prev, out=self.F[slot])
+        np.subtract(g, g_prev, out=self.G[slot])
         self.count = min(self.count + 1, self.size)
         row = self.F[:self.count] @ self.F[slot]
         self.gram[slot, :self.count] = row
@@ -165,10 +171,7 @@ class _Window:
         """ΔG θ with θ = argmin ‖f − ΔF θ‖ (rows of ΔG: [Δδ | ΔA δ])."""
         n = self.count
         F = self.F[:n]
-        try:
-            theta = np.linalg.solve(self.gram[:n, :n], F @ f)
-            if not np.all(np.isfinite(theta)):
-                raise np.linalg.LinAlgError
-        except np.linalg.LinAlgError:
+        _, theta, info = _posv(self.gram[:n, :n], F @ f)   # Cholesky of the Gram matrix
+        if info != 0 or not np.all(np.isfinite(theta)):    # singular: least squares
             theta = np.linalg.lstsq(F.T, f, rcond=None)[0]
         return theta @ self.G[:n]
