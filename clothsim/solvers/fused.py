@@ -186,9 +186,11 @@ class FusedStep:
         self._first = False
         self.x, self.delta = self._xT.T, deltaT
 
-    def _local(self) -> None:
-        """Local step at the current x (its spring vectors in eT) and its rhs."""
-        self._right_hand_side(self.dirs.e_into(self._xT, self.eT, self.pyT), self._rhs_next)
+    def _local(self, length: np.ndarray | None = None) -> None:
+        """Local step at the current x (its spring vectors in eT, their lengths if known)
+        and its rhs."""
+        self._right_hand_side(self.dirs.e_into(self._xT, self.eT, self.pyT, length),
+                              self._rhs_next)
         self._rhs, self._rhs_next = self._rhs_next, self._rhs
 
     def advance(self, deltaT: np.ndarray) -> None:
@@ -205,7 +207,9 @@ class FusedStep:
         if self.energy:
             np.copyto(self._p, self.eT)
             self._l = np.sqrt(np.einsum("ij,ij->j", self._p, self._p))
-        self._local()
+            self._local(self._l)
+        else:
+            self._local()
 
     def gradient_norm(self, aT: np.ndarray) -> float:
         """‖∇g(x)‖ = ‖a − rhs(x)‖ for a = A_FF δ_F of the current x [N·s²] (into :attr:`grad`)."""
@@ -215,7 +219,7 @@ class FusedStep:
     # -- energy differences (Anderson, L-BFGS) ---------------------------------------------
     def _setup_energy(self, solver, problem) -> None:
         model = solver.model
-        self._m = model.vertex_mass
+        self._mF = np.ascontiguousarray(model.vertex_mass[self.free])
         self._k = model.springs.spring_stiffness
         self._two_r = 2.0 * model.springs.spring_rest_length
         self._fT = None if problem.f_ext is None else np.ascontiguousarray(problem.f_ext.T)
@@ -279,9 +283,11 @@ class FusedStep:
             av, qT, k = self._anchor
             da = dxT[:, av]
             e += float(np.sum(k * da * (self._xT[:, av] - qT + 0.5 * da)))
-        two_mid = self._xT + xT                       # 2(x − y) + Δx = x + x' − 2y
-        two_mid -= 2.0 * self.yT
-        mass = 0.5 * float(np.einsum("ij,ij,j->", dxT, two_mid, self._m))
+        # ½ Δxᵀ M (2(x − y) + Δx), 2(x − y) + Δx = δ + δ' to rounding (a factor, not a
+        # difference): over the free vertices, where Δx lives
+        dxF = dxT[:, self.free] if self.runs is None else np.concatenate(
+            [dxT[:, start:stop] for start, stop, _ in self.runs], axis=1)
+        mass = 0.5 * float(np.einsum("ij,ij,j->", dxF, self.delta + deltaT, self._mF))
         return mass + self.h2 * e
 
     def accept(self) -> None:
@@ -291,4 +297,4 @@ class FusedStep:
         self._p, self._p_trial = self._p_trial, self._p
         self._l = self._l_trial
         np.copyto(self.eT, self._p)
-        self._local()
+        self._local(self._l)
