@@ -6,9 +6,12 @@ H₀ = (M + h² L)⁻¹ — the global-step matrix, applied through the cached s
 factor of :class:`~clothsim.solvers.LocalGlobalSolver` (two triangular solves). Without any
 pair the direction −H₀ ∇g(x) is exactly the local/global step; the pairs add the
 curvature the fixed matrix misses. The step length comes from a backtracking Armijo line
-search on the cancellation-free difference
-:func:`~clothsim.solvers.descent.objective_difference`, so g never increases (beyond
-rounding) and the search still works at residuals far below 1e-8. Pairs with
+search on the cancellation-free difference of g (:meth:`FusedStep.trial
+<clothsim.solvers.fused.FusedStep.trial>`, as
+:func:`~clothsim.solvers.descent.objective_difference`), so g never increases (beyond
+rounding) and the search still works at residuals far below 1e-8. It runs on
+local/global's fused iteration: the accepted trial's spring vectors start the local step,
+and ∇g = A_FF δ − rhs with A_FF δ carried through the pairs (no product with A_FF). Pairs with
 sᵀt ≤ 0 (negative curvature, buckling) are skipped, keeping the implicit inverse positive
 definite.
 

@@ -21,7 +21,9 @@ coordinate-major buffers (docs/performance.md): per-step constants (p(y), forces
 computed once per step, the residual comes for free (after a global step
 ∇g(x_{k+1})_F = rhs(d_k)_F − rhs(d_{k+1})_F), and d − p(y) is formed before J is applied
 (no cancellation: momentum is conserved to rounding). The result equals the plain half
-steps and the dense iteration of :mod:`clothsim.reference` to rounding (tested).
+steps and the dense iteration of :mod:`clothsim.reference` to rounding (tested). The
+fused iteration is :class:`~clothsim.solvers.fused.FusedStep`, which Chebyshev, Anderson
+and L-BFGS run on too.
 
 References
 ----------
