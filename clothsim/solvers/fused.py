@@ -142,7 +142,13 @@ class FusedStep:
         return self._rhs_next
 
     def current_directions(self):
-        """A callable returning d(x) of the current iterate, coordinate-major (3, s)."""
+        """The current iterate's d(x), built only when called (for :class:`Iterate`).
+
+        Returns
+        -------
+        callable
+            Returns d(x) [m], coordinate-major, shape (3, s); valid until the next move.
+        """
         return self.dirs.current
 
     def _right_hand_side(self, eT: np.ndarray, out: np.ndarray) -> np.ndarray:
@@ -152,19 +158,29 @@ class FusedStep:
         return out
 
     def solve(self) -> np.ndarray:
-        """δ̂ = A_FF⁻¹ rhs(x): the global step from the current x, shape (3, f) [m] (new)."""
+        """The global step from the current x, as a displacement.
+
+        Returns
+        -------
+        ndarray, shape (3, f)
+            δ̂ = A_FF⁻¹ rhs(x) [m], a new array; A_FF δ̂ = rhs(x) (:attr:`rhs`).
+        """
         return self._solve_columns(self._rhs)
 
     def solve_columns(self, bT: np.ndarray) -> np.ndarray:
-        """A_FF⁻¹ b for coordinate-major b of shape (3, f) (a new array, same shape)."""
-        return self._solve_columns(bT)
+        """A_FF⁻¹ b with the cached factor (L-BFGS's H₀).
 
-    def apply(self, deltaT: np.ndarray) -> np.ndarray:
-        """A_FF δ for coordinate-major δ of shape (3, f) [kg·m] (a new array)."""
-        out = np.zeros_like(deltaT)
-        for c in range(3):
-            spmv_add(self.sysf.A_FF, deltaT[c], out[c])
-        return out
+        Parameters
+        ----------
+        bT : ndarray, shape (3, f)
+            Right-hand sides, coordinate-major [kg·m].
+
+        Returns
+        -------
+        ndarray, shape (3, f)
+            A_FF⁻¹ b [m], a new array.
+        """
+        return self._solve_columns(bT)
 
     def _place(self, deltaT: np.ndarray) -> np.ndarray:
         """x = y + δ over the free vertices of the spare buffer; returns the buffer."""
@@ -212,7 +228,18 @@ class FusedStep:
             self._local()
 
     def gradient_norm(self, aT: np.ndarray) -> float:
-        """‖∇g(x)‖ = ‖a − rhs(x)‖ for a = A_FF δ_F of the current x [N·s²] (into :attr:`grad`)."""
+        """‖∇g(x)‖ over the free vertices from A_FF δ_F, without a product with A_FF.
+
+        Parameters
+        ----------
+        aT : ndarray, shape (3, f)
+            a = A_FF δ_F of the current x [kg·m] (carried by the caller).
+
+        Returns
+        -------
+        float
+            ‖a − rhs(x)‖ [N·s²]; ∇g itself is left in :attr:`grad`.
+        """
         np.subtract(aT, self._rhs, out=self.grad)
         return _norm(self.grad)
 

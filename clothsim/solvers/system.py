@@ -47,8 +47,6 @@ class SystemFactor:
     work : ndarray, shape (3, 3, f)
         Coordinate-major buffers: two consecutive right-hand sides (the older one turned into
         ∇g once the newer is formed) and the constant c_F.
-    A_FF : csr_matrix, shape (f, f)
-        A restricted to the free vertices (A_FF δ_F for the gradient of L-BFGS's iterates).
     """
 
     A: sp.csc_matrix
@@ -60,7 +58,6 @@ class SystemFactor:
     free_runs: list | None = None
     pinned_springs: np.ndarray | None = None
     work: np.ndarray | None = None
-    A_FF: sp.csr_matrix | None = None
 
 
 def factor_system(model: Model, problem: StepProblem, Js: sp.csr_matrix, a: np.ndarray,
@@ -110,4 +107,4 @@ def factor_system(model: Model, problem: StepProblem, Js: sp.csr_matrix, a: np.n
                 if j > i]
     pinned_springs = np.flatnonzero(np.isin(a, fixed) | np.isin(b, fixed))
     return SystemFactor(A, free, fixed, factor, A_FP.tocsr(), h2J_F, runs, pinned_springs,
-                        np.empty((3, 3, len(free))), A_FF.tocsr())
+                        np.empty((3, 3, len(free))))
