@@ -7,7 +7,8 @@ import importlib
 import sys
 import time
 
-BENCHMARKS = ("stiffness", "stability_figures", "performance", "accuracy_bench")
+BENCHMARKS = ("stiffness", "stability_figures", "performance", "iteration_cost",
+              "accuracy_bench")
 #: run only when named: the 257² × 500-frame memory run and the scale ladder up to 1025²
 #: take minutes each
 LONG = ("memory", "scale_ladder")

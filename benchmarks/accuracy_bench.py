@@ -84,6 +84,9 @@ def _print(title: str, level: float, res: dict) -> None:
 
 
 def main() -> None:
+    from .iteration_cost import commit
+
+    print(f"accelerated methods against local/global, commit {commit()}")
     model, problem = _step("xz", 1000.0, 15)
     _print(f"buckling sheet {N}x{N} (held at two corners)", 1e-3,
            time_to(model, problem, 1e-3))

@@ -46,3 +46,17 @@ def test_numpy_parts_leave_the_measured_solver_untouched():
     case.measure_parts(repeats=1)
     assert case.parts_solver is not case.solver
     np.testing.assert_array_equal(case.solver.solve(case.problem).x, before)
+
+
+def test_iteration_cost_ratios_are_complete(monkeypatch):
+    """The per-iteration ratio benchmark's arithmetic on a tiny cloth (timings not asserted)."""
+    from benchmarks import iteration_cost
+
+    with threadpool_limits(1), warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        monkeypatch.setattr(iteration_cost, "ITERATIONS", 5)
+        res = iteration_cost.measure(9, repeats=2)
+    assert set(res["ratios"]) == set(iteration_cost.METHODS)
+    assert res["ratios"]["local-global"] == 1.0 == res["cpu_ratios"]["local-global"]
+    assert all(np.isfinite(v) and v > 0 for v in res["ratios"].values())
+    assert len(iteration_cost.commit()) >= 7

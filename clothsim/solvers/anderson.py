@@ -14,9 +14,11 @@ comparison uses :func:`~clothsim.solvers.descent.objective_difference`, computed
 displacement and spring-length changes, so the guard still decides correctly at relative
 residuals far below 1e-8 (two evaluations of g would compare rounding noise there).
 
-Each iteration costs one local step, one global step and one energy difference (plus one
-extra global step when an accelerated iterate is rejected) and a least-squares problem
-with m columns.
+Each iteration runs on local/global's fused iteration (:class:`~.fused.FusedStep`): one
+local step, one solve, one energy difference from the spring vectors the next local step
+needs anyway (plus one more local step when an accelerated iterate is rejected) and a
+least-squares problem with m columns; ‖∇g‖ comes for free, as A_FF of an extrapolation is
+the same extrapolation of the right-hand sides.
 
 References
 ----------
@@ -28,15 +30,15 @@ Anal. 49(4), 2011.
 
 from __future__ import annotations
 
-from collections import deque
 from collections.abc import Iterator
 
 import numpy as np
+from scipy.linalg import lapack
 
 from ..errors import InputError
 from ..model import Model
 from .base import Iterate, StepProblem
-from .descent import objective_difference
+from .fused import FusedStep
 from .local_global import LocalGlobalSolver
 
 
@@ -97,39 +99,79 @@ class AndersonSolver(LocalGlobalSolver):
             k, x of shape (n, 3) [m] (the solver's array: copy it to keep it) and
             ‖∇g(x)‖ over the free degrees of freedom [N·s²].
         """
-        sysf = self.system(problem)
-        free = sysf.free
-        x = problem.initial_guess() if x0 is None else np.array(x0, dtype=np.float64)
-        d = self.local_step(x)
-        k = 0
-        yield Iterate(k, x, float(np.linalg.norm(self.gradient(problem, x, d))), d)
-        gx = self.global_step(problem, d)
-        dF: deque[np.ndarray] = deque(maxlen=self.window)
-        dG: deque[np.ndarray] = deque(maxlen=self.window)
+        step = FusedStep(self, problem, x0, energy=True)
+        yield Iterate(0, step.x, step.norm0, d=step.current_directions())
+        shape, m = step.delta.shape, step.delta.size
+        # in δ = x − y over the free vertices, coordinate-major; each point is kept as the
+        # row [δ | a] with a = A_FF δ: G(x_j) = y + δ̂_j has a = rhs(x_j), and the
+        # extrapolation combines rows, so ‖∇g‖ = ‖a − rhs(x)‖ comes for free (fused.py)
+        window = _Window(self.window, m)
         f_prev = g_prev = None
+        k = 0
         while True:
-            f = (gx - x)[free].ravel()
+            delta_hat = step.solve()
+            f = (delta_hat - step.delta).reshape(-1)
             if not np.any(f):
                 return  # a fixed point in floating point
+            gx = np.concatenate((delta_hat.reshape(-1), step.rhs.reshape(-1)))
             if f_prev is not None:
-                dF.append(f - f_prev)
-                dG.append((gx - g_prev)[free].ravel())
+                window.append(f, f_prev, gx, g_prev)
             f_prev, g_prev = f, gx
-            x_new = gx
-            if dF:
-                F = np.column_stack(dF)
-                theta = np.linalg.lstsq(F, f, rcond=None)[0]
-                x_new = gx.copy()
-                x_new[free] -= (np.column_stack(dG) @ theta).reshape(-1, 3)
-                if not (np.all(np.isfinite(x_new))
-                        and objective_difference(self.model, problem, x, x_new - x) < 0.0):
+            new = gx
+            if window.count:
+                cand = gx - window.extrapolation(f)
+                cand_delta = cand[:m].reshape(shape)
+                if (np.all(np.isfinite(cand_delta))
+                        and step.trial(cand_delta) < 0.0):
+                    step.accept()
+                    new = cand
+                else:
                     self.rejections += 1  # safeguard: take the plain local/global iterate
-                    x_new = gx
-                    dF.clear()
-                    dG.clear()
+                    window.clear()
                     f_prev = g_prev = None
-            x = x_new
-            d = self.local_step(x)
+            if new is gx:
+                step.advance(delta_hat)
             k += 1
-            yield Iterate(k, x, float(np.linalg.norm(self.gradient(problem, x, d))), d)
-            gx = self.global_step(problem, d)
+            yield Iterate(k, step.x, step.gradient_norm(new[m:].reshape(shape)),
+                          d=step.current_directions())
+
+
+_posv = lapack.get_lapack_funcs("posv", dtype=np.float64)
+
+
+class _Window:
+    """The last m differences ΔF (rows of length M) and ΔG, with their Gram matrix ΔFᵀΔF.
+
+    θ = argmin ‖f − ΔF θ‖ from the normal equations (ΔFᵀΔF) θ = ΔFᵀ f, the Gram matrix
+    updated by one row per new difference (m dot products instead of a QR or SVD of the
+    M × m matrix each iteration); a singular or non-finite solve falls back to lstsq.
+    """
+
+    def __init__(self, size: int, length: int):
+        self.size, self.count, self.head = size, 0, 0
+        self.F = np.empty((size, length))
+        self.G = np.empty((size, 2 * length))
+        self.gram = np.empty((size, size))
+
+    def clear(self) -> None:
+        self.count = self.head = 0
+
+    def append(self, f, f_prev, g, g_prev) -> None:
+        """Keep ΔF = f − f_prev and ΔG = g − g_prev (dropping the oldest when full)."""
+        slot = self.head
+        np.subtract(f, f_prev, out=self.F[slot])
+        np.subtract(g, g_prev, out=self.G[slot])
+        self.count = min(self.count + 1, self.size)
+        row = self.F[:self.count] @ self.F[slot]
+        self.gram[slot, :self.count] = row
+        self.gram[:self.count, slot] = row
+        self.head = (slot + 1) % self.size
+
+    def extrapolation(self, f: np.ndarray) -> np.ndarray:
+        """ΔG θ with θ = argmin ‖f − ΔF θ‖ (rows of ΔG: [Δδ | ΔA δ])."""
+        n = self.count
+        F = self.F[:n]
+        _, theta, info = _posv(self.gram[:n, :n], F @ f)   # Cholesky of the Gram matrix
+        if info != 0 or not np.all(np.isfinite(theta)):    # singular: least squares
+            theta = np.linalg.lstsq(F.T, f, rcond=None)[0]
+        return theta @ self.G[:n]

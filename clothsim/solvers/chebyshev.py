@@ -18,12 +18,17 @@ hence
 
 γ > 1 *over*-relaxes (Wang's γ ≈ 0.9 under-relaxes, which suits an inexact, Jacobi-type
 global step whose spectrum reaches −ρ, not the exact Cholesky solve used here). The
-iteration, with delay S (plain relaxed steps before acceleration starts), is
+iteration, with delay S (plain local/global steps before acceleration starts), is
 
-    ω_k     = 1                          for k < S
+    ω_k     = 1, γ_k = 1                 for k < S
     ω_S     = 2 / (2 − ρ'²)
-    ω_{k+1} = 4 / (4 − ρ'² ω_k)          for k > S
-    x_{k+1} = ω_{k+1} (γ (G(x_k) − x_k) + x_k − x_{k−1}) + x_{k−1}.
+    ω_{k+1} = 4 / (4 − ρ'² ω_k)          for k > S, γ_k = γ for k ≥ S
+    x_{k+1} = ω_{k+1} (γ_k (G(x_k) − x_k) + x_k − x_{k−1}) + x_{k−1}.
+
+No over-relaxation without acceleration: while k < S the step is plain local/global
+(γ_k = 1), so a run of at most S iterations per step is local/global itself, never
+local/global over-relaxed by γ ≈ 2 (which diverges: the relaxed spectrum [1 − γ, γρ + 1 − γ]
+is only contracted by the Chebyshev polynomial, not by a lone relaxed step).
 
 With ρ = 0 (γ = 1, all ω = 1) it is plain local/global, bit for bit.
 
@@ -62,7 +67,8 @@ import numpy as np
 
 from ..errors import InputError, check_finite
 from ..model import Model
-from .base import Iterate, StepProblem
+from .base import Iterate, StepProblem, gradient_noise_floor
+from .fused import FusedStep
 from .local_global import LocalGlobalSolver
 
 log = logging.getLogger(__name__)
@@ -100,18 +106,24 @@ def estimate_spectral_radius(model: Model, problem: StepProblem, *, iterations: 
     Returns
     -------
     float
-        ρ in [0, 1) (dimensionless); 0 when the iteration converged at once.
+        ρ in [0, 1) (dimensionless); 0 when the iteration converged at once: when x_0 or
+        the first update's x_1 is already at the gradient's rounding floor
+        (:func:`~clothsim.objective.gradient_noise_floor`). Updates after an iterate at
+        the floor are rounding noise and are not fitted.
     """
     if iterations < 3 or fit_last < 1:
         raise InputError(f"estimate_spectral_radius: need iterations >= 3 and fit_last >= 1, "
                          f"got {iterations} and {fit_last}")
     lg = solver if solver is not None else LocalGlobalSolver(model, backend=backend)
     steps = []
-    x_prev = None
+    x_prev = floor = None
     for it in LocalGlobalSolver.iterates(lg, problem):
         if x_prev is not None:
             steps.append(float(np.linalg.norm(it.x - x_prev)))
-        if it.k >= iterations:
+        else:
+            floor = gradient_noise_floor(model, problem, it.x)
+        # at the rounding floor the updates are noise: their ratios say nothing about ρ
+        if it.k >= iterations or not it.gradient_norm > floor:
             break
         x_prev = it.x.copy()
     steps = np.asarray(steps)
@@ -141,7 +153,7 @@ class ChebyshevSolver(LocalGlobalSolver):
         Default: estimated by :func:`estimate_spectral_radius` on the first solved step and
         kept (a one-off cost; :meth:`get_state` / :meth:`set_state` carry it over a resume).
     delay : int, default 2
-        S: relaxed, unaccelerated iterations before acceleration starts (0–3 is right for
+        S: plain local/global iterations (ω = γ = 1) before acceleration starts (0–3 is right for
         an exact global step; Wang's S = 10 suits an inexact one).
     gamma : float, optional
         Relaxation γ ∈ (0, 2); default 2 / (2 − ρ), the shift that centres the spectrum.
@@ -248,12 +260,14 @@ class ChebyshevSolver(LocalGlobalSolver):
     def iterates(self, problem: StepProblem, x0: np.ndarray | None = None) -> Iterator[Iterate]:
         """Yield the initial guess, then each accelerated iterate, without end.
 
-        Each iterate costs one local step, one gradient norm and one global step (the cost
-        of a local/global iteration). ρ is estimated first when not known. With
-        G(x_k) the plain local/global iterate from x_k (Wang 2015, shifted as in the module
-        docstring),
+        Each iterate costs one local/global iteration of :class:`~.fused.FusedStep` and one
+        linear combination of three rows (its ‖∇g‖ comes for free). ρ is estimated first
+        when not known. With G(x_k) the plain local/global iterate from x_k (Wang 2015,
+        shifted as in the module docstring),
 
-            x_{k+1} = ω_{k+1} (γ (G(x_k) − x_k) + x_k − x_{k−1}) + x_{k−1}.
+            x_{k+1} = ω_{k+1} (γ_k (G(x_k) − x_k) + x_k − x_{k−1}) + x_{k−1},
+
+        γ_k = 1 for k < S (plain local/global before acceleration), γ after.
 
         Parameters
         ----------
@@ -273,15 +287,35 @@ class ChebyshevSolver(LocalGlobalSolver):
             self.rho = estimate_spectral_radius(self.model, problem, solver=self)
             self.rho_estimations += 1
         gamma = self.gamma
-        x = problem.initial_guess() if x0 is None else np.array(x0, dtype=np.float64)
-        x_prev = x
+        step = FusedStep(self, problem, x0)
+        yield Iterate(0, step.x, step.norm0, d=step.current_directions())
+        # rows [δ | a] of G(x_k), x_k, x_{k−1} (δ_F = x_F − y_F, a = A_FF δ_F): the update
+        # is one linear combination of the three rows, and A_FF δ̂ = rhs(x_k) gives a for
+        # free, so ‖∇g(x_{k+1})‖ = ‖a_{k+1} − rhs(x_{k+1})‖ (clothsim.solvers.fused)
+        m = step.delta.size
+        rows = np.empty((3, 2 * m))
+        rows[1, :m], rows[1, m:] = step.delta.reshape(-1), step.a0.reshape(-1)
+        rows[2] = rows[1]
+        hat, cur, prev = 0, 1, 2
+        coef = np.zeros(3)
+        shape = step.delta.shape
+        delay, rho2 = self.delay, self.shifted_rho ** 2
         omega = 1.0
         k = 0
         while True:
-            d = self.local_step(x)
-            yield Iterate(k, x, float(np.linalg.norm(self.gradient(problem, x, d))), d)
-            x_hat = self.global_step(problem, d)
-            omega = self.omega(k, omega)
-            x_next = omega * (gamma * (x_hat - x) + x - x_prev) + x_prev
-            x_prev, x = x, x_next
+            rows[hat, :m] = step.solve().reshape(-1)
+            rows[hat, m:] = step.rhs.reshape(-1)
+            # ω and γ as self.omega and the delay say (inlined: this loop is the hot path)
+            if k < delay:   # plain local/global: no over-relaxation before acceleration
+                omega, g = 1.0, 1.0
+            else:
+                omega = 2.0 / (2.0 - rho2) if k == delay else 4.0 / (4.0 - rho2 * omega)
+                g = gamma
+            coef[hat], coef[cur], coef[prev] = omega * g, omega * (1.0 - g), 1.0 - omega
+            new = coef @ rows
+            rows[prev] = new
+            cur, prev = prev, cur
+            step.advance(new[:m].reshape(shape))
             k += 1
+            yield Iterate(k, step.x, step.gradient_norm(new[m:].reshape(shape)),
+                          d=step.current_directions())

@@ -68,11 +68,14 @@ class SpringDirections:
             xc.take(b, out=tmp, mode="clip")
             np.subtract(pc, tmp, out=pc)
 
-    def _scale(self, pT: np.ndarray) -> np.ndarray:
+    def _scale(self, pT: np.ndarray, length_given: np.ndarray | None = None) -> np.ndarray:
         """pT *= r / |p| in place; returns the springs with |p| = 0 (left at 0 in pT)."""
         length = self._length
-        np.einsum("ij,ij->j", pT, pT, out=length)            # |p|
-        np.sqrt(length, out=length)
+        if length_given is None:
+            np.einsum("ij,ij->j", pT, pT, out=length)        # |p|
+            np.sqrt(length, out=length)
+        else:                                                # |p| known by the caller
+            np.copyto(length, length_given)
         coincident = _NONE
         if len(length) and not length.min() > 0:             # rare: some ends coincide
             coincident = np.flatnonzero(length == 0)
@@ -134,7 +137,8 @@ class SpringDirections:
         self._d, self._xT, self._carried = dT, None, (_NONE, np.zeros((3, 0)))
         return dT
 
-    def e_into(self, xT: np.ndarray, pT: np.ndarray, pyT: np.ndarray) -> np.ndarray:
+    def e_into(self, xT: np.ndarray, pT: np.ndarray, pyT: np.ndarray,
+               length: np.ndarray | None = None) -> np.ndarray:
         """e = d(x) − p(y) in place over pT, which holds x's spring vectors p(x) on entry.
 
         Parameters
@@ -146,13 +150,15 @@ class SpringDirections:
             p(x) on entry, e on return [m].
         pyT : ndarray, shape (3, s)
             p(y) [m].
+        length : ndarray, shape (s,), optional
+            |p(x)| [m] when the caller has it (the same values the step would compute).
 
         Returns
         -------
         ndarray, shape (3, s)
             pT, now e [m].
         """
-        coincident = self._scale(pT)
+        coincident = self._scale(pT, length)
         if len(coincident):
             pT[:, coincident] = self.previous(coincident)
         self._record(xT, pT, coincident)

@@ -6,9 +6,12 @@ H₀ = (M + h² L)⁻¹ — the global-step matrix, applied through the cached s
 factor of :class:`~clothsim.solvers.LocalGlobalSolver` (two triangular solves). Without any
 pair the direction −H₀ ∇g(x) is exactly the local/global step; the pairs add the
 curvature the fixed matrix misses. The step length comes from a backtracking Armijo line
-search on the cancellation-free difference
-:func:`~clothsim.solvers.descent.objective_difference`, so g never increases (beyond
-rounding) and the search still works at residuals far below 1e-8. Pairs with
+search on the cancellation-free difference of g (:meth:`FusedStep.trial
+<clothsim.solvers.fused.FusedStep.trial>`, as
+:func:`~clothsim.solvers.descent.objective_difference`), so g never increases (beyond
+rounding) and the search still works at residuals far below 1e-8. It runs on
+local/global's fused iteration: the accepted trial's spring vectors start the local step,
+and ∇g = A_FF δ − rhs with A_FF δ carried through the pairs (no product with A_FF). Pairs with
 sᵀt ≤ 0 (negative curvature, buckling) are skipped, keeping the implicit inverse positive
 definite.
 
@@ -21,7 +24,6 @@ J. Nocedal, S. J. Wright. Numerical Optimization, 2nd ed., Springer 2006, Alg. 7
 
 from __future__ import annotations
 
-from collections import deque
 from collections.abc import Iterator
 
 import numpy as np
@@ -29,7 +31,8 @@ import numpy as np
 from ..errors import InputError
 from ..model import Model
 from .base import Iterate, StepProblem
-from .descent import armijo
+from .descent import ARMIJO_C, MAX_HALVINGS
+from .fused import FusedStep
 from .local_global import LocalGlobalSolver
 
 
@@ -67,9 +70,6 @@ class LBFGSSolver(LocalGlobalSolver):
             raise InputError(f"solver.window: must be an integer >= 1, got {window!r}")
         self.window = int(window)
 
-    def _grad(self, problem: StepProblem, x: np.ndarray) -> np.ndarray:
-        return self.gradient(problem, x, self.local_step(x))
-
     def iterates(self, problem: StepProblem, x0: np.ndarray | None = None) -> Iterator[Iterate]:
         """Yield the initial guess, then each L-BFGS iterate, g never increasing.
 
@@ -77,7 +77,9 @@ class LBFGSSolver(LocalGlobalSolver):
         two-loop recursion from H₀ = (M + h² L)⁻¹ and the pairs (s_j, t_j) with
         ρ_j = 1 / (s_jᵀ t_j) > 0; then x_{k+1} = x_k + α p with α from a backtracking
         Armijo search (Liu, Bouaziz, Kavan 2017; Nocedal and Wright Alg. 7.4). Returns when
-        no step length along p decreases g.
+        no step length along p decreases g. Runs on local/global's fused iteration
+        (:class:`~.fused.FusedStep`): ∇g(x) = A_FF δ − rhs(x) from the local step that
+        the energy comparison of the accepted trial has already begun.
 
         Parameters
         ----------
@@ -92,36 +94,99 @@ class LBFGSSolver(LocalGlobalSolver):
             k, x of shape (n, 3) [m] (the solver's array: copy it to keep it) and
             ‖∇g(x)‖ over the free degrees of freedom [N·s²].
         """
-        sysf = self.system(problem)
-        free = sysf.free
-        solve = sysf.A_FF_factor.solve
-        x = problem.initial_guess() if x0 is None else np.array(x0, dtype=np.float64)
-        grad = self._grad(problem, x)
+        step = FusedStep(self, problem, x0, energy=True)
+        a = step.a0                        # A_FF δ_F of the current iterate
+        grad = a - step.rhs                # ∇g over the free vertices, coordinate-major
         k = 0
-        yield Iterate(k, x, float(np.linalg.norm(grad)))
-        pairs: deque[tuple[np.ndarray, np.ndarray, float]] = deque(maxlen=self.window)
+        yield Iterate(k, step.x, step.norm0)
+        hist = _Pairs(self.window, grad.size)
         while True:
-            q = grad.copy()
-            alphas = []
-            for s, t, rho in reversed(pairs):
-                a = rho * float(np.sum(s * q))
-                alphas.append(a)
-                q -= a * t
-            r = solve(q)
-            for (s, t, rho), a in zip(pairs, reversed(alphas)):
-                r += (a - rho * float(np.sum(t * r))) * s
-            direction = np.zeros_like(x)
-            direction[free] = -r
-            found = armijo(self.model, problem, x, direction, -float(np.sum(grad * r)))
-            if found is None:
+            r, r_parts = hist.inverse_hessian_times(grad, step.solve_columns)
+            slope = -float(np.vdot(grad, r))
+            if not slope < 0.0:
+                return  # no descent direction at working precision: optimal to rounding
+            delta, alpha = step.delta, 1.0
+            for _ in range(MAX_HALVINGS):   # backtracking Armijo (descent.armijo), fused
+                if step.trial(delta - alpha * r) <= ARMIJO_C * alpha * slope:
+                    break
+                alpha *= 0.5
+            else:
                 return  # no decrease at working precision: optimal to rounding
-            step = found[0] * direction
-            x = x + step
-            grad_new = self._grad(problem, x)
-            s, t = step[free], grad_new - grad
-            st = float(np.sum(s * t))
+            step.accept()
+            # ∇g(x_{k+1}) = A_FF δ_{k+1} − rhs(x_{k+1}), A_FF δ_{k+1} = A_FF δ_k − α A_FF r
+            # with A_FF r = q + Σ c_j A_FF s_j (H₀ = A_FF⁻¹; the pairs keep A_FF s_j)
+            As = -alpha * hist.apply_a(r_parts)
+            a_new = a + As
+            grad_new = a_new - step.rhs
+            s, t = -alpha * r, grad_new - grad
+            st = float(np.vdot(s, t))
             if st > 0.0:
-                pairs.append((s, t, 1.0 / st))
+                hist.append(s.reshape(-1), t.reshape(-1), 1.0 / st, As.reshape(-1))
+            a = a_new
             grad = grad_new
             k += 1
-            yield Iterate(k, x, float(np.linalg.norm(grad)))
+            yield Iterate(k, step.x, float(np.linalg.norm(grad)))
+
+
+class _Pairs:
+    """The last m pairs (s_j, t_j) with ρ_j and their products s_iᵀ t_j, for the two loops.
+
+    The two-loop recursion (Nocedal and Wright Alg. 7.4) rewritten on the inner products
+    it needs: with sᵢᵀ∇g, tᵢᵀ(H₀ q) and the kept matrix sᵢᵀtⱼ, each loop's scalars come
+    from an m × m triangle, and each loop's vector update is one product with the m stored
+    rows (instead of 2m dot products and 2m vector updates). Same H ∇g, to rounding.
+    """
+
+    def __init__(self, size: int, length: int):
+        self.size = size
+        self.S = np.zeros((size, length))
+        self.T = np.zeros((size, length))
+        self.ST = np.zeros((size, size))
+        self.rho = np.zeros(size)
+        self.U = np.zeros((size, length))   # A_FF s_j
+        self.order: list[int] = []     # slots, oldest first
+
+    def append(self, s: np.ndarray, t: np.ndarray, rho: float, u: np.ndarray) -> None:
+        if len(self.order) < self.size:
+            slot = len(self.order)
+        else:
+            slot = self.order.pop(0)
+        self.order.append(slot)
+        self.S[slot], self.T[slot], self.rho[slot], self.U[slot] = s, t, rho, u
+        self.ST[slot, :] = self.T @ s
+        self.ST[:, slot] = self.S @ t
+
+    def inverse_hessian_times(self, gT: np.ndarray, solve) -> np.ndarray:
+        """H ∇g by the two loops, H₀ applied by ``solve`` (coordinate-major, shape of gT),
+        and what :meth:`apply_a` needs."""
+        order = self.order
+        if not order:
+            return solve(gT), (gT, None)
+        g = gT.reshape(-1)
+        sg, ST, rho = (self.S @ g).tolist(), self.ST.tolist(), self.rho.tolist()
+        alpha = [0.0] * self.size
+        for n, i in enumerate(reversed(order)):         # newest first
+            acc = sg[i]
+            for j in order[len(order) - n:]:            # the newer pairs
+                acc -= alpha[j] * ST[i][j]
+            alpha[i] = rho[i] * acc
+        q = g - np.asarray(alpha) @ self.T
+        r = solve(q.reshape(gT.shape))
+        tr = (self.T @ r.reshape(-1)).tolist()
+        coef = [0.0] * self.size                        # α_j − β_j
+        for n, i in enumerate(order):                   # oldest first
+            acc = tr[i]
+            for j in order[:n]:                         # the older pairs
+                acc += coef[j] * ST[j][i]
+            coef[i] = alpha[i] - rho[i] * acc
+        coef = np.asarray(coef)
+        r += (coef @ self.S).reshape(gT.shape)
+        return r, (q.reshape(gT.shape), coef)
+
+    def apply_a(self, parts) -> np.ndarray:
+        """A_FF r for the r of :meth:`inverse_hessian_times`, from its ``parts``
+        (q, the coefficients of the s_j): q + Σ c_j A_FF s_j, without a product with A_FF."""
+        q, coef = parts
+        if coef is None:
+            return q.copy()
+        return q + (coef @ self.U).reshape(q.shape)

@@ -21,7 +21,9 @@ coordinate-major buffers (docs/performance.md): per-step constants (p(y), forces
 computed once per step, the residual comes for free (after a global step
 ∇g(x_{k+1})_F = rhs(d_k)_F − rhs(d_{k+1})_F), and d − p(y) is formed before J is applied
 (no cancellation: momentum is conserved to rounding). The result equals the plain half
-steps and the dense iteration of :mod:`clothsim.reference` to rounding (tested).
+steps and the dense iteration of :mod:`clothsim.reference` to rounding (tested). The
+fused iteration is :class:`~clothsim.solvers.fused.FusedStep`, which Chebyshev, Anderson
+and L-BFGS run on too.
 
 References
 ----------
@@ -32,15 +34,15 @@ ACM Transactions on Graphics 32(6), 214, 2013. DOI 10.1145/2508363.2508406.
 from __future__ import annotations
 
 import logging
-import math
 
 import numpy as np
 
 from .. import matrices
-from ..factorization import single_threaded, spmv_add
+from ..factorization import single_threaded
 from ..model import Model
 from .base import Iterate, Solver, StepProblem, StepResult
 from .directions import SpringDirections
+from .fused import FusedStep
 from .system import SystemFactor, factor_system
 
 log = logging.getLogger(__name__)
@@ -305,81 +307,13 @@ class LocalGlobalSolver(Solver):
         Iterate
             k, x_k (n, 3) [m] and ‖∇g(x_k)‖ [N·s²].
         """
-        sysf = self.system(problem)
-        free, fixed = sysf.free, sysf.fixed
-        dirs = self._dirs
-        from_y = x0 is None and problem.start == "y"   # x_0 = y: p(x_0) is p(y)
-        x = problem.initial_guess() if x0 is None else np.array(x0, dtype=np.float64)
-        xT = np.ascontiguousarray(x.T)
-        # per-step constants: y, p(y), c_F = (h² f + h² K_anchor (q − y))_F − A_FP δ_P
-        y = problem.y
-        yT = np.ascontiguousarray(y.T)
-        h2J_F, solve_columns = sysf.h2J_F, sysf.A_FF_factor.solve_columns
-        rhsT, rhs_nextT, cT = sysf.work
-        pyT, eT = self._pyT, self._eT
-        dirs.vectors_into(yT, pyT)
-        h2 = problem.h ** 2
-        c = np.zeros_like(y) if problem.f_ext is None else h2 * problem.f_ext
-        problem.anchors.add_rhs(c, h2, origin=y)
-        cT[...] = c[free].T
-        x_fixed_T = None
-        if len(fixed):
-            x_pinned = x if x0 is None else problem.initial_guess()
-            x_fixed_T = np.ascontiguousarray(x_pinned[fixed].T)
-            cT -= (sysf.A_FP @ (x_pinned[fixed] - y[fixed])).T
-        # free vertices as runs of consecutive indices: x_F = y_F + δ_F by slices
-        runs = sysf.free_runs
-        yFT = np.ascontiguousarray(yT[:, free]) if runs is None else None
-        xFT = np.empty_like(yFT) if runs is None else None
-
-        def right_hand_side(eT, out):   # (b(d) − A y)_F − A_FP δ_P = h² (J (d − p(y)))_F + c_F
-            np.copyto(out, cT)
-            for c in range(3):
-                spmv_add(h2J_F, eT[c], out[c])
-            return out
-
-        def norm(aT):
-            flat = aT.reshape(-1)
-            return math.sqrt(float(np.dot(flat, flat)))
-
-        # local step at x_0; x_0 = y (pins applied) has p(y)'s vectors but at the exact pins
-        if from_y:
-            np.copyto(eT, pyT)
-            pinned = sysf.pinned_springs
-            if len(pinned):
-                eT[:, pinned] = xT[:, self._a[pinned]] - xT[:, self._b[pinned]]
-        else:
-            dirs.vectors_into(xT, eT)
-        right_hand_side(dirs.e_into(xT, eT, pyT), rhsT)
-        if from_y:        # δ_F = 0 at x_0, so ∇g(x_0)_F = (A δ)_F − (b − A y)_F = −rhs_F
-            yield Iterate(0, x, norm(rhsT), d=dirs.current)
-        else:
-            g0 = self.gradient(problem, x, dirs.current().T)
-            yield Iterate(0, x, float(np.linalg.norm(g0)), d=dirs.current)
-        # two position buffers in turn: the last local step's x stays intact for the next
-        # one (the carried directions are rebuilt from it, clothsim.solvers.directions);
-        # the global step writes only free vertices, so both hold the pins' targets
-        xT_next = xT.copy()
-        if x_fixed_T is not None:
-            xT_next[:, fixed] = x_fixed_T
+        step = FusedStep(self, problem, x0)
+        yield Iterate(0, step.x, step.norm0, d=step.current_directions())
         k = 0
         while True:
-            # global step: A_FF δ_F = h² (J (d − p(y)))_F + c_F, x = y + δ
-            deltaT = solve_columns(rhsT)
-            if runs is None:
-                np.add(yFT, deltaT, out=xFT)
-                xT_next[:, free] = xFT
-            else:
-                for start, stop, offset in runs:
-                    np.add(yT[:, start:stop], deltaT[:, offset:offset + stop - start],
-                           out=xT_next[:, start:stop])
-            xT, xT_next = xT_next, xT
-            # local step at x_{k+1} (e = d − p(y) over its spring vectors), next right-hand side
-            dirs.vectors_into(xT, eT)
-            right_hand_side(dirs.e_into(xT, eT, pyT), rhs_nextT)
-            np.subtract(rhsT, rhs_nextT, out=rhsT)     # ∇g(x_{k+1}) over the free vertices
-            if k == 0 and x_fixed_T is not None:      # x_0's buffer: written next for x_2
-                xT_next[:, fixed] = x_fixed_T
+            # global step: A_FF δ_F = h² (J (d − p(y)))_F + c_F, x = y + δ; then the local
+            # step at x_{k+1} and its rhs; ∇g(x_{k+1}) = rhs(x_k) − rhs(x_{k+1})
+            step.advance(step.solve())
             k += 1
-            yield Iterate(k, xT.T, norm(rhsT), d=dirs.current)
-            rhsT, rhs_nextT = rhs_nextT, rhsT
+            yield Iterate(k, step.x, step.gradient_norm(step.rhs_previous),
+                          d=step.current_directions())

@@ -1,0 +1,85 @@
+"""The accelerated solvers on local/global's fused iteration (clothsim.solvers.fused).
+
+Their ‖∇g‖ is not computed from its definition but carried: a = A_FF δ as the same
+combination of right-hand sides as δ is of global steps (Chebyshev, Anderson), or through
+the pairs' A_FF s (L-BFGS). These tests recompute ∇g from its definition at every iterate,
+on cases the fused kernel was not tuned on: penalty pins, a start at x_n, gravity with
+exact pins, a cloth far from the origin.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import warnings
+
+import numpy as np
+import pytest
+
+import clothsim as cs
+from clothsim.solvers import gradient_noise_floor, make_solver
+from clothsim.solvers.descent import objective_difference
+from clothsim.solvers.fused import FusedStep
+
+from .cases import buckling_step
+
+METHODS = ["local-global", "chebyshev", "anderson", "lbfgs"]
+
+
+def penalty_step(offset=(0.0, 0.0, 0.0)):
+    """A 7 × 7 curtain held by two penalty pins, mid-swing, optionally far from the origin."""
+    mesh = cs.grid(7, 7, size=(1.0, 1.0), center=np.add((0.0, 1.0, 0.0), offset), plane="xy")
+    springs = cs.grid_springs(mesh, structural=900.0, shear=900.0, bending=90.0,
+                              bending_pattern="every")
+    model = cs.Model.build(mesh, springs, total_mass=1.0)
+    sim = cs.Simulation(model, h=1 / 30, iterations=30,
+                        effects=[cs.Gravity((0.0, -9.81, 0.0)),
+                                 cs.Pin([42, 48], method="penalty", stiffness=2e4)])
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        sim.run(5)
+    return model, sim.problem()
+
+
+def cases():
+    model, problem = buckling_step(7, frames=10)
+    yield "exact pins", model, problem
+    yield "x_n start", model, dataclasses.replace(problem, start="x_n")
+    yield "penalty pins", *penalty_step()
+    yield "far away", *penalty_step((300.0, -40.0, 120.0))
+
+
+@pytest.mark.parametrize("method", METHODS)
+def test_carried_gradient_is_the_gradient(method):
+    for label, model, problem in cases():
+        opts = {"rho": 0.95} if method == "chebyshev" else {}
+        solver = make_solver(method, model, **opts)
+        lg = make_solver("local-global", model)
+        floor = None
+        for it in solver.iterates(problem):
+            x = it.x.copy()
+            direct = float(np.linalg.norm(lg.gradient(problem, x, lg.local_step(x))))
+            # both are exact to their rounding floors (objective.gradient_noise_floor)
+            floor = floor or 10 * gradient_noise_floor(model, problem, x)
+            assert it.gradient_norm == pytest.approx(direct, rel=1e-6, abs=floor), \
+                (label, it.k)
+            if it.k >= 40:
+                break
+
+
+def test_trial_is_the_objective_difference():
+    """FusedStep.trial equals objective_difference at steps from 1e-2 down to 1e-9 of δ,
+    penalty pins and far from the origin included."""
+    rng = np.random.default_rng(3)
+    for offset in [(0.0, 0.0, 0.0), (300.0, -40.0, 120.0)]:
+        model, problem = penalty_step(offset)
+        solver = make_solver("anderson", model)
+        step = FusedStep(solver, problem, energy=True)
+        step.advance(step.solve())
+        x = step.x.copy()
+        for scale in (1e-2, 1e-5, 1e-9):
+            cand = step.delta + scale * rng.normal(size=step.delta.shape)
+            fused = step.trial(cand)
+            x_new = x.copy()
+            x_new[step.free] = problem.y[step.free] + cand.T
+            ref = objective_difference(model, problem, x, x_new - x)
+            assert fused == pytest.approx(ref, rel=1e-6, abs=1e-22), (offset, scale)
