@@ -1,0 +1,32 @@
+"""A run never silently replaces another scene's run in the default folder out/<name>."""
+
+from clothsim.cli import main
+from clothsim.scene import builtin_scene_text
+
+
+def test_a_copy_with_the_same_name_is_refused_naming_both(tmp_path, monkeypatch, capsys):
+    monkeypatch.chdir(tmp_path)
+    assert main(["run", "hanging", "--frames", "3", "--no-preview"]) == 0
+    before = sorted(p.name for p in (tmp_path / "out" / "hanging").iterdir())
+    copy = tmp_path / "my-scene.toml"
+    copy.write_text(builtin_scene_text("hanging").replace("frames = 90", "frames = 2"))
+    capsys.readouterr()
+    assert main(["run", str(copy), "--no-preview"]) == 2
+    err = capsys.readouterr().err
+    assert "another scene" in err and "my-scene.toml" in err and "hanging.toml" in err
+    assert "--out DIR" in err and "--force" in err
+    assert sorted(p.name for p in (tmp_path / "out" / "hanging").iterdir()) == before
+    # the same scene again, or with --force / --out, is fine
+    assert main(["run", "hanging", "--frames", "3", "--no-preview"]) == 0
+    assert main(["run", str(copy), "--no-preview", "--out", "out/mine"]) == 0
+    assert main(["run", str(copy), "--no-preview", "--force"]) == 0
+
+
+def test_another_version_of_the_scene_suggests_resume(tmp_path, monkeypatch, capsys):
+    monkeypatch.chdir(tmp_path)
+    assert main(["run", "hanging", "--frames", "2", "--no-preview"]) == 0
+    capsys.readouterr()
+    assert main(["run", "hanging", "--set", "solver.iterations=3", "--frames", "2",
+                 "--no-preview"]) == 2
+    err = capsys.readouterr().err
+    assert "another version of this scene" in err and "--resume" in err
