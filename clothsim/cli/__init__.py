@@ -110,7 +110,8 @@ def build_parser() -> argparse.ArgumentParser:
                                           "same recorded steps of a scene")
     acc.add_argument("scene", nargs="?", default="hanging",
                      help="scene name or TOML path (default: hanging)")
-    acc.add_argument("--out", default="accuracy-out", help="output directory")
+    acc.add_argument("--out", default="accuracy-out",
+                     help="output directory (default: accuracy-out)")
     acc.add_argument("--methods", default=None,
                      help="comma-separated solvers (default: local-global,chebyshev,anderson,"
                           "lbfgs,newton)")

@@ -10,8 +10,21 @@ PROG = "clothsim"
 log = logging.getLogger("clothsim.cli")
 
 
+class _Formatter(argparse.HelpFormatter):
+    """Help lines that never break inside a hyphenated name ("local-global")."""
+
+    def _split_lines(self, text, width):
+        import textwrap
+
+        return textwrap.wrap(" ".join(text.split()), width, break_on_hyphens=False)
+
+
 class _Parser(argparse.ArgumentParser):
     """argparse, but a usage error is one line and exit status 2 (no usage dump)."""
+
+    def __init__(self, *args, **kwargs):
+        kwargs.setdefault("formatter_class", _Formatter)
+        super().__init__(*args, **kwargs)
 
     def error(self, message):
         raise _UsageError(message)
