@@ -46,3 +46,15 @@ def test_frames_on_request_compares_only_n(ref, tmp_path):
 
 def test_equal_counts_still_pass(ref, tmp_path):
     assert compare_trajectories(tmp_path / "ref.npy", tmp_path / "ref.npy").passed
+
+
+def test_kappa_from_a_scene_of_another_size_is_refused(tmp_path, capsys):
+    from clothsim.cli import main
+
+    assert main(["export", "hanging", "--frames", "2", "--iterate-steps", "0",
+                 "--out", str(tmp_path / "e")]) == 0
+    capsys.readouterr()
+    code = main(["compare", str(tmp_path / "e"), str(tmp_path / "e"), "--precision", "float32",
+                 "--scene", "drop-on-square"])
+    err = capsys.readouterr().err
+    assert code != 0 and "κ comes from a scene of 625 vertices" in err and "441" in err

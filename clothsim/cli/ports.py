@@ -152,17 +152,18 @@ def _cmd_compare(args) -> int:
                                 drop_columns="attachments" if args.drop_attachments else None)
         print(mres.summary())
         return 0 if mres.passed else 1
-    kappa = args.kappa
+    kappa, kappa_vertices = args.kappa, None
     if kappa is None and args.scene is not None:
         from ..ports.check import as_simulation, system_condition_number
         from ..scene import load_scene
 
-        kappa = system_condition_number(as_simulation(load_scene(args.scene)))
+        sim = as_simulation(load_scene(args.scene))
+        kappa, kappa_vertices = system_condition_number(sim), sim.model.vertex_count
     result = compare_trajectories(
         args.trajectory, args.reference, key=args.key or args.field or "positions",
         frames=args.frames, match=args.match_vertices, kappa=kappa, fmt=args.fmt,
         dtype=args.dtype, vertex_count=args.vertices, rtol=args.rtol, atol=args.atol,
-        precision=args.precision)
+        precision=args.precision, kappa_vertices=kappa_vertices)
     for note in result.notes:
         print(f"note: {note}")
     print(result.summary())

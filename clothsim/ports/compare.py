@@ -308,7 +308,7 @@ def compare_arrays(a, b, *, rtol: float | None = None, atol: float | None = None
 def compare_trajectories(path, reference, *, key: str = "positions", frames: int | None = None,
                          match: bool = False, kappa: float | None = None, fmt=None,
                          dtype=None, vertex_count=None, field: str | None = None,
-                         **options) -> Comparison:
+                         kappa_vertices: int | None = None, **options) -> Comparison:
     """Read two trajectories (any format of :mod:`clothsim.ports.formats`) and compare them.
 
     Parameters
@@ -328,6 +328,9 @@ def compare_trajectories(path, reference, *, key: str = "positions", frames: int
         How to read ``path`` (see :func:`clothsim.ports.formats.read_trajectory`).
     field : str, optional
         Alias of ``key``.
+    kappa_vertices : int, optional
+        Vertices of the scene ``kappa`` was computed from: it must be the trajectories'
+        (a condition number of another size says nothing about this port).
     **options
         Passed to :func:`compare_arrays` (``precision``, ``rtol``, ``atol``).
 
@@ -343,6 +346,9 @@ def compare_trajectories(path, reference, *, key: str = "positions", frames: int
     key = field or key
     a = read_trajectory(path, key=key, fmt=fmt, dtype=dtype, vertex_count=vertex_count)
     b = read_trajectory(reference, key=key, vertex_count=vertex_count)
+    if kappa_vertices is not None and b.shape[1] != kappa_vertices:
+        raise InputError(f"scene: κ comes from a scene of {kappa_vertices} vertices, the "
+                         f"trajectories have {b.shape[1]}: give the port's own scene")
     manifest = Path(reference) / "manifest.json"
     if kappa is None and manifest.is_file():
         kappa = json.loads(manifest.read_text()).get("condition_number")

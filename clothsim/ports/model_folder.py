@@ -237,6 +237,10 @@ def _from_folder(d: Path) -> ModelTables:
     if (d / "masses.txt").is_file():
         masses = read_table(d / "masses.txt", 1, "mass").ravel()
         _count_check(d / "masses.txt", masses, n)
+        if np.any(masses < 0):
+            i = int(np.flatnonzero(masses < 0)[0])
+            raise InputError(f"{d / 'masses.txt'}: vertex {i}: mass {masses[i]:g} kg is "
+                             f"negative (0 means pinned)")
     if (d / "forces.txt").is_file():
         forces = read_table(d / "forces.txt", 3, "fx fy fz")
         _count_check(d / "forces.txt", forces, n)

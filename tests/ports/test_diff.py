@@ -134,3 +134,12 @@ def test_nan_masses_are_a_difference():
     b = ModelTables(a.x0, a.springs, a.stiffness, a.rest, np.full(len(a.x0), np.nan), a.pins)
     d = diff_models(a, b)
     assert not d.identical and "masses of B: 441 not finite" in d.cause
+
+
+def test_negative_masses_in_a_folder_are_an_error(tmp_path):
+    export_port(cs.load_scene("hanging"), tmp_path / "e", frames=1, iterate_steps=0)
+    m = np.loadtxt(tmp_path / "e" / "masses.txt")
+    m[5] = -1.0
+    np.savetxt(tmp_path / "e" / "masses.txt", m)
+    with pytest.raises(cs.InputError, match="masses.txt: vertex 5: mass -1 kg is negative"):
+        model_tables(tmp_path / "e")
