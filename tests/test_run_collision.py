@@ -30,3 +30,14 @@ def test_another_version_of_the_scene_suggests_resume(tmp_path, monkeypatch, cap
                  "--no-preview"]) == 2
     err = capsys.readouterr().err
     assert "another version of this scene" in err and "--resume" in err
+
+
+def test_an_export_of_another_scene_is_refused_too(tmp_path, monkeypatch, capsys):
+    monkeypatch.chdir(tmp_path)
+    assert main(["export", "hanging", "--frames", "1", "--iterate-steps", "0"]) == 0
+    copy = tmp_path / "other.toml"
+    copy.write_text(builtin_scene_text("hanging").replace("mass = 1.0", "mass = 2.0"))
+    capsys.readouterr()
+    assert main(["export", str(copy), "--frames", "1", "--iterate-steps", "0"]) == 2
+    assert "holds an export of another scene" in capsys.readouterr().err
+    assert main(["export", "hanging", "--frames", "1", "--iterate-steps", "0"]) == 0

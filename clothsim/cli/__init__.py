@@ -42,7 +42,17 @@ from pathlib import Path
 from .. import __version__
 from ..errors import InputError
 from ..scene.schema import MAX_FRAMES, MAX_VERTICES
-from .common import PROG, _fail, _Parser, _UsageError, add_set_option, count, log, os_error_line
+from .common import (
+    PROG,
+    _fail,
+    _Parser,
+    _UsageError,
+    add_set_option,
+    count,
+    log,
+    os_error_line,
+    other_output,
+)
 from .logs import _configure_logging, _no_progress_bars_off_terminal, _warnings_to_log
 from .ports import (
     _add_port_commands,
@@ -170,33 +180,6 @@ def _cmd_validate(args) -> int:
     return 0
 
 
-def _where(source) -> str:
-    """A scene source as an absolute path where it names a file (run.json keeps it as given)."""
-    p = Path(str(source))
-    return str(p.resolve()) if p.is_file() else str(source)
-
-
-def _other_run(out: Path, scene) -> str | None:
-    """Why ``out`` (the default folder out/<name>) holds another scene's run, if it does."""
-    import json
-
-    try:
-        previous = json.loads((out / "run.json").read_text())
-    except (OSError, ValueError):
-        return None
-    if not isinstance(previous, dict) or "clothsim_run" not in previous:
-        return None
-    mine = json.loads(json.dumps(scene.to_dict(), default=str))
-    theirs = previous.get("scene")
-    same_source = _where(previous.get("source")) == _where(scene.source)
-    if same_source and theirs == mine:
-        return None
-    what = "another version of this scene" if same_source else "another scene"
-    return (f"{out} holds a run of {what}: {previous.get('source')} there, {scene.source} now "
-            f"(same scene.name); run with --out DIR to keep both, --force to replace it"
-            + (", or --resume to continue it" if what.startswith("another version") else ""))
-
-
 def _cmd_run(args) -> int:
     from ..runner import NonFiniteStateError, handle_signals, run_scene
     from ..scene import DEFAULT_SCENE, load_scene
@@ -216,7 +199,7 @@ def _cmd_run(args) -> int:
             return _fail(f"scene.name: {scene.name!r} cannot name a folder in out/; "
                          "use --out DIR", 2)
     if args.out is None and not (args.resume or args.force):
-        other = _other_run(out, scene)
+        other = other_output(out, scene)
         if other:
             return _fail(other, 2)
     frames = scene.frames if args.frames is None else args.frames

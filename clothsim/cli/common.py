@@ -5,6 +5,7 @@ from __future__ import annotations
 import argparse
 import logging
 import sys
+from pathlib import Path
 
 PROG = "clothsim"
 log = logging.getLogger("clothsim.cli")
@@ -107,3 +108,49 @@ def os_error_line(exc: OSError, where=None) -> str:
         return f"{name}: {cause}" if name is not None else cause
     detail = f" ({name})" if name is not None and str(name) != str(where) else ""
     return f"{where}: {cause}{detail}"
+
+
+def _where(source) -> str:
+    """A scene source as an absolute path where it names a file (run.json keeps it as given)."""
+    p = Path(str(source))
+    return str(p.resolve()) if p.is_file() else str(source)
+
+
+def other_output(out: Path, scene, record: str = "run.json") -> str | None:
+    """Why ``out`` (a default folder, out/<name>) holds another scene's output, if it does.
+
+    Parameters
+    ----------
+    out : Path
+        The default output folder.
+    scene : Scene
+        The scene about to write there.
+    record : {"run.json", "manifest.json"}
+        The output's own record (a run's, an export's); both keep the scene's ``source``
+        and resolved ``scene``.
+
+    Returns
+    -------
+    str or None
+        The one-line refusal naming both sources and the ways on, or None when ``out``
+        holds nothing of another scene.
+    """
+    import json
+
+    try:
+        previous = json.loads((out / record).read_text())
+    except (OSError, ValueError):
+        return None
+    if not isinstance(previous, dict) or not previous.get("source"):
+        return None
+    mine = json.loads(json.dumps(scene.to_dict(), default=str))
+    theirs = previous.get("scene")
+    same_source = _where(previous.get("source")) == _where(scene.source)
+    if same_source and theirs == mine:
+        return None
+    what = "another version of this scene" if same_source else "another scene"
+    kind = "a run" if record == "run.json" else "an export"
+    return (f"{out} holds {kind} of {what}: {previous.get('source')} there, {scene.source} now "
+            f"(same scene.name); run with --out DIR to keep both, --force to replace it"
+            + (", or --resume to continue it" if what.startswith("another version")
+               and record == "run.json" else ""))

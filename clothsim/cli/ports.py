@@ -7,7 +7,7 @@ import math
 from pathlib import Path
 
 from ..scene.schema import MAX_FRAMES, MAX_VERTICES
-from .common import _fail, add_set_option, count
+from .common import _fail, add_set_option, count, other_output
 
 
 def _add_port_commands(sub) -> None:
@@ -127,6 +127,10 @@ def _cmd_export(args) -> int:
         return _fail("--out: empty; name a folder", 2)
     scene = load_scene(args.scene, args.set)
     out = Path(args.out) if args.out is not None else Path("out") / scene.name / "export"
+    if args.out is None and not args.force:
+        other = other_output(out, scene, "manifest.json")
+        if other:
+            return _fail(other, 2)
     frames = scene.frames if args.frames is None else args.frames
     manifest = export_port(scene, out, frames=frames, iterate_steps=args.iterate_steps,
                            force=args.force)

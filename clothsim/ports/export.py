@@ -327,6 +327,8 @@ def _export_locked(source, sim, out: Path, frames: int, iterate_steps: int) -> d
     manifest = {
         "layout": LAYOUT, "h": h, "vertex_count": n, "spring_count": model.spring_count,
         "frames": frames + 1,
+        "source": str(getattr(source, "source", "")) if hasattr(source, "to_dict") else "",
+        "scene": source.to_dict() if hasattr(source, "to_dict") else None,
         "solver": {"method": solver.name, "iterations": solver.iterations,
                    "tolerance": solver.tolerance,
                    "initial_guess": sim.initial_guess},
