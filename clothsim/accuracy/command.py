@@ -15,7 +15,7 @@ from collections.abc import Sequence
 from pathlib import Path
 
 from ..errors import InputError
-from .problems import record_problems
+from .problems import load_problems, record_problems, save_problems
 from .report import (
     answer_table,
     fixed_budget_table,
@@ -74,7 +74,8 @@ def run_accuracy(scene, out, *, methods: Sequence[str] = ITERATIVE_METHODS,
                  problems: int = 8, frames: int | None = None, repeats: int = 5,
                  jobs: int = 1, scheduler: str | None = None, target: float | None = None,
                  budgets: Sequence[int] = BUDGETS, tolerances: Sequence[float] = TOLERANCES,
-                 time_steps: bool = True, plots: bool = True, threads: int = 1) -> str:
+                 time_steps: bool = True, plots: bool = True, threads: int = 1,
+                 steps_file=None) -> str:
     """Run the accuracy study of ``scene`` into folder ``out``; return the printed report.
 
     Parameters
@@ -104,6 +105,9 @@ def run_accuracy(scene, out, *, methods: Sequence[str] = ITERATIVE_METHODS,
         Write the PNG figures (needs matplotlib).
     threads : int
         BLAS threads during timing.
+    steps_file : path, optional
+        A ``problems.npz`` an earlier study wrote: measure exactly those step problems
+        instead of recording new ones.
 
     Returns
     -------
@@ -127,8 +131,12 @@ def run_accuracy(scene, out, *, methods: Sequence[str] = ITERATIVE_METHODS,
     factory, model, frame_time = scene_factory(scene)
     frames = scene.frames if frames is None else frames
     h = scene.h
-    sim = factory("newton", h, 100, 1e-10)
-    recorded = record_problems(sim, steps=max(1, frames * scene.substeps), count=problems)
+    if steps_file is not None:
+        recorded = load_problems(steps_file)
+    else:
+        sim = factory("newton", h, 100, 1e-10)
+        recorded = record_problems(sim, steps=max(1, frames * scene.substeps), count=problems)
+    save_problems(recorded, out / "problems.npz")
     steps = prepare_steps(model, recorded)
     options = {}
     if "chebyshev" in methods:
@@ -136,7 +144,9 @@ def run_accuracy(scene, out, *, methods: Sequence[str] = ITERATIVE_METHODS,
     configs = default_configurations(methods, budgets=budgets, tolerances=tolerances,
                                      options=options)
     results = measure(model, steps, configs, jobs=jobs, scheduler=scheduler)
+    write_csv(rows(results, steps, h=h), out / "accuracy.csv")  # errors kept if timing fails
     time_configurations(model, steps, results, repeats=repeats, threads=threads)
+    write_csv(rows(results, steps, h=h), out / "accuracy.csv")
     notes = []
     ts_error, ts, traj = math.nan, None, {}
     if time_steps and frames > 0:
@@ -156,6 +166,14 @@ def run_accuracy(scene, out, *, methods: Sequence[str] = ITERATIVE_METHODS,
     write_sidecar(info, out / "accuracy.json")
     (out / "steps.md").write_text(steps_table(steps) + "\n")
     kinds = [s.kind for s in steps]
+    missed = sum(1 for r in recorded if r.converged is False)
+    if missed:
+        notes.append(f"{missed} recorded step(s): the recording solve missed its tolerance "
+                     f"(column 'recorded' in steps.md)")
+    diverged = [r.setting for r in table if r.status == "diverged"]
+    if diverged:
+        notes.append(f"{len(diverged)} configuration(s) diverged (status 'diverged' in the "
+                     f"CSV, never an answer): {'; '.join(diverged)}")
     if "two-minima" in kinds:
         notes.append(f"{kinds.count('two-minima')} step(s) have two minima (Newton from y and "
                      f"from converged local/global end at different points): no single "
@@ -183,5 +201,5 @@ def run_accuracy(scene, out, *, methods: Sequence[str] = ITERATIVE_METHODS,
             fixed_budget_table(table), ""]
     text += [f"note: {n}" for n in notes]
     text.append(f"wrote {out / 'accuracy.csv'} ({len(table)} configurations), "
-                f"{out / 'accuracy.json'}, {out / 'steps.md'}")
+                f"{out / 'accuracy.json'}, {out / 'steps.md'}, {out / 'problems.npz'}")
     return "\n".join(text)

@@ -8,6 +8,7 @@ from __future__ import annotations
 import csv
 import json
 import math
+import os
 from collections.abc import Sequence
 from dataclasses import asdict, dataclass
 from pathlib import Path
@@ -21,7 +22,7 @@ COLUMNS = ("method", "h", "iterations", "tolerance", "solver_error_median",
            "steps_measured", "steps_skipped", "steps_at_rest", "steps_trivial",
            "steps_two_minima", "time_step_error", "trajectory_error",
            "seconds_per_step_median", "seconds_per_step_iqr", "repeats",
-           "solves_per_step", "factorizations_per_step")
+           "solves_per_step", "factorizations_per_step", "status", "steps_diverged")
 FIXED_BUDGETS = (5, 10, 20)
 
 
@@ -57,6 +58,11 @@ class Row:
         Global-step solves per step (median iterations; 0 for Newton).
     factorizations_per_step : float
         Factorizations per step (Newton).
+    status : str
+        "ok", or "diverged" when the configuration blew up on a measured step, in timing
+        or on its trajectory (its errors there are inf; it is never an answer).
+    steps_diverged : int
+        Measured steps on which it blew up.
     setting : str
         A short description, e.g. ``"chebyshev, 10 it/step"``.
     """
@@ -82,6 +88,8 @@ class Row:
     repeats: int
     solves_per_step: float
     factorizations_per_step: float
+    status: str = "ok"
+    steps_diverged: int = 0
 
     @property
     def setting(self) -> str:
@@ -122,12 +130,14 @@ def rows(results: Sequence[ConfigResult], steps: Sequence[StudyStep], *, h: floa
         it_med = float(_median(r.iterations))
         sec, iqr = median_iqr(r.seconds)
         solves = it_med if c.method != "newton" else 0.0
+        traj = (trajectory_errors or {}).get(c, math.nan)
+        diverged = bool(r.diverged or r.trajectory_diverged or traj == math.inf)
         out.append(Row(c.method, h, c.iterations, c.tolerance, med, p90, mx, it_med,
                        float(r.iterations.max()) if len(r.iterations) else math.nan,
                        count["measured"], len(steps) - count["measured"], count["at-rest"],
                        count["trivial"], count["two-minima"], time_step_error,
-                       (trajectory_errors or {}).get(c, math.nan), sec, iqr, len(r.seconds),
-                       solves, r.factorizations))
+                       traj, sec, iqr, len(r.seconds), solves, r.factorizations,
+                       "diverged" if diverged else "ok", int(r.diverged)))
     return out
 
 
@@ -148,14 +158,17 @@ def write_csv(table: Sequence[Row], path) -> Path:
     Returns
     -------
     Path
-        ``path``.
+        ``path``, written atomically (a temporary file renamed over it): a crash leaves the
+        previous complete CSV, never half of one.
     """
     path = Path(path)
-    with path.open("w", newline="") as fh:
+    tmp = path.with_name(path.name + ".tmp")
+    with tmp.open("w", newline="") as fh:
         w = csv.DictWriter(fh, fieldnames=COLUMNS)
         w.writeheader()
         for row in table:
             w.writerow({k: ("" if v is None else v) for k, v in asdict(row).items()})
+    os.replace(tmp, path)
     return path
 
 
@@ -198,7 +211,7 @@ def cheapest(table: Sequence[Row], level: float, *, error: str = "solver_error_p
         None when no timed row reaches ``level``.
     """
     ok = [r for r in table if math.isfinite(getattr(r, error)) and getattr(r, error) <= level
-          and math.isfinite(r.seconds_per_step_median)]
+          and math.isfinite(r.seconds_per_step_median) and r.status != "diverged"]
     return min(ok, key=lambda r: r.seconds_per_step_median) if ok else None
 
 
@@ -304,14 +317,17 @@ def steps_table(steps: Sequence[StudyStep]) -> str:
     str
         A Markdown table.
     """
-    lines = ["| step | t [s] | kind | ‖∇g(y)‖/floor | 1-iteration error | Newton residual "
-             "| λ_min(H)/m_min | uncertainty | g(x₂) − g(x*) | rho_local_global |",
-             "|---" * 10 + "|"]
+    lines = ["| step | t [s] | recorded | kind | ‖∇g(y)‖/floor | 1-iteration error "
+             "| Newton residual | λ_min(H)/m_min | uncertainty | g(x₂) − g(x*) "
+             "| rho_local_global |",
+             "|---" * 11 + "|"]
     for s in steps:
         ref = s.reference
         cert = ("| | | | |" if ref is None else
                 f"| {ref.residual:.1e} | {ref.min_eigenvalue:.3g} | {ref.uncertainty:.1e} "
                 f"| {ref.objective_difference:.2e} | {s.rho:.4f} |")
-        lines.append(f"| {s.step.index} | {s.step.time:.4g} | {s.kind} | {s.rest_ratio:.2e} "
+        rec = {True: "converged", False: "missed tolerance", None: "–"}[s.step.converged]
+        lines.append(f"| {s.step.index} | {s.step.time:.4g} | {rec} | {s.kind} "
+                     f"| {s.rest_ratio:.2e} "
                      f"| {s.one_iteration_error:.2e} {cert}")
     return "\n".join(lines)

@@ -21,6 +21,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
+from ..errors import ClothsimError
 from ..model import Model
 from ..solvers import estimate_spectral_radius, make_solver
 from .problems import RecordedStep, classify
@@ -122,6 +123,11 @@ class ConfigResult:
         Per-step wall time [s], one entry per timing repeat.
     factorizations : float
         Mean factorizations per step (Newton), hardware independent.
+    diverged : int
+        Measured steps on which the configuration blew up (a non-finite state, force or
+        error, or a failed factorization); their error is inf.
+    trajectory_diverged : bool
+        Its whole-run trajectory blew up.
     """
 
     config: Configuration
@@ -129,6 +135,8 @@ class ConfigResult:
     iterations: np.ndarray                   # (m,) iterations used per step
     seconds: list[float] = field(default_factory=list)   # per-step seconds, one per repeat
     factorizations: float = 0.0              # per step (Newton), hardware independent
+    diverged: int = 0
+    trajectory_diverged: bool = False
 
 
 def prepare_steps(model: Model, recorded: Sequence[RecordedStep], *,
@@ -219,18 +227,30 @@ def chebyshev_rho(model: Model, steps: Sequence[StudyStep], *, backend: str = "a
     return max(rhos, default=0.0)
 
 
-def _solve_one(model: Model, config: Configuration, study_step: StudyStep) -> tuple[float, int,
-                                                                                    int]:
-    solver = config.solver(model)
+BLOW_UPS = (ClothsimError, FloatingPointError, OverflowError, ValueError, ZeroDivisionError,
+            np.linalg.LinAlgError)
+"""What a configuration that blows up raises (a non-finite state or force, a failed
+factorization): recorded as diverged, the study goes on."""
+
+
+def _solve_one(model: Model, config: Configuration,
+               study_step: StudyStep) -> tuple[float, int, int, bool]:
+    """(relative error, iterations, factorizations, diverged) of one solve."""
     problem = study_step.step.problem
-    with warnings.catch_warnings():
-        warnings.simplefilter("ignore")
-        res = solver.solve(problem)
+    try:
+        solver = config.solver(model)
+        with warnings.catch_warnings(), np.errstate(all="ignore"):
+            warnings.simplefilter("ignore")
+            res = solver.solve(problem)
+    except BLOW_UPS as exc:
+        log.warning("%s diverged on step %d: %s", config.label, study_step.step.index, exc)
+        return math.inf, 0, 0, True
     x_star = study_step.reference.x
     scale = float(np.linalg.norm(x_star - problem.x)) or 1.0
     err = float(np.linalg.norm(res.x - x_star)) / scale
-    return (err if math.isfinite(err) else math.inf), int(res.iterations), \
-        int(getattr(solver, "factor_count", 0) if config.method == "newton" else 0)
+    diverged = not math.isfinite(err)
+    return (math.inf if diverged else err), int(res.iterations), \
+        int(getattr(solver, "factor_count", 0) if config.method == "newton" else 0), diverged
 
 
 def measure(model: Model, steps: Sequence[StudyStep], configs: Sequence[Configuration], *,
@@ -268,7 +288,8 @@ def measure(model: Model, steps: Sequence[StudyStep], configs: Sequence[Configur
         out.append(ConfigResult(c, np.array([r[0] for r in chunk]),
                                 np.array([r[1] for r in chunk]),
                                 factorizations=float(np.mean([r[2] for r in chunk]))
-                                if chunk else 0.0))
+                                if chunk else 0.0,
+                                diverged=sum(bool(r[3]) for r in chunk)))
     return out
 
 

@@ -22,7 +22,7 @@ import numpy as np
 
 from ..model import Model
 from ..solvers import LocalGlobalSolver, estimate_spectral_radius
-from .study import ConfigResult, StudyStep
+from .study import BLOW_UPS, ConfigResult, StudyStep
 
 
 def _limited_threads(threads: int):
@@ -63,16 +63,29 @@ def time_configurations(model: Model, steps: Sequence[StudyStep],
     if not measured:
         return
     solvers = [r.config.solver(model) for r in results]
-    with warnings.catch_warnings(), _limited_threads(threads):
+    broken = set()
+    with warnings.catch_warnings(), _limited_threads(threads), np.errstate(all="ignore"):
         warnings.simplefilter("ignore")
-        for solver in solvers:  # warm-up: factor M + h² L, estimate ρ (one-off costs)
-            solver.solve(measured[0].step.problem)
+        for i, solver in enumerate(solvers):  # warm-up: factor M + h² L, estimate ρ (one-off)
+            try:
+                solver.solve(measured[0].step.problem)
+            except BLOW_UPS:
+                broken.add(i)
         for _ in range(repeats):
-            for solver, res in zip(solvers, results):
+            for i, (solver, res) in enumerate(zip(solvers, results)):
+                if i in broken or res.diverged:  # a blown-up configuration is not timed
+                    continue
                 t0 = time.perf_counter()
-                for s in measured:
-                    solver.solve(s.step.problem)
+                try:
+                    for s in measured:
+                        solver.solve(s.step.problem)
+                except BLOW_UPS:
+                    broken.add(i)
+                    continue
                 res.seconds.append((time.perf_counter() - t0) / len(measured))
+    for i in broken:
+        results[i].diverged = max(results[i].diverged, 1)
+        results[i].seconds.clear()
 
 
 def median_iqr(seconds: Sequence[float]) -> tuple[float, float]:

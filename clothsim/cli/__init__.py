@@ -123,6 +123,9 @@ def build_parser() -> argparse.ArgumentParser:
     acc.add_argument("--no-plots", action="store_true", help="write no figures")
     acc.add_argument("--quick", action="store_true",
                      help="few problems, budgets and repeats (a first look, not for a referee)")
+    acc.add_argument("--steps", default=None, metavar="FILE",
+                     help="re-measure exactly the step problems of an earlier study "
+                          "(its problems.npz) instead of recording new ones")
     acc.add_argument("--paper", action="store_true",
                      help="the paper's Fig. 1 setup: local/global against Newton (crossover)")
     acc.add_argument("--paper-size", type=int, default=41, help="vertices per side (--paper)")
@@ -225,7 +228,8 @@ def _cmd_accuracy(args) -> int:
     print(accuracy.run_accuracy(
         scene, args.out, problems=kw.pop("problems", args.problems), frames=args.frames,
         repeats=args.repeats, jobs=args.jobs, scheduler=args.scheduler, target=args.target,
-        time_steps=not args.no_time_steps, plots=not args.no_plots, **kw))
+        time_steps=not args.no_time_steps, plots=not args.no_plots, steps_file=args.steps,
+        **kw))
     return 0
 
 

@@ -1,0 +1,99 @@
+"""A study that never loses its work: blow-ups recorded, CSV kept, steps saved and re-run."""
+
+import csv
+import math
+import warnings
+
+import numpy as np
+import pytest
+
+import clothsim as cs
+from clothsim import gallery
+from clothsim.accuracy import record_problems, run_accuracy
+from clothsim.accuracy.problems import load_problems, save_problems
+from clothsim.errors import InputError
+from clothsim.scene import Scene
+from clothsim.solvers.anderson import AndersonSolver
+
+from .test_study import TINY
+
+
+def study(tmp_path, **kw):
+    args = dict(methods=("local-global", "anderson"), problems=3, repeats=1, budgets=(1, 5),
+                tolerances=(1e-6,), time_steps=False, plots=False)
+    args.update(kw)
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        return run_accuracy(Scene.from_dict(TINY), tmp_path, **args)
+
+
+def read(path):
+    with open(path, newline="") as fh:
+        return list(csv.DictReader(fh))
+
+
+def test_a_configuration_that_blows_up_is_a_diverged_row_and_the_rest_is_measured(
+        tmp_path, monkeypatch):
+    original = AndersonSolver.solve
+
+    def blow_up(self, problem, x0=None):
+        if self.iterations == 5:  # one configuration only, as a nan force would
+            raise InputError("external_force[0, 0]: must be a finite number, got nan")
+        return original(self, problem, x0)
+
+    monkeypatch.setattr(AndersonSolver, "solve", blow_up)
+    text = study(tmp_path, time_steps=True)
+    table = {(r["method"], r["iterations"], r["tolerance"]): r
+             for r in read(tmp_path / "accuracy.csv")}
+    bad = table[("anderson", "5", "")]
+    assert bad["status"] == "diverged" and int(bad["steps_diverged"]) >= 1
+    assert math.isinf(float(bad["solver_error_max"]))
+    assert math.isinf(float(bad["trajectory_error"]))
+    others = [r for k, r in table.items() if k != ("anderson", "5", "")]
+    assert len(others) == 5
+    for r in others:
+        assert r["status"] == "ok" and math.isfinite(float(r["solver_error_max"]))
+        assert math.isfinite(float(r["seconds_per_step_median"]))
+    assert "diverged" in text and "anderson, 5 it/step" in text
+
+
+def test_a_crash_keeps_the_measured_errors(tmp_path, monkeypatch):
+    import clothsim.accuracy.command as command
+
+    def crash(*args, **kwargs):
+        raise RuntimeError("the machine went away")
+
+    monkeypatch.setattr(command, "time_configurations", crash)
+    with pytest.raises(RuntimeError):
+        study(tmp_path)
+    rows = read(tmp_path / "accuracy.csv")
+    assert len(rows) == 6 and all(math.isfinite(float(r["solver_error_max"])) for r in rows)
+    assert (tmp_path / "problems.npz").exists()
+
+
+def test_saved_steps_are_re_measured_exactly(tmp_path):
+    study(tmp_path / "a")
+    study(tmp_path / "b", steps_file=tmp_path / "a" / "problems.npz", problems=1)
+    a, b = load_problems(tmp_path / "a" / "problems.npz"), load_problems(
+        tmp_path / "b" / "problems.npz")
+    assert [s.index for s in a] == [s.index for s in b] and len(a) == 3
+    for s, t in zip(a, b):
+        for name in ("x", "v", "y", "f_ext", "fixed_vertices", "anchor_stiffness"):
+            u, w = getattr(s.problem, name), getattr(t.problem, name)
+            assert (u is None and w is None) or np.array_equal(u, w), name
+    ra, rb = read(tmp_path / "a" / "accuracy.csv"), read(tmp_path / "b" / "accuracy.csv")
+    cols = ("solver_error_median", "solver_error_max", "iterations_max", "steps_measured")
+    assert [[r[c] for c in cols] for r in ra] == [[r[c] for c in cols] for r in rb]
+    with pytest.raises(InputError, match="accuracy.steps"):
+        study(tmp_path / "c", steps_file=tmp_path / "missing.npz")
+
+
+def test_recorded_steps_that_missed_their_tolerance_are_marked(tmp_path):
+    model = gallery.grid_cloth(4, k=800.0, plane="xy", center=(0.0, 1.0, 0.0))
+    sim = cs.Simulation(model, h=1 / 30, solver="newton", iterations=1, tolerance=1e-14,
+                        effects=[cs.Gravity(gallery.GRAVITY), cs.Pin([12, 15])])
+    recorded = record_problems(sim, steps=3, count=3)
+    assert [r.converged for r in recorded] == [False, False, False]
+    back = load_problems(save_problems(recorded, tmp_path / "p.npz"))
+    assert [r.converged for r in back] == [False, False, False]
+    assert np.array_equal(back[1].problem.y, recorded[1].problem.y)
