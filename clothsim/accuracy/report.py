@@ -13,14 +13,18 @@ from collections.abc import Sequence
 from dataclasses import asdict, dataclass
 from pathlib import Path
 
-from .study import ConfigResult, StudyStep, quantiles
+import numpy as np
+
+from .study import KINDS, MEASURED, ConfigResult, StudyStep, quantiles
 from .timing import median_iqr
 from .trace import ACCURACY_LEVELS
 
 COLUMNS = ("method", "h", "iterations", "tolerance", "solver_error_median",
-           "solver_error_p90", "solver_error_max", "iterations_median", "iterations_max",
-           "steps_measured", "steps_skipped", "steps_at_rest", "steps_trivial",
-           "steps_two_minima", "time_step_error", "trajectory_error",
+           "solver_error_p90", "solver_error_max", "objective_gap_median", "objective_gap_p90",
+           "objective_gap_max", "iterations_median", "iterations_max",
+           "steps_measured", "steps_skipped", "steps_unique", "steps_several_minima",
+           "steps_saddle", "steps_reference_failed", "steps_at_rest", "steps_trivial",
+           "time_step_error", "trajectory_error",
            "seconds_per_step_median", "seconds_per_step_iqr", "repeats",
            "solves_per_step", "factorizations_per_step", "status", "steps_diverged")
 FIXED_BUDGETS = (5, 10, 20)
@@ -41,11 +45,18 @@ class Row:
     tolerance : float or None
         Relative-residual tolerance, or None (fixed budget).
     solver_error_median, solver_error_p90, solver_error_max : float
-        Relative solver error ‖x − x*‖ / ‖x* − x_n‖ over the measured steps.
+        Relative solver error ‖x − x*‖ / ‖x* − x_n‖ over the unique steps.
+    objective_gap_median, objective_gap_p90, objective_gap_max : float
+        Relative objective gap (g(x) − g(x_best)) / (g(y) − g(x_best)) over every measured
+        step (unique and several minima).
     iterations_median, iterations_max : float
         Iterations used per step.
-    steps_measured, steps_skipped, steps_at_rest, steps_trivial, steps_two_minima : int
-        How the recorded steps were classified (skipped = not measured).
+    steps_measured, steps_skipped : int
+        Steps measured (unique + several minima) and not.
+    steps_unique, steps_several_minima, steps_saddle, steps_reference_failed : int
+        Steps per certificate class (:data:`~clothsim.accuracy.study.KINDS`).
+    steps_at_rest, steps_trivial : int
+        Steps at rest and trivially solved.
     time_step_error : float
         Relative error of implicit Euler itself at this h (NaN when not measured).
     trajectory_error : float
@@ -74,13 +85,19 @@ class Row:
     solver_error_median: float
     solver_error_p90: float
     solver_error_max: float
+    objective_gap_median: float
+    objective_gap_p90: float
+    objective_gap_max: float
     iterations_median: float
     iterations_max: float
     steps_measured: int
     steps_skipped: int
+    steps_unique: int
+    steps_several_minima: int
+    steps_saddle: int
+    steps_reference_failed: int
     steps_at_rest: int
     steps_trivial: int
-    steps_two_minima: int
     time_step_error: float
     trajectory_error: float
     seconds_per_step_median: float
@@ -122,20 +139,24 @@ def rows(results: Sequence[ConfigResult], steps: Sequence[StudyStep], *, h: floa
         Same order as ``results``.
     """
     kinds = [s.kind for s in steps]
-    count = {k: kinds.count(k) for k in ("measured", "at-rest", "trivial", "two-minima")}
+    count = {k: kinds.count(k) for k in KINDS}
+    measured = sum(count[k] for k in MEASURED)
     out = []
     for r in results:
         c = r.config
-        med, p90, mx = quantiles(r.errors)
+        unique = r.unique if len(r.unique) == len(r.errors) else np.ones(len(r.errors), bool)
+        med, p90, mx = quantiles(r.errors[unique])
+        gaps = quantiles(r.gaps) if len(r.gaps) else (math.nan,) * 3
         it_med = float(_median(r.iterations))
         sec, iqr = median_iqr(r.seconds)
         solves = it_med if c.method != "newton" else 0.0
         traj = (trajectory_errors or {}).get(c, math.nan)
         diverged = bool(r.diverged or r.trajectory_diverged or traj == math.inf)
-        out.append(Row(c.method, h, c.iterations, c.tolerance, med, p90, mx, it_med,
+        out.append(Row(c.method, h, c.iterations, c.tolerance, med, p90, mx, *gaps, it_med,
                        float(r.iterations.max()) if len(r.iterations) else math.nan,
-                       count["measured"], len(steps) - count["measured"], count["at-rest"],
-                       count["trivial"], count["two-minima"], time_step_error,
+                       measured, len(steps) - measured, count["unique"],
+                       count["several-minima"], count["saddle"], count["reference-failed"],
+                       count["at-rest"], count["trivial"], time_step_error,
                        traj, sec, iqr, len(r.seconds), solves, r.factorizations,
                        "diverged" if diverged else "ok", int(r.diverged)))
     return out
@@ -216,7 +237,8 @@ def cheapest(table: Sequence[Row], level: float, *, error: str = "solver_error_p
 
 
 def answer_table(table: Sequence[Row], *, levels: Sequence[float] = ACCURACY_LEVELS,
-                 trajectory_levels: Sequence[float] = (), uncertainty: float = 0.0) -> str:
+                 trajectory_levels: Sequence[float] = (), uncertainty: float = 0.0,
+                 gap_levels: Sequence[float] | None = None) -> str:
     """The answer: for each target, the cheapest setting with its time and spread.
 
     Solver-error levels below ``uncertainty`` (the largest reference uncertainty over the
@@ -232,15 +254,28 @@ def answer_table(table: Sequence[Row], *, levels: Sequence[float] = ACCURACY_LEV
         Trajectory-error targets.
     uncertainty : float, default 0
         The references' relative uncertainty.
+    gap_levels : sequence of float, optional
+        Relative-objective-gap targets (p90 over every measured step); default ``levels``
+        when some step has several minima or no step is unique, else none. Solver-error
+        lines are left out when no step is unique.
 
     Returns
     -------
     str
         A Markdown table, one line per target.
     """
+    unique = max((r.steps_unique for r in table), default=1)
+    several = max((r.steps_several_minima for r in table), default=0)
+    if gap_levels is None:
+        gap_levels = levels if (several or not unique) and table else ()
+    if not unique and table:
+        levels = ()
     lines = ["| target | error measured | cheapest setting | ms/step (median) | IQR [ms] |",
              "|---|---|---|---|---|"]
-    for col, name, levs in (("solver_error_p90", "solver error (p90 over steps)", levels),
+    for col, name, levs in (("solver_error_p90", "solver error (p90 over unique steps)",
+                             levels),
+                            ("objective_gap_p90", "objective gap (p90 over measured steps)",
+                             gap_levels),
                             ("trajectory_error", "trajectory error", trajectory_levels)):
         for level in levs:
             if col == "solver_error_p90" and level < uncertainty:
@@ -299,13 +334,29 @@ def reference_uncertainty(steps: Sequence[StudyStep]) -> float:
     float
         Relative uncertainty of x* (dimensionless).
     """
-    u = [s.reference.uncertainty for s in steps if s.kind == "measured"
+    u = [s.reference.uncertainty for s in steps if s.kind == "unique"
          and s.reference is not None and math.isfinite(s.reference.uncertainty)]
     return max(u, default=0.0)
 
 
+STEP_CLASSES = """Step classes (by certificate; a certified minimum has ‖∇g‖ at its rounding
+floor and a Hessian that factors without shift, λ_min > 0):
+
+- unique: Newton from y, from x_n and from converged local/global reach one certified
+  minimum x*; measured by the solver error ‖x − x*‖ / ‖x* − x_n‖.
+- several-minima: the starts reach several certified minima; measured by the relative
+  objective gap (g(x) − g(x_best)) / (g(y) − g(x_best)), x_best the lowest of them.
+- saddle: Newton from y stopped at a stationary point with an indefinite Hessian; never
+  reported as a minimum, not measured.
+- reference-failed: Newton from y did not reach its rounding floor; not measured.
+- trivial: one local/global iteration is already within 1e-12 (free fall); not measured.
+- at-rest: ‖∇g(y)‖ within 1e3 of its rounding floor; not measured.
+
+Column 'recorded': whether the recording run's Newton met its tolerance on the step."""
+
+
 def steps_table(steps: Sequence[StudyStep]) -> str:
-    """One line per recorded step: kind, rest ratio, one-iteration error, certificate.
+    """One line per recorded step: class, rest ratio, one-iteration error, certificate.
 
     Parameters
     ----------
@@ -315,19 +366,22 @@ def steps_table(steps: Sequence[StudyStep]) -> str:
     Returns
     -------
     str
-        A Markdown table.
+        The class legend (:data:`STEP_CLASSES`), a count per class and a Markdown table.
     """
-    lines = ["| step | t [s] | recorded | kind | ‖∇g(y)‖/floor | 1-iteration error "
-             "| Newton residual | λ_min(H)/m_min | uncertainty | g(x₂) − g(x*) "
-             "| rho_local_global |",
-             "|---" * 11 + "|"]
+    kinds = [s.kind for s in steps]
+    counts = ", ".join(f"{k} {kinds.count(k)}" for k in KINDS)
+    lines = [STEP_CLASSES, "", f"Steps per class: {counts}.", "",
+             "| step | t [s] | recorded | kind | ‖∇g(y)‖/floor | 1-iteration error "
+             "| Newton residual | certified | λ_min(H)/m_min | minima | uncertainty "
+             "| g(x_best) − g(x*) | rho_local_global |",
+             "|---" * 13 + "|"]
     for s in steps:
         ref = s.reference
-        cert = ("| | | | |" if ref is None else
-                f"| {ref.residual:.1e} | {ref.min_eigenvalue:.3g} | {ref.uncertainty:.1e} "
+        cert = ("| | | | | | | |" if ref is None else
+                f"| {ref.residual:.1e} | {'yes' if ref.certified else 'no'} "
+                f"| {ref.min_eigenvalue:.3g} | {ref.minima} | {ref.uncertainty:.1e} "
                 f"| {ref.objective_difference:.2e} | {s.rho:.4f} |")
         rec = {True: "converged", False: "missed tolerance", None: "–"}[s.step.converged]
         lines.append(f"| {s.step.index} | {s.step.time:.4g} | {rec} | {s.kind} "
-                     f"| {s.rest_ratio:.2e} "
-                     f"| {s.one_iteration_error:.2e} {cert}")
+                     f"| {s.rest_ratio:.2e} | {s.one_iteration_error:.2e} {cert}")
     return "\n".join(lines)

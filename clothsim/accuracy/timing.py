@@ -59,7 +59,7 @@ def time_configurations(model: Model, steps: Sequence[StudyStep],
     None
         ``results`` are changed in place.
     """
-    measured = [s for s in steps if s.kind == "measured"]
+    measured = [s for s in steps if s.measured]
     if not measured:
         return
     solvers = [r.config.solver(model) for r in results]
@@ -128,7 +128,7 @@ def one_off_costs(model: Model, steps: Sequence[StudyStep], *, repeats: int = 3,
         ``factorization_seconds`` and ``rho_estimation_seconds`` [s]; empty when no
         step is measured.
     """
-    measured = [s for s in steps if s.kind == "measured"]
+    measured = [s for s in steps if s.measured]
     if not measured:
         return {}
     problem = measured[0].step.problem
