@@ -7,7 +7,8 @@ import importlib
 import sys
 import time
 
-BENCHMARKS = ("stiffness", "stability_figures", "performance", "accuracy_bench")
+BENCHMARKS = ("stiffness", "stability_figures", "performance", "accuracy_bench",
+              "accuracy_quick")
 #: run only when named: the 257² × 500-frame memory run takes about 6 minutes
 LONG = ("memory",)
 

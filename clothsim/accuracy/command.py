@@ -14,7 +14,10 @@ import math
 from collections.abc import Sequence
 from pathlib import Path
 
+import numpy as np
+
 from ..errors import InputError
+from ..factorization import cholmod_available
 from .problems import load_problems, record_problems, save_problems
 from .report import (
     answer_table,
@@ -29,17 +32,24 @@ from .study import (
     BUDGETS,
     KINDS,
     TOLERANCES,
+    ConfigResult,
     chebyshev_rho,
     default_configurations,
     measure,
     prepare_steps,
 )
 from .sweep import TRAJECTORY_LEVELS
-from .timing import machine_info, one_off_costs, time_configurations
+from .timing import _limited_threads, machine_info, one_off_costs, time_configurations
 from .trace import ACCURACY_LEVELS, ITERATIVE_METHODS
 from .trajectory import steps_per_frame
 
 log = logging.getLogger(__name__)
+
+QUICK = {"problems": 4, "budgets": (1, 5, 10, 20, 100), "tolerances": (1e-3, 1e-6),
+         "repeats": 1, "cap": 1000}
+"""What ``--quick`` runs (at most: problems and repeats are capped, never raised)."""
+QUICK_TIME_STEP_FRAMES = 6
+"""Frames of ``--quick``'s time-step check (at h and h/2; no trajectory errors)."""
 
 
 def scene_factory(scene):
@@ -76,7 +86,7 @@ def run_accuracy(scene, out, *, methods: Sequence[str] = ITERATIVE_METHODS,
                  jobs: int = 1, scheduler: str | None = None, target: float | None = None,
                  budgets: Sequence[int] = BUDGETS, tolerances: Sequence[float] = TOLERANCES,
                  time_steps: bool = True, plots: bool = True, threads: int = 1,
-                 steps_file=None) -> str:
+                 steps_file=None, quick: bool = False) -> str:
     """Run the accuracy study of ``scene`` into folder ``out``; return the printed report.
 
     Parameters
@@ -109,6 +119,11 @@ def run_accuracy(scene, out, *, methods: Sequence[str] = ITERATIVE_METHODS,
     steps_file : path, optional
         A ``problems.npz`` an earlier study wrote: measure exactly those step problems
         instead of recording new ones.
+    quick : bool
+        A first look in seconds (:data:`QUICK`): at most 4 problems, budgets 1, 5, 10, 20,
+        100, tolerances 1e-3 and 1e-6 (at most 1000 iterations), 1 timing repeat, no
+        trajectory errors, a time-step check of :data:`QUICK_TIME_STEP_FRAMES` frames at h
+        and h/2 only.
 
     Returns
     -------
@@ -127,8 +142,20 @@ def run_accuracy(scene, out, *, methods: Sequence[str] = ITERATIVE_METHODS,
         if m not in SOLVERS or m == "symplectic-euler":
             raise InputError(f"accuracy.methods: {m!r} is not an iterative solver; choose from "
                              f"{', '.join(s for s in SOLVERS if s != 'symplectic-euler')}")
+    if quick:
+        problems, repeats = min(problems, QUICK["problems"]), min(repeats, QUICK["repeats"])
+        budgets, tolerances = QUICK["budgets"], QUICK["tolerances"]
     out = Path(out)
     out.mkdir(parents=True, exist_ok=True)
+    cholmod_available()  # load CHOLMOD's BLAS and OpenMP first, so that their pools are limited
+    with _limited_threads(threads):  # one BLAS/OpenMP thread throughout: reproducible, and
+        # on a shared machine faster than idle worker threads
+        return _run(scene, out, methods, problems, frames, repeats, jobs, scheduler, target,
+                    budgets, tolerances, time_steps, plots, threads, steps_file, quick)
+
+
+def _run(scene, out, methods, problems, frames, repeats, jobs, scheduler, target, budgets,
+         tolerances, time_steps, plots, threads, steps_file, quick) -> str:
     factory, model, frame_time = scene_factory(scene)
     frames = scene.frames if frames is None else frames
     h = scene.h
@@ -143,22 +170,33 @@ def run_accuracy(scene, out, *, methods: Sequence[str] = ITERATIVE_METHODS,
     if "chebyshev" in methods:
         options["chebyshev"] = {"rho": chebyshev_rho(model, steps)}
     configs = default_configurations(methods, budgets=budgets, tolerances=tolerances,
-                                     options=options)
-    results = measure(model, steps, configs, jobs=jobs, scheduler=scheduler)
-    write_csv(rows(results, steps, h=h), out / "accuracy.csv")  # errors kept if timing fails
-    time_configurations(model, steps, results, repeats=repeats, threads=threads)
-    write_csv(rows(results, steps, h=h), out / "accuracy.csv")
+                                     options=options,
+                                     **({"cap": QUICK["cap"]} if quick else {}))
     notes = []
+    nothing = not any(s.measured for s in steps)
+    if nothing:  # early stop: no step can be measured, so nothing below would be used
+        notes.append("no recorded step can be measured (see steps.md): errors and timings "
+                     "were not run" + (", nor the time-step check" if quick else ""))
+        results = [ConfigResult(c, np.zeros(0), np.zeros(0, dtype=int)) for c in configs]
+    else:
+        results = measure(model, steps, configs, jobs=jobs, scheduler=scheduler)
+    write_csv(rows(results, steps, h=h), out / "accuracy.csv")  # errors kept if timing fails
+    if not nothing:
+        time_configurations(model, steps, results, repeats=repeats, threads=threads)
+        write_csv(rows(results, steps, h=h), out / "accuracy.csv")
     ts_error, ts, traj = math.nan, None, {}
-    if time_steps and frames > 0:
+    if time_steps and frames > 0 and not (nothing and quick):
         from .timestep import time_step_study, trajectory_errors
 
-        ts = time_step_study(factory, frame_time=frame_time, frames=min(frames, 30),
-                             time_steps=(h, h / 2, h / 4))
+        ts = time_step_study(factory, frame_time=frame_time,
+                             frames=min(frames, QUICK_TIME_STEP_FRAMES if quick else 30),
+                             time_steps=(h, h / 2) if quick else (h, h / 2, h / 4))
         # no contact-free window: the CSV cell stays empty
         ts_error = ts.errors[ts.time_steps.index(h)] if ts.window is not None else None
         notes.append(ts.note)
-        traj = trajectory_errors(factory, configs, ts.reference, h=h, frame_time=frame_time)
+        if not quick:
+            traj = trajectory_errors(factory, configs, ts.reference, h=h,
+                                     frame_time=frame_time)
     table = rows(results, steps, h=h, time_step_error=ts_error, trajectory_errors=traj)
     write_csv(table, out / "accuracy.csv")
     info = machine_info(threads) | one_off_costs(model, steps, threads=threads)

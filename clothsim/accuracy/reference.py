@@ -29,6 +29,7 @@ import numpy as np
 
 from ..model import Model
 from ..solvers import LocalGlobalSolver, NewtonSolver, StepProblem, objective_gradient
+from ..solvers.curvature import smallest_eigenvalue as eigenvalue_in_metric
 from ..solvers.descent import objective_difference
 
 SAME_POINT = 1e-6
@@ -132,20 +133,11 @@ def smallest_eigenvalue(newton: NewtonSolver, problem: StepProblem, x: np.ndarra
         λ_min(∇²g) / min m_i (dimensionless; 1 for M alone); NaN when there is no free
         degree of freedom or ARPACK does not converge.
     """
-    from scipy.sparse.linalg import ArpackNoConvergence, eigsh
-
     free = np.repeat(problem.free_mask(newton.model.vertex_count), 3)
     H = newton.hessian(problem, x)[free][:, free]
-    if H.shape[0] == 0:
-        return math.nan
     m = float(newton.model.vertex_mass.min())
-    if H.shape[0] <= 400:
-        return float(np.linalg.eigvalsh(H.toarray())[0]) / m
-    try:
-        return float(eigsh(H, k=1, which="SA", tol=1e-8, maxiter=5000,
-                           return_eigenvectors=False)[0]) / m
-    except ArpackNoConvergence:
-        return math.nan
+    mass = np.full(H.shape[0], m)  # λ(H) / m_min: the metric m_min I
+    return eigenvalue_in_metric(H, mass)
 
 
 def certified_reference(model: Model, problem: StepProblem, *, backend: str = "auto",

@@ -210,7 +210,8 @@ def prepare_steps(model: Model, recorded: Sequence[RecordedStep], *,
 
 def default_configurations(methods: Sequence[str], *, budgets: Sequence[int] = BUDGETS,
                            tolerances: Sequence[float] = TOLERANCES,
-                           options: dict | None = None) -> list[Configuration]:
+                           options: dict | None = None,
+                           cap: int = DEFAULT_CAP) -> list[Configuration]:
     """Budget and tolerance configurations for each method (Newton budgets ≤ 10).
 
     Parameters
@@ -223,6 +224,8 @@ def default_configurations(methods: Sequence[str], *, budgets: Sequence[int] = B
         Relative-residual tolerances (iterations capped at 5000, Newton 100).
     options : dict, optional
         Extra solver options per method, e.g. ``{"chebyshev": {"rho": 0.99}}``.
+    cap : int
+        Iteration cap of the tolerance configurations (Newton: 100).
 
     Returns
     -------
@@ -233,8 +236,8 @@ def default_configurations(methods: Sequence[str], *, budgets: Sequence[int] = B
         opts = tuple(sorted((options or {}).get(m, {}).items()))
         its = [b for b in budgets if m != "newton" or b <= 10]
         out += [Configuration(m, int(b), None, opts) for b in its]
-        cap = TOLERANCE_CAP.get(m, DEFAULT_CAP)
-        out += [Configuration(m, cap, float(t), opts) for t in tolerances]
+        its_cap = TOLERANCE_CAP.get(m, cap)
+        out += [Configuration(m, its_cap, float(t), opts) for t in tolerances]
     return out
 
 

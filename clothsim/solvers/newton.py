@@ -11,8 +11,9 @@ Indefinite Hessians (compressed springs, buckling) are handled by ``indefinite``
 
 ``"shift"`` (default)
     τ = 0 (the exact Newton step) when the Cholesky factorization of H succeeds; otherwise
-    the smallest τ ∈ {τ₀, 10 τ₀, …} for which H + τM factors, τ₀ following the last
-    successful shift (Levenberg–Marquardt; Nocedal and Wright Alg. 3.3 with M as metric).
+    the smallest τ ∈ {τ₀, 4 τ₀, 16 τ₀, …} for which H + τM factors, τ₀ the last working
+    shift, divided by 4 after each full (α = 1) shifted step and by 10 after an exact one
+    (Levenberg–Marquardt; Nocedal and Wright Alg. 3.3 with M as metric).
     Every step is therefore a descent direction of a positive definite model, and no
     indefinite matrix is ever factored by an LU. Near a stationary point where H is still
     indefinite (a saddle: a flat strip under compression, a symmetric crumple) the
@@ -56,10 +57,15 @@ from ..model import Model
 from .base import Iterate, Solver, StepProblem, StepResult, gradient_noise_floor, objective_gradient
 from .curvature import ReusedCholesky, negative_curvature, smallest_eigenvalue
 from .descent import ARMIJO_C, MAX_HALVINGS, armijo, objective_difference  # noqa: F401
+from .hessian import FreeHessian
 
 INDEFINITE = ("shift", "project")
 SHIFT_MIN = 1e-8
 SHIFT_MAX = 1e12
+ESCAPE_RATE = 0.5
+"""At an indefinite H, negative curvature is tried when ‖∇g‖ fell by less than this factor
+over the last iteration (the shifted steps crawl, e.g. towards a saddle), when the shifted
+step finds no decrease, or when the gradient already meets the stop rule."""
 
 
 @dataclass
@@ -132,14 +138,14 @@ class NewtonSolver(Solver):
         self._M3 = np.repeat(model.vertex_mass, 3)
         self._shift = SHIFT_MIN
         self._cholesky: ReusedCholesky | None = None
-        self._skeleton = None
+        self._assembler = FreeHessian(model)
         self._definite_at_last = False
         self._curvature_start: np.ndarray | None = None
 
     def invalidate(self) -> None:
         """Forget the symbolic analysis and the masses (call after changing the model)."""
         self._cholesky = None
-        self._skeleton = None
+        self._assembler = FreeHessian(self.model)
         self._M3 = np.repeat(self.model.vertex_mass, 3)
 
     def hessian(self, problem: StepProblem, x: np.ndarray, *,
@@ -177,54 +183,19 @@ class NewtonSolver(Solver):
         self.backend = self._cholesky.backend
         return factor
 
-    def _fixed_pattern(self, H: sp.spmatrix, free: np.ndarray) -> sp.csc_matrix:
-        """H (free part, CSC) stored in the pattern of every spring block and the diagonal.
-
-        Entries that happen to be exactly zero (axis-aligned springs of a flat grid) are
-        kept as explicit zeros, so every Hessian of this cloth has one sparsity pattern and
-        one CHOLMOD analysis serves them all.
-        """
-        key = free.tobytes()
-        if self._skeleton is None or self._skeleton[0] != key:
-            n = self.model.vertex_count
-            xr = np.random.default_rng(0).standard_normal((n, 3))  # generic: no zero entries
-            S = (energy.spring_hessian(self.model, xr, definite=False)
-                 + sp.identity(3 * n, format="csr")).tocsr()[free][:, free].tocsc()
-            S.sum_duplicates()
-            S.sort_indices()
-            m = S.shape[0]
-            cols = np.repeat(np.arange(m, dtype=np.int64), np.diff(S.indptr))
-            keys = cols * m + S.indices
-            diag = np.searchsorted(keys, np.arange(m, dtype=np.int64) * (m + 1))
-            self._skeleton = (key, S, keys, diag)
-        _, S, keys, diag = self._skeleton
-        C = sp.coo_matrix(H)
-        m = S.shape[0]
-        hk = C.col.astype(np.int64) * m + C.row
-        pos = np.searchsorted(keys, hk)
-        if len(hk) and (pos.max() >= len(keys) or not np.array_equal(keys[pos], hk)):
-            return sp.csc_matrix(H)  # outside the skeleton (cannot happen): analyze afresh
-        out = S.copy()
-        out.data = np.zeros_like(S.data)
-        np.add.at(out.data, pos, C.data)
-        return out
-
     def _shifted(self, H: sp.csc_matrix, free: np.ndarray):
-        """(factor of H + τM, τ) with the smallest tried τ > 0 that is positive definite."""
+        """(factor of H + τM, τ) with the smallest tried τ > 0 that is positive definite:
+        τ starts at the last working shift (lowered after full Newton steps) and grows 4×."""
         mass = self._M3[free]
-        diag = self._skeleton[3] if self._skeleton is not None else None
-        tau = max(self._shift / 10.0, SHIFT_MIN)
+        diag = self._assembler.diagonal
+        tau = max(self._shift, SHIFT_MIN)
         while tau <= SHIFT_MAX:
-            if diag is not None and H.shape == self._skeleton[1].shape and H.nnz == len(
-                    self._skeleton[2]):
-                A = H.copy()
-                A.data[diag] += tau * mass
-            else:
-                A = (H + tau * sp.diags(mass)).tocsc()
+            A = H.copy()
+            A.data[diag] += tau * mass
             try:
                 factor = self._factor(A)
             except FactorizationError:
-                tau *= 10.0
+                tau *= 4.0
                 continue
             self._shift = tau
             return factor, tau
@@ -254,18 +225,21 @@ class NewtonSolver(Solver):
         """
         return self._prepare(problem, x, free)[0]
 
-    def _prepare(self, problem, x, free):
-        """(factor, τ, H): τ = 0 and ``factor`` of H itself when H ≻ 0."""
-        H = self._fixed_pattern(self.hessian(problem, x)[free][:, free], free)
-        try:
-            factor = self._factor(H)
-            self._shift = max(self._shift / 10.0, SHIFT_MIN)
-            return factor, 0.0, H
-        except FactorizationError:
-            pass
+    def _prepare(self, problem, x, free, *, try_exact: bool = True):
+        """(factor, τ, H): τ = 0 and ``factor`` of H itself when H ≻ 0. With ``try_exact``
+        False (far from a stationary point, right after an indefinite H) the unshifted
+        factorization, which would almost surely fail, is not attempted."""
+        H = self._assembler.matrix(problem, x, free)
+        if try_exact:
+            try:
+                factor = self._factor(H)
+                self._shift = max(self._shift / 10.0, SHIFT_MIN)
+                return factor, 0.0, H
+            except FactorizationError:
+                pass
         if self.indefinite == "project":
-            P = self.hessian(problem, x, definite=True)[free][:, free]
-            return self._factor(self._fixed_pattern(P, free)), math.inf, H
+            P = self._assembler.matrix(problem, x, free, definite=True)
+            return self._factor(P), math.inf, H
         factor, tau = self._shifted(H, free)
         return factor, tau, H
 
@@ -335,6 +309,7 @@ class NewtonSolver(Solver):
         factor, tau, H = self._prepare(problem, x, free)
         self._definite_at_last = tau == 0.0
         k = hidden = 0
+        previous = math.inf
         yield Iterate(k, x, norm0)
         while True:
             norm = float(np.linalg.norm(grad))
@@ -346,7 +321,10 @@ class NewtonSolver(Solver):
                 found = armijo(self.model, problem, x, step, float(np.sum(grad * step)))
                 if found is not None:
                     x_new, dg = x + found[0] * step, found[1]
-            if tau > 0.0:  # H indefinite: negative curvature may descend further
+                    if tau > 0.0 and found[0] == 1.0:  # the shifted model was trusted
+                        self._shift = max(self._shift / 4.0, SHIFT_MIN)
+            if tau > 0.0 and (x_new is None or norm <= small or norm > ESCAPE_RATE * previous):
+                # H indefinite and the shifted steps stall: negative curvature may descend
                 escape = self._escape(problem, x, grad, H, factor, free)
                 if escape is not None and escape[1] < dg:
                     x_new = escape[0]
@@ -357,9 +335,10 @@ class NewtonSolver(Solver):
             moved = float(np.abs(x_new - x).max())
             x = x_new
             grad = objective_gradient(self.model, problem, x)
-            factor, tau, H = self._prepare(problem, x, free)
+            previous, norm = norm, float(np.linalg.norm(grad))
+            factor, tau, H = self._prepare(
+                problem, x, free, try_exact=tau == 0.0 or norm <= max(small, 1e-3 * norm0))
             self._definite_at_last = tau == 0.0
-            norm = float(np.linalg.norm(grad))
             if tau > 0.0 and norm <= small and hidden < self.iterations:
                 hidden += 1
                 continue  # not yielded: a consumer would stop at this saddle

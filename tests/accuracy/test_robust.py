@@ -126,3 +126,38 @@ def test_references_of_a_contact_scene_are_certified_minima_never_saddles():
     for s in worked:
         assert s.reference.certified and s.reference.min_eigenvalue > 0, s.reference
     assert all(r.converged for r in recorded)
+
+
+def test_quick_stops_early_when_no_step_can_be_measured(tmp_path, monkeypatch):
+    """A sheet in free fall: every step is trivial, so --quick times nothing and runs no
+    time-step study; the CSV still says how the steps were classified."""
+    import clothsim.accuracy.command as command
+
+    def never(*args, **kwargs):
+        raise AssertionError("ran although nothing can be measured")
+
+    monkeypatch.setattr(command, "time_configurations", never)
+    monkeypatch.setattr("clothsim.accuracy.timestep.time_step_study", never)
+    falling = {"scene": {"name": "falling", "frames": 4, "fps": 30},
+               "cloth": {"resolution": [4, 4], "plane": "xz", "center": [0.0, 1.0, 0.0]},
+               "springs": {"structural": 800.0, "shear": 800.0, "bending": 80.0},
+               "effects": [{"kind": "gravity", "acceleration": [0.0, -9.81, 0.0]}]}
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        text = run_accuracy(Scene.from_dict(falling), tmp_path, methods=("local-global",),
+                            quick=True, plots=False)
+    assert "no recorded step can be measured" in text
+    rows = read(tmp_path / "accuracy.csv")
+    assert rows and all(r["steps_measured"] == "0" and r["steps_trivial"] == "4"
+                        for r in rows)
+
+
+def test_quick_measures_without_trajectory_errors(tmp_path):
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        text = run_accuracy(Scene.from_dict(TINY), tmp_path, methods=("local-global",),
+                            quick=True, plots=False)
+    rows = read(tmp_path / "accuracy.csv")
+    assert [int(r["iterations"]) for r in rows] == [1, 5, 10, 20, 100, 1000, 1000]
+    assert all(r["trajectory_error"] == "nan" and r["repeats"] == "1" for r in rows)
+    assert "trajectory error" not in text and "| 1e-01 |" in text
