@@ -238,5 +238,6 @@ def _run(scene, out, methods, problems, frames, repeats, jobs, scheduler, target
             fixed_budget_table(table), ""]
     text += [f"note: {n}" for n in notes]
     text.append(f"wrote {out / 'accuracy.csv'} ({len(table)} configurations), "
-                f"{out / 'accuracy.json'}, {out / 'steps.md'}, {out / 'problems.npz'}")
+                f"{out / 'accuracy.json'}, {out / 'steps.md'}, {out / 'problems.npz'} "
+                f"(clothsim commit {info['commit']})")
     return "\n".join(text)

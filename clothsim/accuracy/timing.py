@@ -146,6 +146,29 @@ def one_off_costs(model: Model, steps: Sequence[StudyStep], *, repeats: int = 3,
             "rho_estimation_seconds": float(np.median(rho))}
 
 
+def source_commit() -> str:
+    """The git commit of the clothsim source that runs ("+dirty" with local changes).
+
+    Returns
+    -------
+    str
+        A short hash, or "unknown" outside a git checkout.
+    """
+    import subprocess
+    from pathlib import Path
+
+    root = Path(__file__).resolve().parents[2]
+    try:
+        head = subprocess.run(["git", "rev-parse", "--short", "HEAD"], cwd=root, text=True,
+                              capture_output=True, check=True, timeout=10).stdout.strip()
+        dirty = subprocess.run(["git", "status", "--porcelain", "--untracked-files=no",
+                                "clothsim"], cwd=root, text=True, capture_output=True,
+                               check=True, timeout=10).stdout.strip()
+    except (OSError, subprocess.SubprocessError):
+        return "unknown"
+    return head + ("+dirty" if dirty else "")
+
+
 def machine_info(threads: int = 1) -> dict:
     """Machine, Python and library versions, and the thread settings of the measurement.
 
@@ -171,6 +194,7 @@ def machine_info(threads: int = 1) -> dict:
             "platform": platform.platform(), "cpu_count": os.cpu_count(),
             "python": platform.python_version(), "numpy": np.__version__,
             "scipy": scipy.__version__, "clothsim": clothsim_version,
+            "commit": source_commit(),
             "blas_threads": threads}
     try:
         from threadpoolctl import threadpool_info
