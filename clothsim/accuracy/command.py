@@ -21,6 +21,7 @@ from ..factorization import cholmod_available
 from .problems import load_problems, record_problems, save_problems
 from .report import (
     answer_table,
+    fixed_budget_measure,
     fixed_budget_table,
     reference_uncertainty,
     rows,
@@ -234,7 +235,7 @@ def _run(scene, out, methods, problems, frames, repeats, jobs, scheduler, target
             f"steps measured ({classes})", "",
             answer_table(table, levels=levels, uncertainty=reference_uncertainty(steps),
                          trajectory_levels=TRAJECTORY_LEVELS if traj else ()), "",
-            "Fixed budget (solver error after k iterations per step):", "",
+            f"Fixed budget ({fixed_budget_measure(table)} after k iterations per step):", "",
             fixed_budget_table(table), ""]
     text += [f"note: {n}" for n in notes]
     text.append(f"wrote {out / 'accuracy.csv'} ({len(table)} configurations), "

@@ -15,6 +15,7 @@ from pathlib import Path
 
 import numpy as np
 
+from .steps_report import STEP_CLASSES, steps_table  # noqa: F401  (re-exported)
 from .study import KINDS, MEASURED, ConfigResult, StudyStep, quantiles
 from .timing import median_iqr
 from .trace import ACCURACY_LEVELS
@@ -293,7 +294,8 @@ def answer_table(table: Sequence[Row], *, levels: Sequence[float] = ACCURACY_LEV
 
 
 def fixed_budget_table(table: Sequence[Row], budgets: Sequence[int] = FIXED_BUDGETS) -> str:
-    """Solver error (median / p90) after 5, 10, 20 iterations per step, per method.
+    """Solver error (median / p90) after 5, 10, 20 iterations per step, per method; the
+    relative objective gap instead when no step is unique (see :func:`fixed_budget_measure`).
 
     Parameters
     ----------
@@ -307,6 +309,8 @@ def fixed_budget_table(table: Sequence[Row], budgets: Sequence[int] = FIXED_BUDG
     str
         A Markdown table, one line per method.
     """
+    measure = fixed_budget_measure(table)
+    prefix = "solver_error" if measure == "solver error" else "objective_gap"
     methods = list(dict.fromkeys(r.method for r in table if r.method != "newton"))
     head = "| method | " + " | ".join(f"{b} it: median / p90" for b in budgets) + " |"
     lines = [head, "|---" * (len(budgets) + 1) + "|"]
@@ -316,9 +320,28 @@ def fixed_budget_table(table: Sequence[Row], budgets: Sequence[int] = FIXED_BUDG
             r = next((r for r in table if r.method == m and r.tolerance is None
                       and r.iterations == b), None)
             cells.append("–" if r is None else
-                         f"{r.solver_error_median:.1e} / {r.solver_error_p90:.1e}")
+                         f"{getattr(r, prefix + '_median'):.1e} / "
+                         f"{getattr(r, prefix + '_p90'):.1e}")
         lines.append(f"| {m} | " + " | ".join(cells) + " |")
     return "\n".join(lines)
+
+
+def fixed_budget_measure(table: Sequence[Row]) -> str:
+    """What :func:`fixed_budget_table` shows: "solver error", or "objective gap" when no
+    recorded step is unique (every measured step has several minima).
+
+    Parameters
+    ----------
+    table : sequence of Row
+        The rows.
+
+    Returns
+    -------
+    str
+        "solver error" or "objective gap".
+    """
+    unique = max((r.steps_unique for r in table), default=1)
+    return "solver error" if unique or not table else "objective gap"
 
 
 def reference_uncertainty(steps: Sequence[StudyStep]) -> float:
@@ -337,51 +360,3 @@ def reference_uncertainty(steps: Sequence[StudyStep]) -> float:
     u = [s.reference.uncertainty for s in steps if s.kind == "unique"
          and s.reference is not None and math.isfinite(s.reference.uncertainty)]
     return max(u, default=0.0)
-
-
-STEP_CLASSES = """Step classes (by certificate; a certified minimum has ‖∇g‖ at its rounding
-floor and a Hessian that factors without shift, λ_min > 0):
-
-- unique: Newton from y, from x_n and from converged local/global reach one certified
-  minimum x*; measured by the solver error ‖x − x*‖ / ‖x* − x_n‖.
-- several-minima: the starts reach several certified minima; measured by the relative
-  objective gap (g(x) − g(x_best)) / (g(y) − g(x_best)), x_best the lowest of them.
-- saddle: Newton from y stopped at a stationary point with an indefinite Hessian; never
-  reported as a minimum, not measured.
-- reference-failed: Newton from y did not reach its rounding floor; not measured.
-- trivial: one local/global iteration is already within 1e-12 (free fall); not measured.
-- at-rest: ‖∇g(y)‖ within 1e3 of its rounding floor; not measured.
-
-Column 'recorded': whether the recording run's Newton met its tolerance on the step."""
-
-
-def steps_table(steps: Sequence[StudyStep]) -> str:
-    """One line per recorded step: class, rest ratio, one-iteration error, certificate.
-
-    Parameters
-    ----------
-    steps : sequence of StudyStep
-        The classified steps.
-
-    Returns
-    -------
-    str
-        The class legend (:data:`STEP_CLASSES`), a count per class and a Markdown table.
-    """
-    kinds = [s.kind for s in steps]
-    counts = ", ".join(f"{k} {kinds.count(k)}" for k in KINDS)
-    lines = [STEP_CLASSES, "", f"Steps per class: {counts}.", "",
-             "| step | t [s] | recorded | kind | ‖∇g(y)‖/floor | 1-iteration error "
-             "| Newton residual | certified | λ_min(H)/m_min | minima | uncertainty "
-             "| g(x_best) − g(x*) | rho_local_global |",
-             "|---" * 13 + "|"]
-    for s in steps:
-        ref = s.reference
-        cert = ("| | | | | | | |" if ref is None else
-                f"| {ref.residual:.1e} | {'yes' if ref.certified else 'no'} "
-                f"| {ref.min_eigenvalue:.3g} | {ref.minima} | {ref.uncertainty:.1e} "
-                f"| {ref.objective_difference:.2e} | {s.rho:.4f} |")
-        rec = {True: "converged", False: "missed tolerance", None: "–"}[s.step.converged]
-        lines.append(f"| {s.step.index} | {s.step.time:.4g} | {rec} | {s.kind} "
-                     f"| {s.rest_ratio:.2e} | {s.one_iteration_error:.2e} {cert}")
-    return "\n".join(lines)

@@ -312,3 +312,21 @@ def test_run_accuracy_leaves_time_step_error_empty_when_every_frame_has_contact(
     assert "no contact-free window" in text
     row = (tmp_path / "accuracy.csv").read_text().splitlines()[1].split(",")
     assert row[COLUMNS.index("time_step_error")] == ""
+
+
+def test_a_scene_whose_steps_all_have_several_minima_is_answered_by_the_gap():
+    from clothsim.accuracy.report import fixed_budget_measure, fixed_budget_table
+
+    sim = buckling_strip()
+    steps = prepare_steps(sim.model, record_problems(sim, steps=1, count=1))
+    assert [s.kind for s in steps] == ["several-minima"]
+    results = measure(sim.model, steps, [Configuration("local-global", 5),
+                                         Configuration("local-global", 10)])
+    for r in results:
+        r.seconds = [1e-3]
+    table = rows(results, steps, h=sim.h)
+    answer = answer_table(table, levels=(1.0, 1e-12))
+    assert "objective gap" in answer and "solver error" not in answer
+    assert "local-global, 5 it/step" in answer.splitlines()[2]
+    assert fixed_budget_measure(table) == "objective gap"
+    assert "nan" not in fixed_budget_table(table, budgets=(5, 10))
