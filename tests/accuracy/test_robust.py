@@ -161,3 +161,18 @@ def test_quick_measures_without_trajectory_errors(tmp_path):
     assert [int(r["iterations"]) for r in rows] == [1, 5, 10, 20, 100, 1000, 1000]
     assert all(r["trajectory_error"] == "nan" and r["repeats"] == "1" for r in rows)
     assert "trajectory error" not in text and "| 1e-01 |" in text
+
+
+def test_the_same_study_twice_records_the_same_steps_and_classes():
+    from clothsim.accuracy import prepare_steps, scene_factory
+
+    def once():
+        scene = small_drop_on_square(5, 16)
+        factory, model, _ = scene_factory(scene)
+        recorded = record_problems(factory("newton", scene.h, 100, 1e-10), steps=16, count=3)
+        return recorded, [s.kind for s in prepare_steps(model, recorded)]
+
+    (a, ka), (b, kb) = once(), once()
+    assert ka == kb
+    for s, t in zip(a, b):
+        assert s.index == t.index and np.array_equal(s.problem.y, t.problem.y)
