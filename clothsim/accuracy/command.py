@@ -40,7 +40,13 @@ from .study import (
     prepare_steps,
 )
 from .sweep import TRAJECTORY_LEVELS
-from .timing import _limited_threads, machine_info, one_off_costs, time_configurations
+from .timing import (
+    _limited_threads,
+    machine_info,
+    one_off_costs,
+    source_commit,
+    time_configurations,
+)
 from .trace import ACCURACY_LEVELS, ITERATIVE_METHODS
 from .trajectory import steps_per_frame
 
@@ -148,15 +154,16 @@ def run_accuracy(scene, out, *, methods: Sequence[str] = ITERATIVE_METHODS,
         budgets, tolerances = QUICK["budgets"], QUICK["tolerances"]
     out = Path(out)
     out.mkdir(parents=True, exist_ok=True)
+    commit = source_commit()  # of the code that runs (HEAD may move while it runs)
     cholmod_available()  # load CHOLMOD's BLAS and OpenMP first, so that their pools are limited
     with _limited_threads(threads):  # one BLAS/OpenMP thread throughout: reproducible, and
         # on a shared machine faster than idle worker threads
         return _run(scene, out, methods, problems, frames, repeats, jobs, scheduler, target,
-                    budgets, tolerances, time_steps, plots, threads, steps_file, quick)
+                    budgets, tolerances, time_steps, plots, threads, steps_file, quick, commit)
 
 
 def _run(scene, out, methods, problems, frames, repeats, jobs, scheduler, target, budgets,
-         tolerances, time_steps, plots, threads, steps_file, quick) -> str:
+         tolerances, time_steps, plots, threads, steps_file, quick, commit) -> str:
     factory, model, frame_time = scene_factory(scene)
     frames = scene.frames if frames is None else frames
     h = scene.h
@@ -201,7 +208,7 @@ def _run(scene, out, methods, problems, frames, repeats, jobs, scheduler, target
     table = rows(results, steps, h=h, time_step_error=ts_error, trajectory_errors=traj)
     write_csv(table, out / "accuracy.csv")
     info = machine_info(threads) | one_off_costs(model, steps, threads=threads)
-    info |= {"scene": scene.name, "h": h, "frames": frames, "repeats": repeats,
+    info |= {"commit": commit, "scene": scene.name, "h": h, "frames": frames, "repeats": repeats,
              "chebyshev_rho": options.get("chebyshev", {}).get("rho")}
     write_sidecar(info, out / "accuracy.json")
     (out / "steps.md").write_text(steps_table(steps) + "\n")
