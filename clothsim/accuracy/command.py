@@ -230,7 +230,7 @@ def _run(scene, out, methods, problems, frames, repeats, jobs, scheduler, target
         notes.append(f"{failed} step(s) have no certified reference ({kinds.count('saddle')} "
                      f"saddle, {kinds.count('reference-failed')} reference failed): not "
                      f"measured, see steps.md")
-    if plots:
+    if plots and any(s.kind == "unique" for s in steps):  # it plots the solver error
         from .plots import plot_fixed_budget
 
         plot_fixed_budget(table, out / "fixed_budget.png", title=scene.name,
