@@ -8,7 +8,7 @@ import sys
 import time
 
 BENCHMARKS = ("stiffness", "stability_figures", "performance", "iteration_cost",
-              "accuracy_bench")
+              "accuracy_bench", "accuracy_quick")
 #: run only when named: the 257² × 500-frame memory run and the scale ladder up to 1025²
 #: take minutes each
 LONG = ("memory", "scale_ladder")

@@ -14,10 +14,14 @@ import math
 from collections.abc import Sequence
 from pathlib import Path
 
+import numpy as np
+
 from ..errors import InputError
-from .problems import record_problems
+from ..factorization import cholmod_available
+from .problems import load_problems, record_problems, save_problems
 from .report import (
     answer_table,
+    fixed_budget_measure,
     fixed_budget_table,
     reference_uncertainty,
     rows,
@@ -27,18 +31,32 @@ from .report import (
 )
 from .study import (
     BUDGETS,
+    KINDS,
     TOLERANCES,
+    ConfigResult,
     chebyshev_rho,
     default_configurations,
     measure,
     prepare_steps,
 )
 from .sweep import TRAJECTORY_LEVELS
-from .timing import machine_info, one_off_costs, time_configurations
+from .timing import (
+    _limited_threads,
+    machine_info,
+    one_off_costs,
+    source_commit,
+    time_configurations,
+)
 from .trace import ACCURACY_LEVELS, ITERATIVE_METHODS
 from .trajectory import steps_per_frame
 
 log = logging.getLogger(__name__)
+
+QUICK = {"problems": 4, "budgets": (1, 5, 10, 20, 100), "tolerances": (1e-3, 1e-6),
+         "repeats": 1, "cap": 1000}
+"""What ``--quick`` runs (at most: problems and repeats are capped, never raised)."""
+QUICK_TIME_STEP_FRAMES = 6
+"""Frames of ``--quick``'s time-step check (at h and h/2; no trajectory errors)."""
 
 
 def scene_factory(scene):
@@ -74,7 +92,8 @@ def run_accuracy(scene, out, *, methods: Sequence[str] = ITERATIVE_METHODS,
                  problems: int = 8, frames: int | None = None, repeats: int = 5,
                  jobs: int = 1, scheduler: str | None = None, target: float | None = None,
                  budgets: Sequence[int] = BUDGETS, tolerances: Sequence[float] = TOLERANCES,
-                 time_steps: bool = True, plots: bool = True, threads: int = 1) -> str:
+                 time_steps: bool = True, plots: bool = True, threads: int = 1,
+                 steps_file=None, quick: bool = False) -> str:
     """Run the accuracy study of ``scene`` into folder ``out``; return the printed report.
 
     Parameters
@@ -104,6 +123,14 @@ def run_accuracy(scene, out, *, methods: Sequence[str] = ITERATIVE_METHODS,
         Write the PNG figures (needs matplotlib).
     threads : int
         BLAS threads during timing.
+    steps_file : path, optional
+        A ``problems.npz`` an earlier study wrote: measure exactly those step problems
+        instead of recording new ones.
+    quick : bool
+        A first look in seconds (:data:`QUICK`): at most 4 problems, budgets 1, 5, 10, 20,
+        100, tolerances 1e-3 and 1e-6 (at most 1000 iterations), 1 timing repeat, no
+        trajectory errors, a time-step check of :data:`QUICK_TIME_STEP_FRAMES` frames at h
+        and h/2 only.
 
     Returns
     -------
@@ -122,66 +149,103 @@ def run_accuracy(scene, out, *, methods: Sequence[str] = ITERATIVE_METHODS,
         if m not in SOLVERS or m == "symplectic-euler":
             raise InputError(f"accuracy.methods: {m!r} is not an iterative solver; choose from "
                              f"{', '.join(s for s in SOLVERS if s != 'symplectic-euler')}")
+    if quick:
+        problems, repeats = min(problems, QUICK["problems"]), min(repeats, QUICK["repeats"])
+        budgets, tolerances = QUICK["budgets"], QUICK["tolerances"]
     out = Path(out)
     out.mkdir(parents=True, exist_ok=True)
+    commit = source_commit()  # of the code that runs (HEAD may move while it runs)
+    cholmod_available()  # load CHOLMOD's BLAS and OpenMP first, so that their pools are limited
+    with _limited_threads(threads):  # one BLAS/OpenMP thread throughout: reproducible, and
+        # on a shared machine faster than idle worker threads
+        return _run(scene, out, methods, problems, frames, repeats, jobs, scheduler, target,
+                    budgets, tolerances, time_steps, plots, threads, steps_file, quick, commit)
+
+
+def _run(scene, out, methods, problems, frames, repeats, jobs, scheduler, target, budgets,
+         tolerances, time_steps, plots, threads, steps_file, quick, commit) -> str:
     factory, model, frame_time = scene_factory(scene)
     frames = scene.frames if frames is None else frames
     h = scene.h
-    sim = factory("newton", h, 100, 1e-10)
-    recorded = record_problems(sim, steps=max(1, frames * scene.substeps), count=problems)
+    if steps_file is not None:
+        recorded = load_problems(steps_file)
+    else:
+        sim = factory("newton", h, 100, 1e-10)
+        recorded = record_problems(sim, steps=max(1, frames * scene.substeps), count=problems)
+    save_problems(recorded, out / "problems.npz")
     steps = prepare_steps(model, recorded)
     options = {}
     if "chebyshev" in methods:
         options["chebyshev"] = {"rho": chebyshev_rho(model, steps)}
     configs = default_configurations(methods, budgets=budgets, tolerances=tolerances,
-                                     options=options)
-    results = measure(model, steps, configs, jobs=jobs, scheduler=scheduler)
-    time_configurations(model, steps, results, repeats=repeats, threads=threads)
+                                     options=options,
+                                     **({"cap": QUICK["cap"]} if quick else {}))
     notes = []
+    nothing = not any(s.measured for s in steps)
+    if nothing:  # early stop: no step can be measured, so nothing below would be used
+        notes.append("no recorded step can be measured (see steps.md): errors and timings "
+                     "were not run" + (", nor the time-step check" if quick else ""))
+        results = [ConfigResult(c, np.zeros(0), np.zeros(0, dtype=int)) for c in configs]
+    else:
+        results = measure(model, steps, configs, jobs=jobs, scheduler=scheduler)
+    write_csv(rows(results, steps, h=h), out / "accuracy.csv")  # errors kept if timing fails
+    if not nothing:
+        time_configurations(model, steps, results, repeats=repeats, threads=threads)
+        write_csv(rows(results, steps, h=h), out / "accuracy.csv")
     ts_error, ts, traj = math.nan, None, {}
-    if time_steps and frames > 0:
+    if time_steps and frames > 0 and not (nothing and quick):
         from .timestep import time_step_study, trajectory_errors
 
-        ts = time_step_study(factory, frame_time=frame_time, frames=min(frames, 30),
-                             time_steps=(h, h / 2, h / 4))
+        ts = time_step_study(factory, frame_time=frame_time,
+                             frames=min(frames, QUICK_TIME_STEP_FRAMES if quick else 30),
+                             time_steps=(h, h / 2) if quick else (h, h / 2, h / 4))
         # no contact-free window: the CSV cell stays empty
         ts_error = ts.errors[ts.time_steps.index(h)] if ts.window is not None else None
         notes.append(ts.note)
-        traj = trajectory_errors(factory, configs, ts.reference, h=h, frame_time=frame_time)
+        if not quick:
+            traj = trajectory_errors(factory, configs, ts.reference, h=h,
+                                     frame_time=frame_time)
     table = rows(results, steps, h=h, time_step_error=ts_error, trajectory_errors=traj)
     write_csv(table, out / "accuracy.csv")
     info = machine_info(threads) | one_off_costs(model, steps, threads=threads)
-    info |= {"scene": scene.name, "h": h, "frames": frames, "repeats": repeats,
+    info |= {"commit": commit, "scene": scene.name, "h": h, "frames": frames, "repeats": repeats,
              "chebyshev_rho": options.get("chebyshev", {}).get("rho")}
     write_sidecar(info, out / "accuracy.json")
     (out / "steps.md").write_text(steps_table(steps) + "\n")
     kinds = [s.kind for s in steps]
-    if "two-minima" in kinds:
-        notes.append(f"{kinds.count('two-minima')} step(s) have two minima (Newton from y and "
-                     f"from converged local/global end at different points): no single "
-                     f"solver error exists there; they are counted in steps_two_minima and "
-                     f"left out")
-    saddles = sum(1 for s in steps if s.reference is not None and s.kind == "measured"
-                  and s.reference.min_eigenvalue < 0)
-    if saddles:
-        notes.append(f"{saddles} measured step(s) converge to a stationary point with "
-                     f"lambda_min(H) < 0 (a saddle across a symmetry plane the gradient never "
-                     f"leaves; every method and both starts agree on it): see steps.md")
-    if plots:
+    missed = sum(1 for r in recorded if r.converged is False)
+    if missed:
+        notes.append(f"{missed} recorded step(s): the recording solve missed its tolerance "
+                     f"(column 'recorded' in steps.md)")
+    diverged = [r.setting for r in table if r.status == "diverged"]
+    if diverged:
+        notes.append(f"{len(diverged)} configuration(s) diverged (status 'diverged' in the "
+                     f"CSV, never an answer): {'; '.join(diverged)}")
+    if kinds.count("several-minima"):
+        notes.append(f"{kinds.count('several-minima')} step(s) have several certified minima "
+                     f"(Newton from y, x_n and converged local/global end at different "
+                     f"minima): measured by the relative objective gap, not by a distance")
+    failed = kinds.count("saddle") + kinds.count("reference-failed")
+    if failed:
+        notes.append(f"{failed} step(s) have no certified reference ({kinds.count('saddle')} "
+                     f"saddle, {kinds.count('reference-failed')} reference failed): not "
+                     f"measured, see steps.md")
+    if plots and any(s.kind == "unique" for s in steps):  # it plots the solver error
         from .plots import plot_fixed_budget
 
         plot_fixed_budget(table, out / "fixed_budget.png", title=scene.name,
                           uncertainty=reference_uncertainty(steps))
     levels = (target,) if target is not None else ACCURACY_LEVELS
-    measured = kinds.count("measured")
+    measured = sum(1 for s in steps if s.measured)
+    classes = ", ".join(f"{kinds.count(k)} {k}" for k in KINDS)
     text = [f"# accuracy of {scene.name}: h = {h:.4g} s, {measured} of {len(steps)} recorded "
-            f"steps measured ({kinds.count('at-rest')} at rest, {kinds.count('trivial')} "
-            f"trivial, {kinds.count('two-minima')} with two minima)", "",
+            f"steps measured ({classes})", "",
             answer_table(table, levels=levels, uncertainty=reference_uncertainty(steps),
                          trajectory_levels=TRAJECTORY_LEVELS if traj else ()), "",
-            "Fixed budget (solver error after k iterations per step):", "",
+            f"Fixed budget ({fixed_budget_measure(table)} after k iterations per step):", "",
             fixed_budget_table(table), ""]
     text += [f"note: {n}" for n in notes]
     text.append(f"wrote {out / 'accuracy.csv'} ({len(table)} configurations), "
-                f"{out / 'accuracy.json'}, {out / 'steps.md'}")
+                f"{out / 'accuracy.json'}, {out / 'steps.md'}, {out / 'problems.npz'} "
+                f"(clothsim commit {info['commit']})")
     return "\n".join(text)

@@ -4,7 +4,11 @@
 frames and substeps) and keeps the step problems of several steps spread over the whole
 run — contact and buckling included, whatever the run goes through. Every configuration of
 the study then solves exactly these problems (never its own drifting state), so rows are
-comparable. :func:`classify` names the steps that teach nothing:
+comparable. The run uses one BLAS/OpenMP thread (a recording does not depend on the
+machine's thread count), and a recorded step whose solve missed its tolerance is marked
+(:attr:`RecordedStep.converged`). :func:`save_problems` writes the recorded problems to a
+``.npz`` file and :func:`load_problems` reads them back exactly, so a study can be re-run
+on the same steps. :func:`classify` names the steps that teach nothing:
 
 ``"at-rest"``
     ‖∇g(y)‖ within 1e3 of its rounding floor
@@ -21,11 +25,15 @@ from __future__ import annotations
 
 import copy
 import logging
+import os
 import warnings
 from dataclasses import dataclass
+from pathlib import Path
 
 import numpy as np
 
+from ..errors import InputError
+from ..factorization import single_threaded
 from ..model import Model
 from ..simulation import Simulation
 from ..solvers import LocalGlobalSolver, StepProblem, objective_gradient
@@ -49,11 +57,89 @@ class RecordedStep:
         Simulated time at the start of the step [s].
     problem : StepProblem
         A copy of the step's problem (h, y, f_ext, pins).
+    converged : bool or None
+        Whether the recording solver met its tolerance on this step (None: not checked).
     """
 
     index: int
     time: float
     problem: StepProblem
+    converged: bool | None = None
+
+
+_ARRAYS = ("x", "v", "y", "f_ext", "fixed_vertices", "fixed_positions", "anchor_vertices",
+           "anchor_positions", "anchor_stiffness")
+
+
+def save_problems(recorded, path) -> Path:
+    """Write recorded step problems to an ``.npz`` file (exactly; :func:`load_problems`).
+
+    Parameters
+    ----------
+    recorded : sequence of RecordedStep
+        The steps.
+    path : str or Path
+        The file (overwritten, written atomically).
+
+    Returns
+    -------
+    Path
+        ``path``.
+    """
+    path = Path(path)
+    data = {"index": np.array([r.index for r in recorded], dtype=np.int64),
+            "time": np.array([r.time for r in recorded], dtype=np.float64),
+            "h": np.array([r.problem.h for r in recorded], dtype=np.float64),
+            "start": np.array([r.problem.start for r in recorded]),
+            "converged": np.array([-1 if r.converged is None else int(r.converged)
+                                   for r in recorded], dtype=np.int64)}
+    for i, r in enumerate(recorded):
+        for name in _ARRAYS:
+            value = getattr(r.problem, name)
+            if value is not None:
+                data[f"{i}/{name}"] = np.asarray(value)
+    tmp = path.with_name(path.name + ".tmp")
+    with tmp.open("wb") as fh:
+        np.savez_compressed(fh, **data)
+    os.replace(tmp, path)
+    return path
+
+
+def load_problems(path) -> list[RecordedStep]:
+    """Read the step problems :func:`save_problems` wrote.
+
+    Parameters
+    ----------
+    path : str or Path
+        The ``.npz`` file.
+
+    Returns
+    -------
+    list of RecordedStep
+        The same problems, bit for bit.
+
+    Raises
+    ------
+    InputError
+        When the file is missing or is not a saved problem set.
+    """
+    path = Path(path)
+    if not path.is_file():
+        raise InputError(f"accuracy.steps: no such file {str(path)!r}")
+    try:
+        with np.load(path, allow_pickle=False) as z:
+            data = {k: z[k] for k in z.files}
+        out = []
+        for i in range(len(data["index"])):
+            fields = {name: data[f"{i}/{name}"] for name in _ARRAYS if f"{i}/{name}" in data}
+            problem = StepProblem(h=float(data["h"][i]), start=str(data["start"][i]), **fields)
+            c = int(data["converged"][i])
+            out.append(RecordedStep(int(data["index"][i]), float(data["time"][i]), problem,
+                                    None if c < 0 else bool(c)))
+    except (KeyError, ValueError, OSError) as exc:
+        raise InputError(f"accuracy.steps: {str(path)!r} is not a saved problem set "
+                         f"({exc})") from None
+    return out
 
 
 def record_problems(sim: Simulation, *, steps: int, count: int = 8) -> list[RecordedStep]:
@@ -72,15 +158,20 @@ def record_problems(sim: Simulation, *, steps: int, count: int = 8) -> list[Reco
     Returns
     -------
     list of RecordedStep
+        With ``converged`` from the recording solver's own stop rule.
     """
     picks = set(np.unique(np.linspace(0, max(steps - 1, 0), max(1, count)).round().astype(int)))
     out = []
-    with warnings.catch_warnings():
+    with warnings.catch_warnings(), single_threaded():
         warnings.simplefilter("ignore")
         for i in range(steps):
+            rec = None
             if i in picks:
-                out.append(RecordedStep(i, i * sim.h, copy.deepcopy(sim.problem())))
-            sim.step()
+                rec = RecordedStep(i, i * sim.h, copy.deepcopy(sim.problem()))
+                out.append(rec)
+            record = sim.step()
+            if rec is not None:
+                rec.converged = record.converged
     return out
 
 

@@ -1,17 +1,22 @@
-"""A certified reference solution x* per step problem.
+"""A certified reference solution x* per step problem, and the set of minima it belongs to.
 
-Newton (:class:`~clothsim.solvers.NewtonSolver`) is run to its rounding floor from y, and
-again from a second start: the point plain local/global reaches (1e-6 relative residual,
-then Newton to the floor). The certificate reports
+Newton (:class:`~clothsim.solvers.NewtonSolver`, which never stops at a saddle) is run to its
+rounding floor from y — the reference x* — and from further starts: x_n, and the point plain
+local/global reaches (1e-6 relative residual, then Newton to the floor). Each end point is
+*certified* when ‖∇g‖ is at its rounding floor and the free Hessian factors without shift
+(λ_min > 0): a strict local minimum. The certificate reports
 
+- whether x* is certified, and if not why (:attr:`CertifiedReference.at_floor`,
+  :attr:`CertifiedReference.positive_definite`);
 - the final relative residual ‖∇g(x*)‖ / ‖∇g(y)‖ and ‖∇g(x*)‖ over its rounding floor;
-- the smallest eigenvalue of H = ∇²g(x*) over the free degrees of freedom, divided by the
-  smallest vertex mass (Lanczos, :func:`scipy.sparse.linalg.eigsh`): > 0 certifies a strict
-  local minimum;
-- the distance between the two solutions, relative to ‖x* − x_n‖: the reference's
-  uncertainty when they agree, or — beyond :data:`SAME_POINT` — two different stationary
-  points (e.g. two buckling minima), with g(x₂) − g(x₁). Then no single "error" exists for
-  this step; the study says so and leaves the step out of the error distribution.
+- the smallest eigenvalue of H = ∇²g(x*) divided by the smallest vertex mass (> 0: a
+  strict local minimum; dense below 400 unknowns, else Lanczos/``eigsh``);
+- the distinct certified minima the starts reached (:attr:`CertifiedReference.minima`):
+  when they agree, their largest distance relative to ‖x* − x_n‖ is the reference's
+  uncertainty; when they differ by more than :data:`SAME_POINT`, the step has several
+  minima, and the lowest one, x_best, with g(y) − g(x_best) (computed from differences,
+  without cancellation), defines the relative objective gap
+  (g(x) − g(x_best)) / (g(y) − g(x_best)) by which any solver's answer is measured there.
 """
 
 from __future__ import annotations
@@ -24,9 +29,14 @@ import numpy as np
 
 from ..model import Model
 from ..solvers import LocalGlobalSolver, NewtonSolver, StepProblem, objective_gradient
+from ..solvers.curvature import smallest_eigenvalue as eigenvalue_in_metric
 from ..solvers.descent import objective_difference
 
 SAME_POINT = 1e-6
+
+
+REFERENCE_ITERATIONS = 200
+"""Newton's iteration cap for a reference (more than any step has needed)."""
 
 
 @dataclass
@@ -47,9 +57,21 @@ class CertifiedReference:
     uncertainty : float
         ‖x* − x₂‖ / ‖x* − x_n‖ between the two starts (when they agree).
     two_minima : bool
-        The two starts reached different stationary points.
+        The starts reached several distinct certified minima.
     objective_difference : float
-        g(x₂) − g(x*) [J·s²] (negative: the local/global start found a lower point).
+        g(x_best) − g(x*) [J·s²] (≤ 0; negative: another start found a lower minimum).
+    certified : bool
+        x* is a certified minimum (gradient at its floor, H ≻ 0).
+    at_floor : bool
+        Newton from y ended with ‖∇g‖ at its rounding floor.
+    positive_definite : bool
+        H(x*) factors without shift.
+    minima : int
+        Distinct certified minima reached from the starts.
+    x_best : ndarray, shape (n, 3)
+        The lowest certified minimum [m] (x* when it is the only one).
+    objective_scale : float
+        g(y) − g(x_best) [J·s²], the denominator of the relative objective gap.
     """
 
     x: np.ndarray
@@ -59,6 +81,36 @@ class CertifiedReference:
     uncertainty: float
     two_minima: bool
     objective_difference: float
+    certified: bool = True
+    at_floor: bool = True
+    positive_definite: bool = True
+    minima: int = 1
+    x_best: np.ndarray | None = None
+    objective_scale: float = math.nan
+
+    def objective_gap(self, model: Model, problem: StepProblem, x: np.ndarray) -> float:
+        """(g(x) − g(x_best)) / (g(y) − g(x_best)), without cancellation.
+
+        Parameters
+        ----------
+        model, problem : Model, StepProblem
+            The step.
+        x : ndarray, shape (n, 3)
+            A solver's answer [m].
+
+        Returns
+        -------
+        float
+            0 at x_best, 1 at y (dimensionless; negative when x is lower than every
+            certified minimum); inf when x is not finite.
+        """
+        best = self.x if self.x_best is None else self.x_best
+        if not np.all(np.isfinite(x)):
+            return math.inf
+        scale = self.objective_scale
+        if not (scale > 0):
+            return math.nan
+        return objective_difference(model, problem, best, x - best) / scale
 
 
 def smallest_eigenvalue(newton: NewtonSolver, problem: StepProblem, x: np.ndarray) -> float:
@@ -81,25 +133,16 @@ def smallest_eigenvalue(newton: NewtonSolver, problem: StepProblem, x: np.ndarra
         λ_min(∇²g) / min m_i (dimensionless; 1 for M alone); NaN when there is no free
         degree of freedom or ARPACK does not converge.
     """
-    from scipy.sparse.linalg import ArpackNoConvergence, eigsh
-
     free = np.repeat(problem.free_mask(newton.model.vertex_count), 3)
     H = newton.hessian(problem, x)[free][:, free]
-    if H.shape[0] == 0:
-        return math.nan
     m = float(newton.model.vertex_mass.min())
-    if H.shape[0] <= 400:
-        return float(np.linalg.eigvalsh(H.toarray())[0]) / m
-    try:
-        return float(eigsh(H, k=1, which="SA", tol=1e-8, maxiter=5000,
-                           return_eigenvectors=False)[0]) / m
-    except ArpackNoConvergence:
-        return math.nan
+    mass = np.full(H.shape[0], m)  # λ(H) / m_min: the metric m_min I
+    return eigenvalue_in_metric(H, mass)
 
 
 def certified_reference(model: Model, problem: StepProblem, *, backend: str = "auto",
                         second_start: bool = True) -> CertifiedReference:
-    """Newton to the rounding floor, certified (see the module text).
+    """Newton to the rounding floor from y, certified, with the minima of other starts.
 
     Parameters
     ----------
@@ -110,31 +153,52 @@ def certified_reference(model: Model, problem: StepProblem, *, backend: str = "a
     backend : {"auto", "cholmod", "splu"}
         Factorization backend.
     second_start : bool
-        Also solve from the converged local/global point (the uncertainty check).
+        Also solve from x_n and from the converged local/global point (the uncertainty
+        and several-minima checks).
 
     Returns
     -------
     CertifiedReference
     """
+    from dataclasses import replace
+
     from ..solvers.base import gradient_noise_floor
 
-    newton = NewtonSolver(model, iterations=200, tolerance=1e-15, backend=backend)
+    def newton():
+        return NewtonSolver(model, iterations=REFERENCE_ITERATIONS, tolerance=1e-15,
+                            backend=backend)
+
+    solver = newton()
     with warnings.catch_warnings():
         warnings.simplefilter("ignore")
-        res = newton.solve(problem)
+        res = solver.solve(problem)
         x = res.x
         g_norm = float(np.linalg.norm(objective_gradient(model, problem, x)))
         floor = gradient_noise_floor(model, problem, x)
         scale = float(np.linalg.norm(x - problem.x)) or 1.0
-        dist, dg = 0.0, 0.0
+        ends = [res]
         if second_start:
+            x_n = replace(problem, start="x_n").initial_guess()
+            ends.append(newton().solve(problem, x0=x_n))
             lg = LocalGlobalSolver(model, iterations=5000, tolerance=1e-6, backend=backend,
                                    check_conditioning=False)
-            x2 = NewtonSolver(model, iterations=200, tolerance=1e-15,
-                              backend=backend).solve(problem, x0=lg.solve(problem).x).x
-            dist = float(np.linalg.norm(x2 - x)) / scale
-            dg = objective_difference(model, problem, x, x2 - x)
-    two = dist > SAME_POINT
+            ends.append(newton().solve(problem, x0=lg.solve(problem).x))
+    minima = []  # distinct certified minima, x* first when certified
+    for r in ends:
+        if r.certified and all(float(np.linalg.norm(r.x - m)) / scale > SAME_POINT
+                               for m in minima):
+            minima.append(r.x)
+    agree = [float(np.linalg.norm(r.x - x)) / scale for r in ends[1:]
+             if r.certified and float(np.linalg.norm(r.x - x)) / scale <= SAME_POINT]
+    dgs = [objective_difference(model, problem, x, m - x) for m in minima]
+    i_best = int(np.argmin(dgs)) if minima else None
+    x_best = minima[i_best] if minima else x
+    y0 = problem.initial_guess()
+    objective_scale = objective_difference(model, problem, x_best, y0 - x_best)
+    several = len(minima) > 1
     return CertifiedReference(x, res.residual, g_norm / floor if floor > 0 else math.inf,
-                              smallest_eigenvalue(newton, problem, x),
-                              math.nan if two else dist, two, dg)
+                              smallest_eigenvalue(solver, problem, x),
+                              math.nan if several else max(agree, default=0.0), several,
+                              dgs[i_best] if minima else 0.0, bool(res.certified),
+                              bool(res.at_floor), bool(res.positive_definite), len(minima),
+                              x_best, float(objective_scale))

@@ -8,20 +8,26 @@ from __future__ import annotations
 import csv
 import json
 import math
+import os
 from collections.abc import Sequence
 from dataclasses import asdict, dataclass
 from pathlib import Path
 
-from .study import ConfigResult, StudyStep, quantiles
+import numpy as np
+
+from .steps_report import STEP_CLASSES, steps_table  # noqa: F401  (re-exported)
+from .study import KINDS, MEASURED, ConfigResult, StudyStep, quantiles
 from .timing import median_iqr
 from .trace import ACCURACY_LEVELS
 
 COLUMNS = ("method", "h", "iterations", "tolerance", "solver_error_median",
-           "solver_error_p90", "solver_error_max", "iterations_median", "iterations_max",
-           "steps_measured", "steps_skipped", "steps_at_rest", "steps_trivial",
-           "steps_two_minima", "time_step_error", "trajectory_error",
+           "solver_error_p90", "solver_error_max", "objective_gap_median", "objective_gap_p90",
+           "objective_gap_max", "iterations_median", "iterations_max",
+           "steps_measured", "steps_skipped", "steps_unique", "steps_several_minima",
+           "steps_saddle", "steps_reference_failed", "steps_at_rest", "steps_trivial",
+           "time_step_error", "trajectory_error",
            "seconds_per_step_median", "seconds_per_step_iqr", "repeats",
-           "solves_per_step", "factorizations_per_step")
+           "solves_per_step", "factorizations_per_step", "status", "steps_diverged")
 FIXED_BUDGETS = (5, 10, 20)
 
 
@@ -40,11 +46,18 @@ class Row:
     tolerance : float or None
         Relative-residual tolerance, or None (fixed budget).
     solver_error_median, solver_error_p90, solver_error_max : float
-        Relative solver error ‖x − x*‖ / ‖x* − x_n‖ over the measured steps.
+        Relative solver error ‖x − x*‖ / ‖x* − x_n‖ over the unique steps.
+    objective_gap_median, objective_gap_p90, objective_gap_max : float
+        Relative objective gap (g(x) − g(x_best)) / (g(y) − g(x_best)) over every measured
+        step (unique and several minima).
     iterations_median, iterations_max : float
         Iterations used per step.
-    steps_measured, steps_skipped, steps_at_rest, steps_trivial, steps_two_minima : int
-        How the recorded steps were classified (skipped = not measured).
+    steps_measured, steps_skipped : int
+        Steps measured (unique + several minima) and not.
+    steps_unique, steps_several_minima, steps_saddle, steps_reference_failed : int
+        Steps per certificate class (:data:`~clothsim.accuracy.study.KINDS`).
+    steps_at_rest, steps_trivial : int
+        Steps at rest and trivially solved.
     time_step_error : float
         Relative error of implicit Euler itself at this h (NaN when not measured).
     trajectory_error : float
@@ -57,6 +70,11 @@ class Row:
         Global-step solves per step (median iterations; 0 for Newton).
     factorizations_per_step : float
         Factorizations per step (Newton).
+    status : str
+        "ok", or "diverged" when the configuration blew up on a measured step, in timing
+        or on its trajectory (its errors there are inf; it is never an answer).
+    steps_diverged : int
+        Measured steps on which it blew up.
     setting : str
         A short description, e.g. ``"chebyshev, 10 it/step"``.
     """
@@ -68,13 +86,19 @@ class Row:
     solver_error_median: float
     solver_error_p90: float
     solver_error_max: float
+    objective_gap_median: float
+    objective_gap_p90: float
+    objective_gap_max: float
     iterations_median: float
     iterations_max: float
     steps_measured: int
     steps_skipped: int
+    steps_unique: int
+    steps_several_minima: int
+    steps_saddle: int
+    steps_reference_failed: int
     steps_at_rest: int
     steps_trivial: int
-    steps_two_minima: int
     time_step_error: float
     trajectory_error: float
     seconds_per_step_median: float
@@ -82,6 +106,8 @@ class Row:
     repeats: int
     solves_per_step: float
     factorizations_per_step: float
+    status: str = "ok"
+    steps_diverged: int = 0
 
     @property
     def setting(self) -> str:
@@ -114,20 +140,26 @@ def rows(results: Sequence[ConfigResult], steps: Sequence[StudyStep], *, h: floa
         Same order as ``results``.
     """
     kinds = [s.kind for s in steps]
-    count = {k: kinds.count(k) for k in ("measured", "at-rest", "trivial", "two-minima")}
+    count = {k: kinds.count(k) for k in KINDS}
+    measured = sum(count[k] for k in MEASURED)
     out = []
     for r in results:
         c = r.config
-        med, p90, mx = quantiles(r.errors)
+        unique = r.unique if len(r.unique) == len(r.errors) else np.ones(len(r.errors), bool)
+        med, p90, mx = quantiles(r.errors[unique])
+        gaps = quantiles(r.gaps) if len(r.gaps) else (math.nan,) * 3
         it_med = float(_median(r.iterations))
         sec, iqr = median_iqr(r.seconds)
         solves = it_med if c.method != "newton" else 0.0
-        out.append(Row(c.method, h, c.iterations, c.tolerance, med, p90, mx, it_med,
+        traj = (trajectory_errors or {}).get(c, math.nan)
+        diverged = bool(r.diverged or r.trajectory_diverged or traj == math.inf)
+        out.append(Row(c.method, h, c.iterations, c.tolerance, med, p90, mx, *gaps, it_med,
                        float(r.iterations.max()) if len(r.iterations) else math.nan,
-                       count["measured"], len(steps) - count["measured"], count["at-rest"],
-                       count["trivial"], count["two-minima"], time_step_error,
-                       (trajectory_errors or {}).get(c, math.nan), sec, iqr, len(r.seconds),
-                       solves, r.factorizations))
+                       measured, len(steps) - measured, count["unique"],
+                       count["several-minima"], count["saddle"], count["reference-failed"],
+                       count["at-rest"], count["trivial"], time_step_error,
+                       traj, sec, iqr, len(r.seconds), solves, r.factorizations,
+                       "diverged" if diverged else "ok", int(r.diverged)))
     return out
 
 
@@ -148,14 +180,17 @@ def write_csv(table: Sequence[Row], path) -> Path:
     Returns
     -------
     Path
-        ``path``.
+        ``path``, written atomically (a temporary file renamed over it): a crash leaves the
+        previous complete CSV, never half of one.
     """
     path = Path(path)
-    with path.open("w", newline="") as fh:
+    tmp = path.with_name(path.name + ".tmp")
+    with tmp.open("w", newline="") as fh:
         w = csv.DictWriter(fh, fieldnames=COLUMNS)
         w.writeheader()
         for row in table:
             w.writerow({k: ("" if v is None else v) for k, v in asdict(row).items()})
+    os.replace(tmp, path)
     return path
 
 
@@ -198,12 +233,13 @@ def cheapest(table: Sequence[Row], level: float, *, error: str = "solver_error_p
         None when no timed row reaches ``level``.
     """
     ok = [r for r in table if math.isfinite(getattr(r, error)) and getattr(r, error) <= level
-          and math.isfinite(r.seconds_per_step_median)]
+          and math.isfinite(r.seconds_per_step_median) and r.status != "diverged"]
     return min(ok, key=lambda r: r.seconds_per_step_median) if ok else None
 
 
 def answer_table(table: Sequence[Row], *, levels: Sequence[float] = ACCURACY_LEVELS,
-                 trajectory_levels: Sequence[float] = (), uncertainty: float = 0.0) -> str:
+                 trajectory_levels: Sequence[float] = (), uncertainty: float = 0.0,
+                 gap_levels: Sequence[float] | None = None) -> str:
     """The answer: for each target, the cheapest setting with its time and spread.
 
     Solver-error levels below ``uncertainty`` (the largest reference uncertainty over the
@@ -219,15 +255,28 @@ def answer_table(table: Sequence[Row], *, levels: Sequence[float] = ACCURACY_LEV
         Trajectory-error targets.
     uncertainty : float, default 0
         The references' relative uncertainty.
+    gap_levels : sequence of float, optional
+        Relative-objective-gap targets (p90 over every measured step); default ``levels``
+        when some step has several minima or no step is unique, else none. Solver-error
+        lines are left out when no step is unique.
 
     Returns
     -------
     str
         A Markdown table, one line per target.
     """
+    unique = max((r.steps_unique for r in table), default=1)
+    several = max((r.steps_several_minima for r in table), default=0)
+    if gap_levels is None:
+        gap_levels = levels if (several or not unique) and table else ()
+    if not unique and table:
+        levels = ()
     lines = ["| target | error measured | cheapest setting | ms/step (median) | IQR [ms] |",
              "|---|---|---|---|---|"]
-    for col, name, levs in (("solver_error_p90", "solver error (p90 over steps)", levels),
+    for col, name, levs in (("solver_error_p90", "solver error (p90 over unique steps)",
+                             levels),
+                            ("objective_gap_p90", "objective gap (p90 over measured steps)",
+                             gap_levels),
                             ("trajectory_error", "trajectory error", trajectory_levels)):
         for level in levs:
             if col == "solver_error_p90" and level < uncertainty:
@@ -245,7 +294,8 @@ def answer_table(table: Sequence[Row], *, levels: Sequence[float] = ACCURACY_LEV
 
 
 def fixed_budget_table(table: Sequence[Row], budgets: Sequence[int] = FIXED_BUDGETS) -> str:
-    """Solver error (median / p90) after 5, 10, 20 iterations per step, per method.
+    """Solver error (median / p90) after 5, 10, 20 iterations per step, per method; the
+    relative objective gap instead when no step is unique (see :func:`fixed_budget_measure`).
 
     Parameters
     ----------
@@ -259,6 +309,8 @@ def fixed_budget_table(table: Sequence[Row], budgets: Sequence[int] = FIXED_BUDG
     str
         A Markdown table, one line per method.
     """
+    measure = fixed_budget_measure(table)
+    prefix = "solver_error" if measure == "solver error" else "objective_gap"
     methods = list(dict.fromkeys(r.method for r in table if r.method != "newton"))
     head = "| method | " + " | ".join(f"{b} it: median / p90" for b in budgets) + " |"
     lines = [head, "|---" * (len(budgets) + 1) + "|"]
@@ -268,9 +320,28 @@ def fixed_budget_table(table: Sequence[Row], budgets: Sequence[int] = FIXED_BUDG
             r = next((r for r in table if r.method == m and r.tolerance is None
                       and r.iterations == b), None)
             cells.append("–" if r is None else
-                         f"{r.solver_error_median:.1e} / {r.solver_error_p90:.1e}")
+                         f"{getattr(r, prefix + '_median'):.1e} / "
+                         f"{getattr(r, prefix + '_p90'):.1e}")
         lines.append(f"| {m} | " + " | ".join(cells) + " |")
     return "\n".join(lines)
+
+
+def fixed_budget_measure(table: Sequence[Row]) -> str:
+    """What :func:`fixed_budget_table` shows: "solver error", or "objective gap" when no
+    recorded step is unique (every measured step has several minima).
+
+    Parameters
+    ----------
+    table : sequence of Row
+        The rows.
+
+    Returns
+    -------
+    str
+        "solver error" or "objective gap".
+    """
+    unique = max((r.steps_unique for r in table), default=1)
+    return "solver error" if unique or not table else "objective gap"
 
 
 def reference_uncertainty(steps: Sequence[StudyStep]) -> float:
@@ -286,32 +357,6 @@ def reference_uncertainty(steps: Sequence[StudyStep]) -> float:
     float
         Relative uncertainty of x* (dimensionless).
     """
-    u = [s.reference.uncertainty for s in steps if s.kind == "measured"
+    u = [s.reference.uncertainty for s in steps if s.kind == "unique"
          and s.reference is not None and math.isfinite(s.reference.uncertainty)]
     return max(u, default=0.0)
-
-
-def steps_table(steps: Sequence[StudyStep]) -> str:
-    """One line per recorded step: kind, rest ratio, one-iteration error, certificate.
-
-    Parameters
-    ----------
-    steps : sequence of StudyStep
-        The classified steps.
-
-    Returns
-    -------
-    str
-        A Markdown table.
-    """
-    lines = ["| step | t [s] | kind | ‖∇g(y)‖/floor | 1-iteration error | Newton residual "
-             "| λ_min(H)/m_min | uncertainty | g(x₂) − g(x*) | rho_local_global |",
-             "|---" * 10 + "|"]
-    for s in steps:
-        ref = s.reference
-        cert = ("| | | | |" if ref is None else
-                f"| {ref.residual:.1e} | {ref.min_eigenvalue:.3g} | {ref.uncertainty:.1e} "
-                f"| {ref.objective_difference:.2e} | {s.rho:.4f} |")
-        lines.append(f"| {s.step.index} | {s.step.time:.4g} | {s.kind} | {s.rest_ratio:.2e} "
-                     f"| {s.one_iteration_error:.2e} {cert}")
-    return "\n".join(lines)

@@ -3,10 +3,25 @@
 For each recorded step (:mod:`clothsim.accuracy.problems`) that teaches something, a
 certified reference (:mod:`clothsim.accuracy.reference`) is computed once; every
 configuration (a method with a fixed iteration budget, or with a residual tolerance) then
-solves the same problems. Per configuration:
-the distribution (median, 90th percentile, worst) of the relative solver error
-‖x − x*‖ / ‖x* − x_n‖ and of the iterations it used, over the measured steps. Steps at
-rest, trivially solved or with two minima are counted in their own columns, never measured.
+solves the same problems. Steps are classified by their certificates (:data:`KINDS`):
+
+``"unique"``
+    every start reached the same certified minimum x*: the relative solver error
+    ‖x − x*‖ / ‖x* − x_n‖ is measured;
+``"several-minima"``
+    the starts reached several certified minima: measured by the relative objective gap
+    (g(x) − g(x_best)) / (g(y) − g(x_best)) (a distance to one minimum is no error);
+``"saddle"``
+    Newton from y ended at a stationary point whose Hessian is indefinite (never reported
+    as a minimum; not measured);
+``"reference-failed"``
+    Newton from y did not reach its rounding floor (not measured);
+``"trivial"``, ``"at-rest"``
+    see :func:`~clothsim.accuracy.problems.classify`.
+
+Per configuration: the distribution (median, 90th percentile, worst) of the solver error
+over the unique steps, of the objective gap over every measured step, and of the
+iterations it used.
 The error measurement parallelises over (configuration, step) pairs with joblib
 (:func:`measure`, ``jobs``); it is deterministic, so any ``jobs`` gives the same errors.
 """
@@ -21,6 +36,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
+from ..errors import ClothsimError
 from ..model import Model
 from ..solvers import estimate_spectral_radius, make_solver
 from .problems import RecordedStep, classify
@@ -81,6 +97,12 @@ class Configuration:
         return f"{self.method} {self.iterations} it"
 
 
+KINDS = ("unique", "several-minima", "saddle", "reference-failed", "trivial", "at-rest")
+"""Step classes, by certificate (module text)."""
+MEASURED = ("unique", "several-minima")
+"""The classes whose steps every configuration solves."""
+
+
 @dataclass
 class StudyStep:
     """A recorded step with its classification and (when measured) its reference.
@@ -90,7 +112,7 @@ class StudyStep:
     step : RecordedStep
         The step problem as recorded.
     kind : str
-        "measured", "at-rest", "trivial" or "two-minima" (:func:`classify`).
+        One of :data:`KINDS`.
     rest_ratio : float
         ‖∇g(y)‖ / rounding floor.
     one_iteration_error : float
@@ -100,11 +122,16 @@ class StudyStep:
     """
 
     step: RecordedStep
-    kind: str                      # "measured", "at-rest", "trivial", "two-minima"
+    kind: str                      # one of KINDS
     rest_ratio: float              # ‖∇g(y)‖ / rounding floor
     one_iteration_error: float
     reference: CertifiedReference | None = None
-    rho: float = math.nan          # local/global decay rate (measured / two-minima steps)
+    rho: float = math.nan          # local/global decay rate (measured steps)
+
+    @property
+    def measured(self) -> bool:
+        """Whether every configuration solves this step (a class of :data:`MEASURED`)."""
+        return self.kind in MEASURED
 
 
 @dataclass
@@ -122,6 +149,15 @@ class ConfigResult:
         Per-step wall time [s], one entry per timing repeat.
     factorizations : float
         Mean factorizations per step (Newton), hardware independent.
+    diverged : int
+        Measured steps on which the configuration blew up (a non-finite state, force or
+        error, or a failed factorization); their error is inf.
+    trajectory_diverged : bool
+        Its whole-run trajectory blew up.
+    gaps : ndarray, shape (m,)
+        Relative objective gap (g(x) − g(x_best)) / (g(y) − g(x_best)) per measured step.
+    unique : ndarray of bool, shape (m,)
+        Which measured steps are "unique" (their solver error is defined).
     """
 
     config: Configuration
@@ -129,6 +165,10 @@ class ConfigResult:
     iterations: np.ndarray                   # (m,) iterations used per step
     seconds: list[float] = field(default_factory=list)   # per-step seconds, one per repeat
     factorizations: float = 0.0              # per step (Newton), hardware independent
+    diverged: int = 0
+    trajectory_diverged: bool = False
+    gaps: np.ndarray = field(default_factory=lambda: np.zeros(0))
+    unique: np.ndarray = field(default_factory=lambda: np.zeros(0, dtype=bool))
 
 
 def prepare_steps(model: Model, recorded: Sequence[RecordedStep], *,
@@ -153,10 +193,14 @@ def prepare_steps(model: Model, recorded: Sequence[RecordedStep], *,
     for rec in recorded:
         ref = certified_reference(model, rec.problem, backend=backend)
         kind, ratio, err1 = classify(model, rec.problem, ref.x)
-        if kind == "measured" and ref.two_minima:
-            kind = "two-minima"
+        if kind == "measured":
+            if not ref.certified:
+                kind = ("saddle" if ref.at_floor and not ref.positive_definite
+                        else "reference-failed")
+            else:
+                kind = "several-minima" if ref.two_minima else "unique"
         rho = (estimate_spectral_radius(model, rec.problem, backend=backend)
-               if kind in ("measured", "two-minima") else math.nan)
+               if kind in MEASURED else math.nan)
         out.append(StudyStep(rec, kind, ratio, err1, ref if kind != "at-rest" else None, rho))
         log.info("step %d: %s (|grad g(y)|/floor %.2e, one-iteration error %.2e, "
                  "residual %.1e, min eig %.3g, uncertainty %.1e, rho %.4f)", rec.index, kind,
@@ -166,7 +210,8 @@ def prepare_steps(model: Model, recorded: Sequence[RecordedStep], *,
 
 def default_configurations(methods: Sequence[str], *, budgets: Sequence[int] = BUDGETS,
                            tolerances: Sequence[float] = TOLERANCES,
-                           options: dict | None = None) -> list[Configuration]:
+                           options: dict | None = None,
+                           cap: int = DEFAULT_CAP) -> list[Configuration]:
     """Budget and tolerance configurations for each method (Newton budgets ≤ 10).
 
     Parameters
@@ -179,6 +224,8 @@ def default_configurations(methods: Sequence[str], *, budgets: Sequence[int] = B
         Relative-residual tolerances (iterations capped at 5000, Newton 100).
     options : dict, optional
         Extra solver options per method, e.g. ``{"chebyshev": {"rho": 0.99}}``.
+    cap : int
+        Iteration cap of the tolerance configurations (Newton: 100).
 
     Returns
     -------
@@ -189,8 +236,8 @@ def default_configurations(methods: Sequence[str], *, budgets: Sequence[int] = B
         opts = tuple(sorted((options or {}).get(m, {}).items()))
         its = [b for b in budgets if m != "newton" or b <= 10]
         out += [Configuration(m, int(b), None, opts) for b in its]
-        cap = TOLERANCE_CAP.get(m, DEFAULT_CAP)
-        out += [Configuration(m, cap, float(t), opts) for t in tolerances]
+        its_cap = TOLERANCE_CAP.get(m, cap)
+        out += [Configuration(m, its_cap, float(t), opts) for t in tolerances]
     return out
 
 
@@ -204,7 +251,7 @@ def chebyshev_rho(model: Model, steps: Sequence[StudyStep], *, backend: str = "a
     model : Model
         The cloth.
     steps : sequence of StudyStep
-        Only ``kind == "measured"`` steps are used.
+        Only measured steps (:data:`MEASURED`) are used.
     backend : {"auto", "cholmod", "splu"}
         Factorization backend.
 
@@ -215,22 +262,36 @@ def chebyshev_rho(model: Model, steps: Sequence[StudyStep], *, backend: str = "a
     """
     rhos = [s.rho if math.isfinite(s.rho)
             else estimate_spectral_radius(model, s.step.problem, backend=backend)
-            for s in steps if s.kind == "measured"]
+            for s in steps if s.measured]
     return max(rhos, default=0.0)
 
 
-def _solve_one(model: Model, config: Configuration, study_step: StudyStep) -> tuple[float, int,
-                                                                                    int]:
-    solver = config.solver(model)
+BLOW_UPS = (ClothsimError, FloatingPointError, OverflowError, ValueError, ZeroDivisionError,
+            np.linalg.LinAlgError)
+"""What a configuration that blows up raises (a non-finite state or force, a failed
+factorization): recorded as diverged, the study goes on."""
+
+
+def _solve_one(model: Model, config: Configuration,
+               study_step: StudyStep) -> tuple[float, int, int, bool, float]:
+    """(relative error, iterations, factorizations, diverged, objective gap) of one solve."""
     problem = study_step.step.problem
-    with warnings.catch_warnings():
-        warnings.simplefilter("ignore")
-        res = solver.solve(problem)
+    try:
+        solver = config.solver(model)
+        with warnings.catch_warnings(), np.errstate(all="ignore"):
+            warnings.simplefilter("ignore")
+            res = solver.solve(problem)
+    except BLOW_UPS as exc:
+        log.warning("%s diverged on step %d: %s", config.label, study_step.step.index, exc)
+        return math.inf, 0, 0, True, math.inf
     x_star = study_step.reference.x
     scale = float(np.linalg.norm(x_star - problem.x)) or 1.0
     err = float(np.linalg.norm(res.x - x_star)) / scale
-    return (err if math.isfinite(err) else math.inf), int(res.iterations), \
-        int(getattr(solver, "factor_count", 0) if config.method == "newton" else 0)
+    diverged = not math.isfinite(err)
+    gap = math.inf if diverged else study_step.reference.objective_gap(model, problem, res.x)
+    return (math.inf if diverged else err), int(res.iterations), \
+        int(getattr(solver, "factor_count", 0) if config.method == "newton" else 0), \
+        diverged, gap
 
 
 def measure(model: Model, steps: Sequence[StudyStep], configs: Sequence[Configuration], *,
@@ -242,7 +303,7 @@ def measure(model: Model, steps: Sequence[StudyStep], configs: Sequence[Configur
     model : Model
         The cloth.
     steps : sequence of StudyStep
-        From :func:`prepare_steps`; only ``kind == "measured"`` steps are solved.
+        From :func:`prepare_steps`; only measured steps (:data:`MEASURED`) are solved.
     configs : sequence of Configuration
         What to run.
     jobs : int
@@ -255,7 +316,8 @@ def measure(model: Model, steps: Sequence[StudyStep], configs: Sequence[Configur
     list of ConfigResult
         Same order as ``configs``; identical for any ``jobs`` and ``scheduler``.
     """
-    measured = [s for s in steps if s.kind == "measured"]
+    measured = [s for s in steps if s.measured]
+    unique = np.array([s.kind == "unique" for s in measured], dtype=bool)
     tasks = [(c, s) for c in configs for s in measured]
     if jobs == 1 and scheduler is None:
         results = [_solve_one(model, c, s) for c, s in tasks]
@@ -268,7 +330,10 @@ def measure(model: Model, steps: Sequence[StudyStep], configs: Sequence[Configur
         out.append(ConfigResult(c, np.array([r[0] for r in chunk]),
                                 np.array([r[1] for r in chunk]),
                                 factorizations=float(np.mean([r[2] for r in chunk]))
-                                if chunk else 0.0))
+                                if chunk else 0.0,
+                                diverged=sum(bool(r[3]) for r in chunk),
+                                gaps=np.array([r[4] for r in chunk], dtype=np.float64),
+                                unique=unique.copy()))
     return out
 
 

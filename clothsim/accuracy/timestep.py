@@ -13,6 +13,7 @@ window of frames in which no run, reference included, had a position correction
 
 from __future__ import annotations
 
+import logging
 import math
 import warnings
 from collections.abc import Sequence
@@ -27,6 +28,8 @@ from .trajectory import (
     run_trajectory,
     trajectory_error,
 )
+
+log = logging.getLogger(__name__)
 
 CONVERGED = ("newton", 100, 1e-10)
 
@@ -147,7 +150,7 @@ def time_step_study(factory: SimulationFactory, *, frame_time: float, frames: in
     h_asym = 1.0 / omega
     ok = [(h, e) for h, e in zip(hs, errs) if math.isfinite(e) and e > 0]
     slope = math.nan
-    if len(ok) >= 3:
+    if len(ok) >= 2:  # --quick checks two time steps
         slope = float(np.polyfit(*np.log(np.array(ok)).T, 1)[0])
     if math.isfinite(slope) and slope >= 0.7:
         note = (f"time-step error falls like h^{slope:.2f} (implicit Euler: first order), "
@@ -184,16 +187,27 @@ def trajectory_errors(factory: SimulationFactory, configs, reference: np.ndarray
     Returns
     -------
     dict
-        Configuration → ‖X − X_ref‖ / ‖X_ref − X_0‖ (time-step and solver error together).
+        Configuration → ‖X − X_ref‖ / ‖X_ref − X_0‖ (time-step and solver error together);
+        inf for a run that blew up (a non-finite state or force): it is recorded, and the
+        other runs go on.
     """
+    from .study import BLOW_UPS
+
     frames = len(reference) - 1
     out = {}
-    with warnings.catch_warnings():
+    with warnings.catch_warnings(), np.errstate(all="ignore"):
         warnings.simplefilter("ignore")
         for c in configs:
             if c.tolerance is None and c.iterations not in TRAJECTORY_BUDGETS:
                 continue
-            sim = factory(c.method, h, c.iterations, c.tolerance)
-            out[c] = trajectory_error(run_trajectory(sim, frames=frames,
-                                                     frame_time=frame_time).frames, reference)
+            try:
+                sim = factory(c.method, h, c.iterations, c.tolerance)
+                for name, value in c.options:  # the study's settings, e.g. Chebyshev's ρ
+                    setattr(sim.solver, name, value)
+                err = trajectory_error(run_trajectory(sim, frames=frames,
+                                                      frame_time=frame_time).frames, reference)
+            except BLOW_UPS as exc:
+                log.warning("%s: trajectory diverged: %s", c.label, exc)
+                err = math.inf
+            out[c] = err if math.isfinite(err) else math.inf
     return out

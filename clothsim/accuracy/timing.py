@@ -22,7 +22,7 @@ import numpy as np
 
 from ..model import Model
 from ..solvers import LocalGlobalSolver, estimate_spectral_radius
-from .study import ConfigResult, StudyStep
+from .study import BLOW_UPS, ConfigResult, StudyStep
 
 
 def _limited_threads(threads: int):
@@ -59,20 +59,33 @@ def time_configurations(model: Model, steps: Sequence[StudyStep],
     None
         ``results`` are changed in place.
     """
-    measured = [s for s in steps if s.kind == "measured"]
+    measured = [s for s in steps if s.measured]
     if not measured:
         return
     solvers = [r.config.solver(model) for r in results]
-    with warnings.catch_warnings(), _limited_threads(threads):
+    broken = set()
+    with warnings.catch_warnings(), _limited_threads(threads), np.errstate(all="ignore"):
         warnings.simplefilter("ignore")
-        for solver in solvers:  # warm-up: factor M + h² L, estimate ρ (one-off costs)
-            solver.solve(measured[0].step.problem)
+        for i, solver in enumerate(solvers):  # warm-up: factor M + h² L, estimate ρ (one-off)
+            try:
+                solver.solve(measured[0].step.problem)
+            except BLOW_UPS:
+                broken.add(i)
         for _ in range(repeats):
-            for solver, res in zip(solvers, results):
+            for i, (solver, res) in enumerate(zip(solvers, results)):
+                if i in broken or res.diverged:  # a blown-up configuration is not timed
+                    continue
                 t0 = time.perf_counter()
-                for s in measured:
-                    solver.solve(s.step.problem)
+                try:
+                    for s in measured:
+                        solver.solve(s.step.problem)
+                except BLOW_UPS:
+                    broken.add(i)
+                    continue
                 res.seconds.append((time.perf_counter() - t0) / len(measured))
+    for i in broken:
+        results[i].diverged = max(results[i].diverged, 1)
+        results[i].seconds.clear()
 
 
 def median_iqr(seconds: Sequence[float]) -> tuple[float, float]:
@@ -115,7 +128,7 @@ def one_off_costs(model: Model, steps: Sequence[StudyStep], *, repeats: int = 3,
         ``factorization_seconds`` and ``rho_estimation_seconds`` [s]; empty when no
         step is measured.
     """
-    measured = [s for s in steps if s.kind == "measured"]
+    measured = [s for s in steps if s.measured]
     if not measured:
         return {}
     problem = measured[0].step.problem
@@ -131,6 +144,29 @@ def one_off_costs(model: Model, steps: Sequence[StudyStep], *, repeats: int = 3,
             rho.append(time.perf_counter() - t0)
     return {"factorization_seconds": float(np.median(fac)),
             "rho_estimation_seconds": float(np.median(rho))}
+
+
+def source_commit() -> str:
+    """The git commit of the clothsim source that runs ("+dirty" with local changes).
+
+    Returns
+    -------
+    str
+        A short hash, or "unknown" outside a git checkout.
+    """
+    import subprocess
+    from pathlib import Path
+
+    root = Path(__file__).resolve().parents[2]
+    try:
+        head = subprocess.run(["git", "rev-parse", "--short", "HEAD"], cwd=root, text=True,
+                              capture_output=True, check=True, timeout=10).stdout.strip()
+        dirty = subprocess.run(["git", "status", "--porcelain", "--untracked-files=no",
+                                "clothsim"], cwd=root, text=True, capture_output=True,
+                               check=True, timeout=10).stdout.strip()
+    except (OSError, subprocess.SubprocessError):
+        return "unknown"
+    return head + ("+dirty" if dirty else "")
 
 
 def machine_info(threads: int = 1) -> dict:
@@ -158,6 +194,7 @@ def machine_info(threads: int = 1) -> dict:
             "platform": platform.platform(), "cpu_count": os.cpu_count(),
             "python": platform.python_version(), "numpy": np.__version__,
             "scipy": scipy.__version__, "clothsim": clothsim_version,
+            "commit": source_commit(),
             "blas_threads": threads}
     try:
         from threadpoolctl import threadpool_info

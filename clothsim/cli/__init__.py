@@ -140,7 +140,15 @@ def build_parser() -> argparse.ArgumentParser:
                      help="skip the time-step error runs")
     acc.add_argument("--no-plots", action="store_true", help="write no figures")
     acc.add_argument("--quick", action="store_true",
-                     help="few problems, budgets and repeats (a first look, not for a referee)")
+                     help="a first look in seconds, not for a referee: at most 4 problems, "
+                          "budgets 1/5/10/20/100, tolerances 1e-3/1e-6 (at most 1000 "
+                          "iterations), 1 timing repeat, one BLAS thread, no trajectory "
+                          "errors, a 6-frame "
+                          "time-step check at h and h/2; stops early when no step can be "
+                          "measured")
+    acc.add_argument("--steps", default=None, metavar="FILE",
+                     help="re-measure exactly the step problems of an earlier study "
+                          "(its problems.npz) instead of recording new ones")
     acc.add_argument("--paper", action="store_true",
                      help="the paper's Fig. 1 setup: local/global against Newton (crossover)")
     acc.add_argument("--paper-size", type=count(2, int(MAX_VERTICES ** 0.5)), default=41,
@@ -250,13 +258,11 @@ def _cmd_accuracy(args) -> int:
     kw = {}
     if args.methods:
         kw["methods"] = tuple(m.strip() for m in args.methods.split(",") if m.strip())
-    if args.quick:
-        kw.update(budgets=(1, 5, 10, 20, 100), tolerances=(1e-3, 1e-6),
-                  problems=min(args.problems, 4))
     print(accuracy.run_accuracy(
-        scene, args.out, problems=kw.pop("problems", args.problems), frames=args.frames,
+        scene, args.out, problems=args.problems, frames=args.frames, quick=args.quick,
         repeats=args.repeats, jobs=args.jobs, scheduler=args.scheduler, target=args.target,
-        time_steps=not args.no_time_steps, plots=not args.no_plots, **kw))
+        time_steps=not args.no_time_steps, plots=not args.no_plots, steps_file=args.steps,
+        **kw))
     return 0
 
 

@@ -56,7 +56,7 @@ def free_fall_onto_box():
 
 
 def check_real_work(steps):
-    measured = [s for s in steps if s.kind == "measured"]
+    measured = [s for s in steps if s.measured]
     assert measured
     for s in measured:
         assert s.reference.residual <= 1e-8 or s.reference.floor_ratio < 1e3
@@ -69,12 +69,13 @@ def test_stiff_cloth_at_rest_is_skipped_not_measured():
     recorded = record_problems(sim, steps=60, count=6)
     steps = prepare_steps(sim.model, recorded)
     kinds = [s.kind for s in steps]
-    assert kinds[0] == "measured" and kinds.count("at-rest") >= 2, kinds
+    assert kinds[0] == "unique" and kinds.count("at-rest") >= 2, kinds
     check_real_work(steps)
     table = rows(measure(sim.model, steps, [Configuration("local-global", 5)]), steps,
                  h=sim.h)
-    assert table[0].steps_measured == kinds.count("measured")
-    assert table[0].steps_skipped == len(kinds) - kinds.count("measured")
+    measured = kinds.count("unique") + kinds.count("several-minima")
+    assert table[0].steps_measured == measured and table[0].steps_unique == kinds.count("unique")
+    assert table[0].steps_skipped == len(kinds) - measured
     assert table[0].steps_at_rest == kinds.count("at-rest")
     assert table[0].solver_error_max > 1e-6  # real work left after 5 iterations
 
@@ -84,22 +85,56 @@ def test_free_fall_steps_are_trivial_and_contact_steps_measured():
     recorded = record_problems(sim, steps=16, count=8)
     steps = prepare_steps(sim.model, recorded)
     kinds = [s.kind for s in steps]
-    assert kinds[0] == "trivial" and "measured" in kinds, kinds
+    assert kinds[0] == "trivial" and "unique" in kinds, kinds
     check_real_work(steps)
 
 
-def test_two_minima_are_reported_not_measured(tmp_path):
-    sim = two_minima_simulation()
+def buckling_strip(seed: int = 1, amplitude: float = 1e-3):
+    """The compressed 9 × 3 strip (tests/ports) with a tiny random out-of-plane velocity:
+    its first step buckles, and Newton from y and from converged local/global reach two
+    different minima (both certified, H ≻ 0)."""
+    from tests.ports.test_check import compressed_strip
+
+    sim = compressed_strip()
+    v = np.zeros_like(sim.state.positions)
+    v[:, 2] = amplitude * np.random.default_rng(seed).standard_normal(len(v))
+    sim.state = State(sim.state.positions.copy(), v)
+    return sim
+
+
+def test_several_minima_are_measured_by_the_objective_gap(tmp_path):
+    sim = buckling_strip()
     recorded = record_problems(sim, steps=2, count=2)
     steps = prepare_steps(sim.model, recorded)
-    assert [s.kind for s in steps] == ["measured", "two-minima"]
-    ref = steps[1].reference
-    assert ref.two_minima and math.isnan(ref.uncertainty) and ref.objective_difference < 0
-    table = rows(measure(sim.model, steps, [Configuration("local-global", 3)]), steps,
-                 h=sim.h)
-    assert table[0].steps_two_minima == 1 and table[0].steps_measured == 1
+    assert [s.kind for s in steps] == ["several-minima", "unique"]
+    ref = steps[0].reference
+    assert ref.two_minima and ref.minima >= 2 and math.isnan(ref.uncertainty)
+    assert ref.certified and ref.min_eigenvalue > 0 and ref.objective_difference <= 0
+    assert ref.objective_scale > 0
+    problem = steps[0].step.problem
+    assert ref.objective_gap(sim.model, problem, problem.initial_guess()) == pytest.approx(1)
+    assert ref.objective_gap(sim.model, problem, ref.x_best) == 0.0
+    results = measure(sim.model, steps, [Configuration("local-global", 3),
+                                         Configuration("newton", 100, 1e-12)])
+    table = rows(results, steps, h=sim.h)
+    assert table[0].steps_several_minima == 1 and table[0].steps_measured == 2
+    assert table[0].steps_unique == 1
+    # every measured step has a gap; converged Newton is at a certified minimum: gap <= its
+    # own basin's, and 3 local/global iterations are far from any minimum
+    assert np.all(np.isfinite(results[0].gaps)) and len(results[0].gaps) == 2
+    assert results[1].gaps.max() < 0.5 and results[0].gaps.max() > results[1].gaps.max()
     header = write_csv(table, tmp_path / "a.csv").read_text().splitlines()[0].split(",")
-    assert "steps_two_minima" in header
+    assert {"steps_several_minima", "objective_gap_p90", "steps_saddle"} <= set(header)
+
+
+def test_a_reference_that_is_not_certified_is_reported_as_such(monkeypatch):
+    import clothsim.accuracy.reference as reference
+
+    monkeypatch.setattr(reference, "REFERENCE_ITERATIONS", 1)
+    sim = buckling_strip()
+    steps = prepare_steps(sim.model, record_problems(sim, steps=1, count=1))
+    assert steps[0].kind == "reference-failed" and not steps[0].reference.certified
+    assert not steps[0].measured
 
 
 def test_jobs_two_gives_the_same_errors_as_serial():
@@ -204,6 +239,7 @@ def test_rho_per_step_matches_the_decay_of_the_local_global_error():
     steps = prepare_steps(sim.model, record_problems(sim, steps=2, count=2))
     for s in steps:
         assert 0.0 < s.rho < 1.0, s.rho
+    assert steps_table(steps).count("| unique |") == 2
     step = steps[0]  # measured: compare with the error decay against the certified x*
     errors = []
     for it in LocalGlobalSolver(sim.model, check_conditioning=False).iterates(
@@ -214,8 +250,10 @@ def test_rho_per_step_matches_the_decay_of_the_local_global_error():
     decay = (errors[150] / errors[100]) ** (1 / 50)
     assert abs(step.rho - decay) < 0.02, (step.rho, decay)
     table = steps_table(steps)
-    assert "rho_local_global" in table.splitlines()[0]
-    assert f"{step.rho:.4f}" in table.splitlines()[2]
+    lines = table.splitlines()
+    head = next(i for i, line in enumerate(lines) if line.startswith("| step |"))
+    assert "rho_local_global" in lines[head] and "several-minima:" in table
+    assert f"{step.rho:.4f}" in lines[head + 2]
 
 
 def box_factory(top: float = 0.5, gap: float = 0.1):
@@ -274,3 +312,21 @@ def test_run_accuracy_leaves_time_step_error_empty_when_every_frame_has_contact(
     assert "no contact-free window" in text
     row = (tmp_path / "accuracy.csv").read_text().splitlines()[1].split(",")
     assert row[COLUMNS.index("time_step_error")] == ""
+
+
+def test_a_scene_whose_steps_all_have_several_minima_is_answered_by_the_gap():
+    from clothsim.accuracy.report import fixed_budget_measure, fixed_budget_table
+
+    sim = buckling_strip()
+    steps = prepare_steps(sim.model, record_problems(sim, steps=1, count=1))
+    assert [s.kind for s in steps] == ["several-minima"]
+    results = measure(sim.model, steps, [Configuration("local-global", 5),
+                                         Configuration("local-global", 10)])
+    for r in results:
+        r.seconds = [1e-3]
+    table = rows(results, steps, h=sim.h)
+    answer = answer_table(table, levels=(1.0, 1e-12))
+    assert "objective gap" in answer and "solver error" not in answer
+    assert "local-global, 5 it/step" in answer.splitlines()[2]
+    assert fixed_budget_measure(table) == "objective gap"
+    assert "nan" not in fixed_budget_table(table, budgets=(5, 10))
