@@ -19,6 +19,7 @@ and implicit Euler's damping (:mod:`.damping`) remain available. docs/accuracy.m
 the results and explains every CSV column.
 """
 
+from .answer import answer_table
 from .command import run_accuracy, scene_factory
 from .damping import (
     damping_curves,
@@ -37,7 +38,7 @@ from .plots import (
 )
 from .problems import RecordedStep, classify, record_problems
 from .reference import CertifiedReference, certified_reference
-from .report import COLUMNS, answer_table, fixed_budget_table
+from .report import COLUMNS, fixed_budget_table
 from .study import Configuration, default_configurations, measure, prepare_steps
 from .sweep import (
     CSV_FIELDS,

@@ -18,9 +18,9 @@ import numpy as np
 
 from ..errors import InputError
 from ..factorization import cholmod_available
+from .answer import answer_table, short_answer
 from .problems import load_problems, record_problems, save_problems
 from .report import (
-    answer_table,
     fixed_budget_measure,
     fixed_budget_table,
     reference_uncertainty,
@@ -240,6 +240,7 @@ def _run(scene, out, methods, problems, frames, repeats, jobs, scheduler, target
     classes = ", ".join(f"{kinds.count(k)} {k}" for k in KINDS)
     text = [f"# accuracy of {scene.name}: h = {h:.4g} s, {measured} of {len(steps)} recorded "
             f"steps measured ({classes})", "",
+            *short_answer(table, (target,) if target is not None else (1e-3,)), "",
             answer_table(table, levels=levels, uncertainty=reference_uncertainty(steps),
                          trajectory_levels=TRAJECTORY_LEVELS if traj else ()), "",
             f"Fixed budget ({fixed_budget_measure(table)} after k iterations per step):", "",

@@ -18,7 +18,6 @@ import numpy as np
 from .steps_report import STEP_CLASSES, steps_table  # noqa: F401  (re-exported)
 from .study import KINDS, MEASURED, ConfigResult, StudyStep, quantiles
 from .timing import median_iqr
-from .trace import ACCURACY_LEVELS
 
 COLUMNS = ("method", "h", "iterations", "tolerance", "solver_error_median",
            "solver_error_p90", "solver_error_max", "objective_gap_median", "objective_gap_p90",
@@ -212,85 +211,6 @@ def write_sidecar(info: dict, path) -> Path:
     path = Path(path)
     path.write_text(json.dumps(info, indent=2, sort_keys=True, default=str) + "\n")
     return path
-
-
-def cheapest(table: Sequence[Row], level: float, *, error: str = "solver_error_p90"
-             ) -> Row | None:
-    """The row with the least median seconds per step whose ``error`` is ≤ ``level``.
-
-    Parameters
-    ----------
-    table : sequence of Row
-        The rows.
-    level : float
-        Accuracy target (relative error).
-    error : str, default "solver_error_p90"
-        The Row column compared with ``level``.
-
-    Returns
-    -------
-    Row or None
-        None when no timed row reaches ``level``.
-    """
-    ok = [r for r in table if math.isfinite(getattr(r, error)) and getattr(r, error) <= level
-          and math.isfinite(r.seconds_per_step_median) and r.status != "diverged"]
-    return min(ok, key=lambda r: r.seconds_per_step_median) if ok else None
-
-
-def answer_table(table: Sequence[Row], *, levels: Sequence[float] = ACCURACY_LEVELS,
-                 trajectory_levels: Sequence[float] = (), uncertainty: float = 0.0,
-                 gap_levels: Sequence[float] | None = None) -> str:
-    """The answer: for each target, the cheapest setting with its time and spread.
-
-    Solver-error levels below ``uncertainty`` (the largest reference uncertainty over the
-    measured steps) are not answered: the reference cannot tell them apart.
-
-    Parameters
-    ----------
-    table : sequence of Row
-        The rows.
-    levels : sequence of float
-        Solver-error targets (p90 over the steps).
-    trajectory_levels : sequence of float
-        Trajectory-error targets.
-    uncertainty : float, default 0
-        The references' relative uncertainty.
-    gap_levels : sequence of float, optional
-        Relative-objective-gap targets (p90 over every measured step); default ``levels``
-        when some step has several minima or no step is unique, else none. Solver-error
-        lines are left out when no step is unique.
-
-    Returns
-    -------
-    str
-        A Markdown table, one line per target.
-    """
-    unique = max((r.steps_unique for r in table), default=1)
-    several = max((r.steps_several_minima for r in table), default=0)
-    if gap_levels is None:
-        gap_levels = levels if (several or not unique) and table else ()
-    if not unique and table:
-        levels = ()
-    lines = ["| target | error measured | cheapest setting | ms/step (median) | IQR [ms] |",
-             "|---|---|---|---|---|"]
-    for col, name, levs in (("solver_error_p90", "solver error (p90 over unique steps)",
-                             levels),
-                            ("objective_gap_p90", "objective gap (p90 over measured steps)",
-                             gap_levels),
-                            ("trajectory_error", "trajectory error", trajectory_levels)):
-        for level in levs:
-            if col == "solver_error_p90" and level < uncertainty:
-                lines.append(f"| {level:.0e} | {name} | below the reference's uncertainty "
-                             f"{uncertainty:.1e}: not measurable | | |")
-                continue
-            r = cheapest(table, level, error=col)
-            if r is None:
-                lines.append(f"| {level:.0e} | {name} | no setting reaches this | | |")
-            else:
-                lines.append(f"| {level:.0e} | {name} | {r.setting} | "
-                             f"{1e3 * r.seconds_per_step_median:.3g} | "
-                             f"{1e3 * r.seconds_per_step_iqr:.2g} |")
-    return "\n".join(lines)
 
 
 def fixed_budget_table(table: Sequence[Row], budgets: Sequence[int] = FIXED_BUDGETS) -> str:

@@ -15,7 +15,8 @@ from clothsim.accuracy import (
     prepare_steps,
     record_problems,
 )
-from clothsim.accuracy.report import COLUMNS, answer_table, rows, write_csv
+from clothsim.accuracy.answer import answer_table
+from clothsim.accuracy.report import COLUMNS, rows, write_csv
 from clothsim.scene import Scene
 from clothsim.simulation import State
 

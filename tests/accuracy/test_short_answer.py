@@ -1,0 +1,28 @@
+"""accuracy opens with the answer to the student's question: the cheapest setting for 1e-3."""
+
+from types import SimpleNamespace
+
+from clothsim.accuracy.answer import short_answer
+
+
+def row(method, setting, err, ms, unique=3):
+    return SimpleNamespace(method=method, setting=setting, solver_error_p90=err,
+                           objective_gap_p90=err, seconds_per_step_median=ms / 1e3,
+                           status="ok", steps_unique=unique)
+
+
+def test_cheapest_setting_and_its_speedup_over_local_global():
+    table = [row("local-global", "local-global, 200 it/step", 5e-4, 40.0),
+             row("local-global", "local-global, 10 it/step", 2e-1, 2.0),
+             row("chebyshev", "chebyshev, 40 it/step", 8e-4, 10.0)]
+    (line,) = short_answer(table)
+    assert line.startswith("answer for 1e-03 (solver error): chebyshev, 40 it/step, 10 ms/step")
+    assert "4x faster than local/global (local-global, 200 it/step, 40 ms/step)" in line
+
+
+def test_no_setting_and_the_gap_when_no_step_is_unique():
+    table = [row("local-global", "local-global, 10 it/step", 5e-2, 2.0, unique=0)]
+    assert short_answer(table, (1e-3, 1e-1)) == [
+        "answer for 1e-03 (objective gap): no setting measured reaches it",
+        "answer for 1e-01 (objective gap): local-global, 10 it/step, 2 ms/step; local/global "
+        "itself is the cheapest"]
