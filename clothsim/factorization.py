@@ -152,6 +152,10 @@ class Factor:
         :data:`CONDITION_WARNING_THRESHOLD`.
     cholmod_mode : {"auto", "simplicial", "supernodal"}
         CHOLMOD's factorization (ignored by SuperLU); see the module docstring.
+    reuse : Factor, optional
+        An earlier CHOLMOD factor of a matrix with the same sparsity pattern and mode: its
+        symbolic analysis (ordering, elimination tree, supernodes) is reused and only the
+        numeric factorization runs (ignored when the pattern or mode differs).
 
     Attributes
     ----------
@@ -161,6 +165,8 @@ class Factor:
         ``(n, n)``.
     backend : str
         The backend that ran ("cholmod" or "splu").
+    analyzed : bool
+        True when this factorization ran its own symbolic analysis (False: reused).
 
     Raises
     ------
@@ -169,7 +175,7 @@ class Factor:
     """
 
     def __init__(self, A, *, backend: str = "auto", check_conditioning: bool = True,
-                 cholmod_mode: str = "auto"):
+                 cholmod_mode: str = "auto", reuse: Factor | None = None):
         if cholmod_mode not in CHOLMOD_MODES:
             raise InputError(f"cholmod_mode: must be one of "
                              f"{', '.join(map(repr, CHOLMOD_MODES))}, got {cholmod_mode!r}")
@@ -177,11 +183,20 @@ class Factor:
         self.shape = self.A.shape
         self.backend = resolve_backend(backend)
         self.mode_reason = cholmod_mode if self.backend == "cholmod" else "SuperLU"
+        self.cholmod_mode, self.analyzed = cholmod_mode, True
         if self.backend == "cholmod":
             from sksparse.cholmod import CholmodNotPositiveDefiniteError, cholesky
 
+            self.A.sort_indices()
+            same = (reuse is not None and reuse.backend == "cholmod"
+                    and reuse.cholmod_mode == cholmod_mode and reuse.shape == self.shape
+                    and np.array_equal(reuse.A.indptr, self.A.indptr)
+                    and np.array_equal(reuse.A.indices, self.A.indices))
             try:
-                self._factor = cholesky(self.A, mode=cholmod_mode)
+                if same:   # the earlier symbolic analysis, a new numeric factorization
+                    self._factor, self.analyzed = reuse._factor.cholesky(self.A), False
+                else:
+                    self._factor = cholesky(self.A, mode=cholmod_mode)
             except CholmodNotPositiveDefiniteError as exc:
                 raise FactorizationError(f"system matrix is not positive definite: {exc}") from exc
             # For small or very sparse matrices CHOLMOD picks a simplicial LDLᵀ, which does not

@@ -48,3 +48,22 @@ def test_run_records_the_choice_and_newton_refuses_the_key(tmp_path):
     scene = cs.load_scene("hanging", ["solver.cholmod_mode=simplicial", "solver.method=newton"])
     with pytest.raises(cs.InputError, match="solver.cholmod_mode: applies to the local/global"):
         scene.build_simulation()
+
+
+def test_a_refactorization_of_the_same_pattern_reuses_the_analysis():
+    import dataclasses
+
+    scene = cs.load_scene("hanging")
+    sim = scene.build_simulation()
+    solver = sim.solver
+    p1 = sim.problem()
+    solver.system(p1)
+    p2 = dataclasses.replace(p1, h=p1.h / 2)           # h changed: same pattern
+    x_reused = solver.solve(p2).x.copy()
+    assert (solver.factor_count, solver.analysis_count) == (2, 1)
+    fresh = cs.load_scene("hanging").build_simulation().solver
+    assert np.abs(fresh.solve(p2).x - x_reused).max() < 1e-13
+    assert fresh.analysis_count == 1
+    solver.invalidate()                                # after invalidate: analyzed afresh
+    solver.system(p2)
+    assert solver.analysis_count == 2

@@ -75,11 +75,15 @@ class LocalGlobalSolver(Solver):
         chooses by size (:func:`clothsim.factorization.choose_cholmod_mode`).
     factorization : str or None
         The mode of the last factorization and why, e.g. "simplicial: 441 free vertices < …".
+    analysis_count : int
+        CHOLMOD symbolic analyses done: a refactorization with the same free vertices (h or
+        the penalty pins changed) reuses the last one.
     """
 
     name = "local-global"
     cholmod_mode = "auto"
     factorization: str | None = None
+    analysis_count = 0
 
     def __init__(self, model: Model, *, iterations: int = 10, tolerance: float | None = None,
                  backend: str = "auto", check_conditioning: bool = True):
@@ -131,8 +135,9 @@ class LocalGlobalSolver(Solver):
             sysf = factor_system(self.model, problem, self._Js, self._a, self._b,
                                  backend=self.backend_requested,
                                  check_conditioning=self.check_conditioning,
-                                 cholmod_mode=self.cholmod_mode)
+                                 cholmod_mode=self.cholmod_mode, previous=self._cache)
         self.factor_count += 1
+        self.analysis_count += sysf.A_FF_factor.analyzed
         self.backend = sysf.A_FF_factor.backend
         self.factorization = sysf.A_FF_factor.mode_reason
         return sysf

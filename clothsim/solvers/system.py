@@ -62,7 +62,8 @@ class SystemFactor:
 
 def factor_system(model: Model, problem: StepProblem, Js: sp.csr_matrix, a: np.ndarray,
                   b: np.ndarray, *, backend: str = "auto",
-                  check_conditioning: bool = True, cholmod_mode: str = "auto") -> SystemFactor:
+                  check_conditioning: bool = True, cholmod_mode: str = "auto",
+                  previous: SystemFactor | None = None) -> SystemFactor:
     """Assemble and factor M_s + h² (L_s + K_anchor) for this problem's h and pins.
 
     Parameters
@@ -81,6 +82,9 @@ def factor_system(model: Model, problem: StepProblem, Js: sp.csr_matrix, a: np.n
         Warn when the condition estimate passes the threshold.
     cholmod_mode : {"auto", "simplicial", "supernodal"}
         CHOLMOD's mode; "auto" by size (:func:`clothsim.factorization.choose_cholmod_mode`).
+    previous : SystemFactor, optional
+        The factor this one replaces: with the same free vertices (h or the penalty pins
+        changed) its symbolic analysis is reused.
 
     Returns
     -------
@@ -95,8 +99,9 @@ def factor_system(model: Model, problem: StepProblem, Js: sp.csr_matrix, a: np.n
     A_FF = A_csr[free][:, free]
     A_FP = A_csr[free][:, fixed]
     mode, reason = choose_cholmod_mode(len(free), cholmod_mode)
-    factor = Factor(A_FF, backend=backend,
-                    check_conditioning=check_conditioning, cholmod_mode=mode)
+    factor = Factor(A_FF, backend=backend, check_conditioning=check_conditioning,
+                    cholmod_mode=mode,
+                    reuse=None if previous is None else previous.A_FF_factor)
     factor.mode_reason = reason if factor.backend == "cholmod" else "SuperLU (no CHOLMOD)"
     log.info("factored M + h^2 L: %d free of %d vertices, h=%g, backend=%s (%s)",
              len(free), n, problem.h, factor.backend, factor.mode_reason)
