@@ -41,3 +41,14 @@ def test_an_export_of_another_scene_is_refused_too(tmp_path, monkeypatch, capsys
     assert main(["export", str(copy), "--frames", "1", "--iterate-steps", "0"]) == 2
     assert "holds an export of another scene" in capsys.readouterr().err
     assert main(["export", "hanging", "--frames", "1", "--iterate-steps", "0"]) == 0
+
+
+def test_the_default_accuracy_folder_keeps_another_scenes_study(tmp_path, monkeypatch, capsys):
+    monkeypatch.chdir(tmp_path)
+    (tmp_path / "accuracy-out").mkdir()
+    (tmp_path / "accuracy-out" / "accuracy.json").write_text('{"scene": "drop-on-square"}')
+    assert main(["accuracy", "hanging", "--quick"]) == 2
+    err = capsys.readouterr().err
+    assert "holds the accuracy study of 'drop-on-square', not of 'hanging'" in err
+    assert (tmp_path / "accuracy-out" / "accuracy.json").read_text() == \
+        '{"scene": "drop-on-square"}'

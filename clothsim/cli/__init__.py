@@ -120,8 +120,10 @@ def build_parser() -> argparse.ArgumentParser:
                                           "same recorded steps of a scene")
     acc.add_argument("scene", nargs="?", default="hanging",
                      help="scene name or TOML path (default: hanging)")
-    acc.add_argument("--out", default="accuracy-out",
+    acc.add_argument("--out", default=None,
                      help="output directory (default: accuracy-out)")
+    acc.add_argument("--force", action="store_true",
+                     help="replace the default folder's study of another scene")
     acc.add_argument("--methods", default=None,
                      help="comma-separated solvers (default: local-global,chebyshev,anderson,"
                           "lbfgs,newton)")
@@ -255,11 +257,23 @@ def _cmd_accuracy(args) -> int:
     from ..scene import load_scene
 
     scene = load_scene(args.scene, args.set)
+    out = args.out if args.out is not None else "accuracy-out"
+    if args.out is None and not args.force:
+        import json
+
+        try:
+            previous = json.loads((Path(out) / "accuracy.json").read_text()).get("scene")
+        except (OSError, ValueError, AttributeError):
+            previous = None
+        if previous is not None and previous != scene.name:
+            return _fail(f"{out} holds the accuracy study of {previous!r}, not of "
+                         f"{scene.name!r}: choose --out DIR to keep both, or --force to "
+                         f"replace it", 2)
     kw = {}
     if args.methods:
         kw["methods"] = tuple(m.strip() for m in args.methods.split(",") if m.strip())
     print(accuracy.run_accuracy(
-        scene, args.out, problems=args.problems, frames=args.frames, quick=args.quick,
+        scene, out, problems=args.problems, frames=args.frames, quick=args.quick,
         repeats=args.repeats, jobs=args.jobs, scheduler=args.scheduler, target=args.target,
         time_steps=not args.no_time_steps, plots=not args.no_plots, steps_file=args.steps,
         **kw))
