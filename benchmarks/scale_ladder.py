@@ -109,7 +109,8 @@ def main(argv: list[str] | None = None) -> None:
         for n in runs:
             t = cli(n)
             share = 1 - t["without"] / t["with"]
-            lines.append(f"| {n}² | {t['with']:.1f} s | {t['without']:.1f} s | {share:.0%} |")
+            lines.append(f"| {n}² | {t['with']:.1f} s | {t['without']:.1f} s | "
+                         f"{max(share, 0.0):.0%} |")
             print(lines[-1], flush=True)
     OUT.write_text("\n".join(lines) + "\n")
     print(f"written to {OUT.relative_to(ROOT)}")
