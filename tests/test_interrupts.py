@@ -54,11 +54,19 @@ def write_scene(folder: Path, method: str, frames: int = LONG) -> Path:
     return path
 
 
+def _default_signals() -> None:
+    """In the child: the signals' default dispositions, whatever the test runner inherited
+    (under ``nohup`` SIGHUP is ignored, and clothsim rightly keeps an inherited SIG_IGN)."""
+    for sig in (signal.SIGHUP, signal.SIGINT, signal.SIGTERM):
+        signal.signal(sig, signal.SIG_DFL)
+
+
 def start_run(scene: Path, out: Path, *extra) -> subprocess.Popen:
     env = {**os.environ, "PYTHONPATH": str(REPO)}
     return subprocess.Popen([sys.executable, "-m", "clothsim", "run", str(scene), "--out",
                              str(out), "--no-preview", *extra], env=env,
-                            stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
+                            stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True,
+                            preexec_fn=_default_signals)
 
 
 def wait_for_frame(out: Path, frame: int, proc: subprocess.Popen, timeout: float = 60) -> None:

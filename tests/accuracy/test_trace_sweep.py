@@ -162,7 +162,7 @@ def test_cli_arguments_and_scene_factory():
     from clothsim.cli import build_parser
 
     args = build_parser().parse_args(["accuracy", "--quick", "--jobs", "2"])
-    assert args.scene == "hanging" and args.quick and args.out and args.jobs == 2
+    assert args.scene == "hanging" and args.quick and args.out is None and args.jobs == 2
 
     class FakeScene:
         fps = 30.0
