@@ -219,27 +219,6 @@ def _read_trajectory(path, key, fmt, dtype, vertex_count) -> np.ndarray:
     return raw.astype(np.float64).reshape(-1, vertex_count, 3)
 
 
-def check_number_table(path) -> None:
-    """Check that a text file is a table of numbers (``#`` comments allowed), as a port's
-    model files are, so a reader that trusts it cannot fail with Python text.
-
-    Parameters
-    ----------
-    path : str or Path
-        The text file.
-
-    Returns
-    -------
-    None
-
-    Raises
-    ------
-    InputError
-        One line naming the file and the first bad line.
-    """
-    _read_text(Path(path))
-
-
 def write_trajectory(path, frames, *, key: str = "positions", fmt: str | None = None,
                      dtype: str = "float64") -> Path:
     """Write (frames, n, 3) numbers in one format of the module docstring.

@@ -130,7 +130,7 @@ def read_table(path: Path, columns, what: str, *, empty: bool = False) -> np.nda
     Raises
     ------
     InputError
-        ``path:line: …`` for a line that is not numbers, has another count, or is not finite.
+        ``path: line N: …`` naming the first bad token, or the count of numbers.
     """
     allowed = (columns,) if isinstance(columns, int) else columns
     rows, width = [], None
@@ -142,18 +142,21 @@ def read_table(path: Path, columns, what: str, *, empty: bool = False) -> np.nda
         body = line.split("#", 1)[0].strip()
         if not body:
             continue
+        tokens = body.split()
         try:
-            row = [float(t) for t in body.split()]
+            row = [float(t) for t in tokens]
         except ValueError:
-            raise InputError(f"{path}:{number}: expected numbers ({what}), got "
-                             f"{body[:60]!r}") from None
+            bad = next(t for t in tokens if not _is_number(t))
+            raise InputError(f"{path}: line {number}: not a number: {bad[:40]!r} (a line "
+                             f"holds {what})") from None
         if (allowed is not None and len(row) not in allowed) or (width is not None
                                                                 and len(row) != width):
             want = width if width is not None else " or ".join(map(str, allowed))
-            raise InputError(f"{path}:{number}: expected {want} numbers ({what}), got "
-                             f"{len(row)}")
+            raise InputError(f"{path}: line {number}: {len(row)} numbers, expected {want} "
+                             f"({what})")
         if not np.all(np.isfinite(row)):
-            raise InputError(f"{path}:{number}: numbers must be finite, got {body[:60]!r}")
+            bad = next(t for t, v in zip(tokens, row) if not np.isfinite(v))
+            raise InputError(f"{path}: line {number}: not a finite number: {bad[:40]!r}")
         width = len(row)
         rows.append(row)
     if not rows and not empty:
@@ -161,6 +164,14 @@ def read_table(path: Path, columns, what: str, *, empty: bool = False) -> np.nda
     if not rows:
         return np.zeros((0, allowed[0] if allowed else 0))
     return np.array(rows, dtype=np.float64)
+
+
+def _is_number(token: str) -> bool:
+    try:
+        float(token)
+    except ValueError:
+        return False
+    return True
 
 
 def _read_settings(path: Path) -> dict:
@@ -171,7 +182,8 @@ def _read_settings(path: Path) -> dict:
             continue
         parts = body.split()
         if len(parts) != 2:
-            raise InputError(f"{path}:{number}: expected 'key value', got {body[:60]!r}")
+            raise InputError(f"{path}: line {number}: expected 'key value', got "
+                             f"{len(parts)} words")
         key, value = parts
         if key not in SETTING_UNITS:
             continue   # frames and keys of other tools: not part of the step
@@ -179,8 +191,8 @@ def _read_settings(path: Path) -> dict:
             out[key] = (float(value) if key in ("h", "tolerance") else
                         int(float(value)) if key == "iterations" else value)
         except ValueError:
-            raise InputError(f"{path}:{number}: {key}: expected a number, got "
-                             f"{value!r}") from None
+            raise InputError(f"{path}: line {number}: {key}: expected a number, got "
+                             f"{value[:40]!r}") from None
     return out
 
 

@@ -73,6 +73,7 @@ def test_each_case_is_the_assignments_program(profile, name):
     scale = np.abs(expected).max() + 1.0
     assert np.abs(ours - expected).max() < 1e-7 * scale, np.abs(ours - expected).max()
     assert main(["check", str(d / "scene.toml"), str(d)]) == 0
+    assert main(["diff-model", str(d / "scene.toml"), str(d)]) == 0   # free-fall: no pins
 
 
 def test_cli_writes_the_coursework_profile(tmp_path, capsys):

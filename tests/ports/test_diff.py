@@ -118,10 +118,10 @@ def test_malformed_folder_files_name_file_and_line(tmp_path):
     lines = pins.read_text().splitlines()
     lines[1] = lines[1] + " 4"
     pins.write_text("\n".join(lines) + "\n")
-    with pytest.raises(cs.InputError, match=r"pins.txt:2: expected 6 numbers"):
+    with pytest.raises(cs.InputError, match=r"pins.txt: line 2: 7 numbers, expected 6"):
         diff_models(scene, tmp_path / "e")
     pins.write_text("# vertex method stiffness x y z\n0 0 0 a b c\n")
-    with pytest.raises(cs.InputError, match=r"pins.txt:2: expected numbers"):
+    with pytest.raises(cs.InputError, match=r"pins.txt: line 2: not a number: .a."):
         model_tables(tmp_path / "e")
     (tmp_path / "e" / "masses.txt").write_text("1\n2\n")
     pins.unlink()
