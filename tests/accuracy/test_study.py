@@ -171,6 +171,10 @@ def test_run_accuracy_writes_csv_sidecar_and_answer(tmp_path):
     assert len(lines) == 1 + 3 + 3  # per method: 2 budgets + 1 tolerance
     assert (tmp_path / "accuracy.json").exists() and "| 1e-06 |" in text
     assert "no setting reaches this" not in text  # converged Newton reaches 1e-6
+    # the short answer comes before any table
+    first_table = next(i for i, t in enumerate(text.splitlines()) if t.startswith("|"))
+    answers = [i for i, t in enumerate(text.splitlines()) if t.startswith("answer for 1e-06")]
+    assert answers and answers[0] < first_table, text
 
 
 def test_answer_table_says_when_nothing_reaches_a_level():
