@@ -168,3 +168,21 @@ def atomic_path(path):
     finally:
         if tmp.exists():
             tmp.unlink()
+
+
+def is_number(token: str) -> bool:
+    """Whether ``token`` parses as a float (the readers name the first token that does not).
+
+    Parameters
+    ----------
+    token : str
+
+    Returns
+    -------
+    bool
+    """
+    try:
+        float(token)
+    except ValueError:
+        return False
+    return True

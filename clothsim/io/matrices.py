@@ -8,7 +8,7 @@ from pathlib import Path
 import numpy as np
 
 from ..errors import InputError
-from .common import refuse_special
+from .common import is_number, refuse_special
 
 
 def write_matrix(path, A) -> None:
@@ -110,7 +110,7 @@ def read_matrix(path):
     try:
         values = np.array(flat, dtype=np.float64).reshape(count, per)
     except ValueError:
-        n, bad = next((n, t) for n, tokens in body for t in tokens if not _is_number(t))
+        n, bad = next((n, t) for n, tokens in body for t in tokens if not is_number(t))
         raise InputError(f"{path}: line {n}: not a number: {bad[:40]!r}") from None
     if layout == "array":
         if symmetry != "general":
@@ -132,14 +132,6 @@ def read_matrix(path):
         r, c, v = (np.concatenate([r, c[off]]), np.concatenate([c, r[off]]),
                    np.concatenate([v, sign * v[off]]))
     return scipy.sparse.csr_matrix((v, (r, c)), shape=(rows, cols))
-
-
-def _is_number(token: str) -> bool:
-    try:
-        float(token)
-    except ValueError:
-        return False
-    return True
 
 
 def write_vector(path, v) -> None:
@@ -183,7 +175,7 @@ def read_vector(path) -> np.ndarray:
     values = []
     for n, line in enumerate(lines, start=1):
         for token in line.split("#", 1)[0].split():
-            if not _is_number(token):
+            if not is_number(token):
                 raise InputError(f"{path}: line {n}: not a number: {token[:40]!r}")
             values.append(float(token))
     if not values:

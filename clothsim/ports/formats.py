@@ -32,7 +32,7 @@ import numpy as np
 
 from .. import io
 from ..errors import InputError
-from ..io.common import refuse_special
+from ..io.common import is_number, refuse_special
 
 TEXT_SUFFIXES = (".txt", ".csv", ".dat")
 RAW_SUFFIXES = (".bin", ".raw", ".f64", ".f32")
@@ -84,17 +84,9 @@ def _read_text(path: Path) -> np.ndarray:
         try:
             numbers.append([float(t) for t in tokens])
         except ValueError:
-            bad = next(t for t in tokens if not _is_number(t))
+            bad = next(t for t in tokens if not is_number(t))
             raise InputError(f"{path}: line {n}: not a number: {bad[:40]!r}") from None
     return np.array(numbers, dtype=np.float64)
-
-
-def _is_number(token: str) -> bool:
-    try:
-        float(token)
-    except ValueError:
-        return False
-    return True
 
 
 def _why(exc: BaseException) -> str:

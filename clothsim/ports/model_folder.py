@@ -34,6 +34,7 @@ from pathlib import Path
 import numpy as np
 
 from ..errors import InputError
+from ..io.common import is_number
 from .check import as_simulation
 
 #: The step settings diff-model compares, with their units.
@@ -146,7 +147,7 @@ def read_table(path: Path, columns, what: str, *, empty: bool = False) -> np.nda
         try:
             row = [float(t) for t in tokens]
         except ValueError:
-            bad = next(t for t in tokens if not _is_number(t))
+            bad = next(t for t in tokens if not is_number(t))
             raise InputError(f"{path}: line {number}: not a number: {bad[:40]!r} (a line "
                              f"holds {what})") from None
         if (allowed is not None and len(row) not in allowed) or (width is not None
@@ -164,14 +165,6 @@ def read_table(path: Path, columns, what: str, *, empty: bool = False) -> np.nda
     if not rows:
         return np.zeros((0, allowed[0] if allowed else 0))
     return np.array(rows, dtype=np.float64)
-
-
-def _is_number(token: str) -> bool:
-    try:
-        float(token)
-    except ValueError:
-        return False
-    return True
 
 
 def _read_settings(path: Path) -> dict:
