@@ -99,7 +99,7 @@ class FusedStep:
             self._p = np.empty_like(eT)
             dirs.vectors_into(xT, self._p)
             self._l = np.sqrt(np.einsum("ij,ij->j", self._p, self._p))
-            self._p_trial, self._l_trial = np.empty_like(eT), None
+            self._p_trial, self._l_spare = np.empty_like(eT), np.empty_like(self._l)
             self._setup_energy(solver, problem)
         self.energy = energy
         # local step at x_0; x_0 = y (pins applied) has p(y)'s vectors but at the exact pins
@@ -222,7 +222,8 @@ class FusedStep:
         self.dirs.vectors_into(xT, self.eT)
         if self.energy:
             np.copyto(self._p, self.eT)
-            self._l = np.sqrt(np.einsum("ij,ij->j", self._p, self._p))
+            np.einsum("ij,ij->j", self._p, self._p, out=self._l)
+            np.sqrt(self._l, out=self._l)
             self._local(self._l)
         else:
             self._local()
@@ -262,6 +263,9 @@ class FusedStep:
         self._a3 = np.ascontiguousarray((self.dirs.a[None, :] + shift).reshape(-1))
         self._b3 = np.ascontiguousarray((self.dirs.b[None, :] + shift).reshape(-1))
         self._tmp = np.empty(self.eT.size)
+        self._w = self._tmp.reshape(self.eT.shape)       # p + p' (after the gathers)
+        self._s, self._num = np.empty(len(self._k)), np.empty(len(self._k))
+        self._mv = np.empty((3, len(self._mF)))
 
     def _vectors(self, xT: np.ndarray, pT: np.ndarray) -> None:
         """p = x_a − x_b into pT, all coordinates in two takes (as SpringDirections does)."""
@@ -295,15 +299,22 @@ class FusedStep:
         self._vectors(xT, pn)
         np.subtract(xT, self._xT, out=dxT)
         self._vectors(dxT, dp)
-        ln = np.sqrt(np.einsum("ij,ij->j", pn, pn))
-        self._l_trial, self._trial_delta = ln, deltaT
-        s = self._l + ln
-        num = np.einsum("ij,ij->j", p + pn, dp)      # (2p + Δp)·Δp, Δp exact to rounding
+        ln = self._l_spare                             # |p'|, kept for accept
+        np.einsum("ij,ij->j", pn, pn, out=ln)
+        np.sqrt(ln, out=ln)
+        self._trial_delta = deltaT
+        s, num, w = self._s, self._num, self._w
+        np.add(self._l, ln, out=s)
+        np.add(p, pn, out=w)
+        np.einsum("ij,ij->j", w, dp, out=num)        # (2p + Δp)·Δp, Δp exact to rounding
         if s.min() > 0:
-            dl = np.divide(num, s, out=num)
+            np.divide(num, s, out=num)
         else:                                          # springs whose ends coincide twice
-            dl = np.divide(num, s, out=np.zeros_like(s), where=s > 0)
-        e = 0.5 * float(np.dot(self._k * dl, s - self._two_r))
+            np.divide(num, s, out=num, where=s > 0)
+            num[~(s > 0)] = 0.0
+        np.multiply(num, self._k, out=num)
+        np.subtract(s, self._two_r, out=s)
+        e = 0.5 * float(np.dot(num, s))
         if self._fT is not None:
             e -= float(np.vdot(dxT, self._fT))
         if self._anchor is not None:
@@ -314,7 +325,10 @@ class FusedStep:
         # difference): over the free vertices, where Δx lives
         dxF = dxT[:, self.free] if self.runs is None else np.concatenate(
             [dxT[:, start:stop] for start, stop, _ in self.runs], axis=1)
-        mass = 0.5 * float(np.einsum("ij,ij,j->", dxF, self.delta + deltaT, self._mF))
+        mv = self._mv
+        np.add(self.delta, deltaT, out=mv)
+        np.multiply(mv, self._mF, out=mv)
+        mass = 0.5 * float(np.dot(dxF.reshape(-1), mv.reshape(-1)))
         return mass + self.h2 * e
 
     def accept(self) -> None:
@@ -322,6 +336,6 @@ class FusedStep:
         deltaT = self._trial_delta
         self._swap(deltaT)
         self._p, self._p_trial = self._p_trial, self._p
-        self._l = self._l_trial
+        self._l, self._l_spare = self._l_spare, self._l
         np.copyto(self.eT, self._p)
         self._local(self._l)
