@@ -10,7 +10,8 @@ Two step problems at 41 × 41 (1681 vertices), each after a converged run:
 Each method's trace is repeated ``REPEATS`` times, interleaved (method A, B, C, D, then
 again), and the median time is used; BLAS is limited to one thread; the cached factor and
 Chebyshev's ρ are computed before timing (one-off costs, printed apart). Then the
-``clothsim accuracy --paper`` report. Run: ``python -m benchmarks accuracy_bench``.
+``clothsim accuracy --paper`` report. Run: ``python -m benchmarks accuracy_bench``
+(``python -m benchmarks.accuracy_bench --no-paper``: the two steps only, about a minute).
 """
 
 from __future__ import annotations
@@ -83,7 +84,8 @@ def _print(title: str, level: float, res: dict) -> None:
         print(f"  {m:13s} {it!s:>6} it  {t * 1e3:9.1f} ms   speed-up {bound}x{base / t:6.1f}")
 
 
-def main() -> None:
+def main(paper: bool = True) -> None:
+    """Print both steps' tables, then (``paper``) the ``--paper`` report."""
     from .iteration_cost import commit
 
     print(f"accelerated methods against local/global, commit {commit()}")
@@ -92,8 +94,11 @@ def main() -> None:
            time_to(model, problem, 1e-3))
     model, problem = _step("xy", 800.0, 8)
     _print(f"stretched curtain {N}x{N}", 1e-6, time_to(model, problem, 1e-6))
-    print(paper_report(n=N, repeats=3))
+    if paper:
+        print(paper_report(n=N, repeats=3))
 
 
 if __name__ == "__main__":
-    main()
+    import sys
+
+    main(paper="--no-paper" not in sys.argv[1:])

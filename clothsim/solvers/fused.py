@@ -202,10 +202,11 @@ class FusedStep:
         self._first = False
         self.x, self.delta = self._xT.T, deltaT
 
-    def _local(self, length: np.ndarray | None = None) -> None:
-        """Local step at the current x (its spring vectors in eT, their lengths if known)
-        and its rhs."""
-        self._right_hand_side(self.dirs.e_into(self._xT, self.eT, self.pyT, length),
+    def _local(self, length: np.ndarray | None = None,
+               source: np.ndarray | None = None) -> None:
+        """Local step at the current x (its spring vectors in eT or ``source``, their
+        lengths if known) and its rhs."""
+        self._right_hand_side(self.dirs.e_into(self._xT, self.eT, self.pyT, length, source),
                               self._rhs_next)
         self._rhs, self._rhs_next = self._rhs_next, self._rhs
 
@@ -219,13 +220,13 @@ class FusedStep:
         """
         xT = self._place(deltaT)
         self._swap(deltaT)
-        self.dirs.vectors_into(xT, self.eT)
-        if self.energy:
-            np.copyto(self._p, self.eT)
+        if self.energy:   # the spring vectors stay in _p for the next trial
+            self.dirs.vectors_into(xT, self._p)
             np.einsum("ij,ij->j", self._p, self._p, out=self._l)
             np.sqrt(self._l, out=self._l)
-            self._local(self._l)
+            self._local(self._l, self._p)
         else:
+            self.dirs.vectors_into(xT, self.eT)
             self._local()
 
     def gradient_norm(self, aT: np.ndarray) -> float:
@@ -337,5 +338,4 @@ class FusedStep:
         self._swap(deltaT)
         self._p, self._p_trial = self._p_trial, self._p
         self._l, self._l_spare = self._l_spare, self._l
-        np.copyto(self.eT, self._p)
-        self._local(self._l)
+        self._local(self._l, self._p)
