@@ -267,6 +267,9 @@ class FusedStep:
         self._w = self._tmp.reshape(self.eT.shape)       # p + p' (after the gathers)
         self._s, self._num = np.empty(len(self._k)), np.empty(len(self._k))
         self._mv = np.empty((3, len(self._mF)))
+        if self.runs is not None:   # Δx over the free vertices: views of its runs
+            self._dx_runs = [self._dxT[:, start:stop] for start, stop, _ in self.runs]
+            self._dxF = np.empty_like(self._mv)
 
     def _vectors(self, xT: np.ndarray, pT: np.ndarray) -> None:
         """p = x_a − x_b into pT, all coordinates in two takes (as SpringDirections does)."""
@@ -324,8 +327,10 @@ class FusedStep:
             e += float(np.sum(k * da * (self._xT[:, av] - qT + 0.5 * da)))
         # ½ Δxᵀ M (2(x − y) + Δx), 2(x − y) + Δx = δ + δ' to rounding (a factor, not a
         # difference): over the free vertices, where Δx lives
-        dxF = dxT[:, self.free] if self.runs is None else np.concatenate(
-            [dxT[:, start:stop] for start, stop, _ in self.runs], axis=1)
+        if self.runs is None:
+            dxF = dxT[:, self.free]
+        else:
+            dxF = np.concatenate(self._dx_runs, axis=1, out=self._dxF)
         mv = self._mv
         np.add(self.delta, deltaT, out=mv)
         np.multiply(mv, self._mF, out=mv)

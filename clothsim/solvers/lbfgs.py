@@ -106,6 +106,7 @@ class LBFGSSolver(LocalGlobalSolver):
         # the next gradient, and the pair (s, t, A_FF s) of the step
         cands, grad_new = np.empty((2,) + shape), np.empty(shape)
         s, t, u = np.empty(shape), np.empty(shape), np.empty(shape)
+        sf, tf, uf = s.reshape(-1), t.reshape(-1), u.reshape(-1)     # flat views
         while True:
             r, r_parts = hist.inverse_hessian_times(grad, step.solve_columns)
             slope = -float(np.dot(grad.reshape(-1), r.reshape(-1)))
@@ -113,8 +114,8 @@ class LBFGSSolver(LocalGlobalSolver):
                 return  # no descent direction at working precision: optimal to rounding
             delta, alpha, cand = step.delta, 1.0, cands[k % 2]
             for _ in range(MAX_HALVINGS):   # backtracking Armijo (descent.armijo), fused
-                np.multiply(r, alpha, out=s)            # α r: exact (α a power of 2)
-                np.subtract(delta, s, out=cand)
+                np.multiply(r, -alpha, out=s)           # s = −α r: exact (α a power of 2)
+                np.add(delta, s, out=cand)              # δ − α r
                 if step.trial(cand) <= ARMIJO_C * alpha * slope:
                     break
                 alpha *= 0.5
@@ -126,12 +127,10 @@ class LBFGSSolver(LocalGlobalSolver):
             np.multiply(hist.apply_a(r_parts), -alpha, out=u)
             np.add(a, u, out=a)
             np.subtract(a, step.rhs, out=grad_new)
-            np.negative(s, out=s)                       # s = −α r
             np.subtract(grad_new, grad, out=t)
-            st = float(np.dot(s.reshape(-1), t.reshape(-1)))
+            st = float(np.dot(sf, tf))
             if st > 0.0:
-                hist.append(s.reshape(-1), t.reshape(-1), 1.0 / st, u.reshape(-1),
-                            hist.t_dot_direction(r_parts) * -alpha)
+                hist.append(sf, tf, 1.0 / st, uf, hist.t_dot_direction(r_parts) * -alpha)
             grad, grad_new = grad_new, grad
             k += 1
             g = grad.reshape(-1)
