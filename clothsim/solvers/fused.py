@@ -17,7 +17,13 @@ Anderson and L-BFGS also compare g at two points: :meth:`FusedStep.trial` puts a
 candidate's positions in the spare buffer and returns g(candidate) − g(x) from spring
 vectors the local step needs anyway (:meth:`FusedStep.accept` then takes it without
 recomputing them), without cancellation: from δ's change and the change of spring lengths,
-as :func:`~clothsim.solvers.descent.objective_difference`.
+as :func:`~clothsim.solvers.descent.objective_difference`. The candidate's spring vectors
+are p' = p + Δp, Δp = Δx_a − Δx_b gathered from the exact position change Δx = x' − x (one
+gather instead of two). They differ from x'_a − x'_b by rounding, which would add up over
+accepted moves: :meth:`FusedStep.accept` therefore gathers p from the positions on the
+first move (where x_0's pins may jump to their targets and pinned-together ends become
+exactly coincident) and every :data:`RESYNC`-th after it, so the spring vectors are never
+more than RESYNC additions (each one rounding of p) away from the positions' own.
 
 Every iterate after x_0 has its exactly pinned vertices at their targets (the x_0 a caller
 passes may not: its gradient is then computed from the definition).
@@ -30,6 +36,10 @@ import math
 import numpy as np
 
 from ..factorization import spmv_add
+
+#: :meth:`FusedStep.accept` gathers the spring vectors from the positions on the first
+#: accepted move and every RESYNC-th after it; in between p' = p + Δp (trial)
+RESYNC = 8
 
 
 def _norm(aT: np.ndarray) -> float:
@@ -264,6 +274,7 @@ class FusedStep:
         self._a3 = np.ascontiguousarray((self.dirs.a[None, :] + shift).reshape(-1))
         self._b3 = np.ascontiguousarray((self.dirs.b[None, :] + shift).reshape(-1))
         self._tmp = np.empty(self.eT.size)
+        self._accepted = 0
         self._w = self._tmp.reshape(self.eT.shape)       # p + p' (after the gathers)
         self._s, self._num = np.empty(len(self._k)), np.empty(len(self._k))
         self._mv = np.empty((3, len(self._mF)))
@@ -281,8 +292,9 @@ class FusedStep:
     def trial(self, deltaT: np.ndarray) -> float:
         """g(y + δ) − g(x) without cancellation, x the current iterate [J·s²].
 
-        Puts the candidate x' in the spare buffer with its spring vectors; :meth:`accept`
-        then moves there without recomputing them (until the next :meth:`trial`). As in
+        Puts the candidate x' in the spare buffer with its spring vectors p' = p + Δp;
+        :meth:`accept` then moves there without recomputing them (until the next
+        :meth:`trial`; see the module docstring for how p' is kept in step with x'). As in
         :func:`~.descent.objective_difference`, everything is formed from Δx = x' − x (exact:
         a difference of nearby floats) and the spring vectors' changes Δp = Δx_a − Δx_b, so
         the comparison still resolves g's change far below 1e-8 relative residual.
@@ -300,9 +312,9 @@ class FusedStep:
         """
         xT = self._place(deltaT)
         p, pn, dxT, dp = self._p, self._p_trial, self._dxT, self._dpT
-        self._vectors(xT, pn)
         np.subtract(xT, self._xT, out=dxT)
         self._vectors(dxT, dp)
+        np.add(p, dp, out=pn)                          # p' = p + Δp (accept re-syncs)
         ln = self._l_spare                             # |p'|, kept for accept
         np.einsum("ij,ij->j", pn, pn, out=ln)
         np.sqrt(ln, out=ln)
@@ -343,4 +355,9 @@ class FusedStep:
         self._swap(deltaT)
         self._p, self._p_trial = self._p_trial, self._p
         self._l, self._l_spare = self._l_spare, self._l
+        self._accepted += 1
+        if self._accepted % RESYNC == 1:   # the first move and every RESYNC-th: p(x) afresh
+            self._vectors(self._xT, self._p)
+            np.einsum("ij,ij->j", self._p, self._p, out=self._l)
+            np.sqrt(self._l, out=self._l)
         self._local(self._l, self._p)

@@ -86,13 +86,15 @@ def test_trial_is_the_objective_difference():
 
 
 @pytest.mark.parametrize("given", [False, True])
-def test_accept_is_advance_bit_for_bit(given):
-    """Moving by trial + accept (spring vectors reused from the trial) gives the same
-    iterate, right-hand side and directions as advance (gathered afresh), bit for bit: with
-    two exact pins at one point (their spring's ends coincide at every iterate, its
+def test_accept_is_advance(given):
+    """Moving by trial + accept (spring vectors p' = p + Δp from the trial) gives the same
+    iterate and directions as advance (gathered afresh), bit for bit, and the same
+    right-hand side to rounding (bit for bit where accept re-syncs p from the positions):
+    with two exact pins at one point (their spring's ends coincide at every iterate, its
     direction is carried), a spring whose ends coincide in y, gravity and a penalty pin."""
     from clothsim.gallery import grid_cloth
     from clothsim.solvers.base import StepProblem
+    from clothsim.solvers.fused import RESYNC
 
     model = grid_cloth(6, k=400.0, plane="xy", total_mass=0.5)
     rng = np.random.default_rng(7)
@@ -111,13 +113,15 @@ def test_accept_is_advance_bit_for_bit(given):
     solver, other = make_solver("anderson", model), make_solver("anderson", model)
     fused = FusedStep(solver, problem, x0 if given else None, energy=True)
     plain = FusedStep(other, problem, x0 if given else None, energy=True)
-    for k in range(6):
+    floor = gradient_noise_floor(model, problem, problem.y)
+    for k in range(RESYNC + 4):
         cand = fused.solve() + (0.0 if k % 2 else 1e-3 * rng.normal(size=fused.delta.shape))
         fused.trial(cand)
         fused.accept()
         plain.advance(cand.copy())
         np.testing.assert_array_equal(fused.x, plain.x)
-        np.testing.assert_array_equal(fused.rhs, plain.rhs)
         np.testing.assert_array_equal(fused.current_directions()(),
                                       plain.current_directions()())
-        assert np.all(np.isfinite(fused.rhs))
+        if k % RESYNC == 0:     # re-synced: the same spring vectors
+            np.testing.assert_array_equal(fused.rhs, plain.rhs)
+        assert np.linalg.norm(fused.rhs - plain.rhs) <= floor, k
