@@ -147,14 +147,16 @@ class _Pairs:
     """
 
     def __init__(self, size: int, length: int):
-        self.size = size
-        self.S = np.zeros((size, length))
+        self.size, self.length = size, length
+        # s_j and A_FF s_j side by side: one product with the coefficients gives both
+        self.SU = np.zeros((size, 2 * length))
+        self.S, self.U = self.SU[:, :length], self.SU[:, length:]
         self.T = np.zeros((size, length))
         self.ST = np.zeros((size, size))
         self.rho = np.zeros(size)
-        self.U = np.zeros((size, length))   # A_FF s_j
         self.order: list[int] = []     # slots, oldest first
-        self._q, self._v = np.empty(length), np.empty(length)
+        self._loops = ([], [])         # per slot: the newer pairs, the older pairs
+        self._q, self._v = np.empty(length), np.empty(2 * length)
 
     def append(self, s: np.ndarray, t: np.ndarray, rho: float, u: np.ndarray,
                ts: np.ndarray) -> None:
@@ -165,6 +167,9 @@ class _Pairs:
         else:
             slot = self.order.pop(0)
         self.order.append(slot)
+        order = self.order
+        self._loops = ([(i, order[len(order) - n:]) for n, i in enumerate(reversed(order))],
+                       [(i, order[:n]) for n, i in enumerate(order)])
         self.S[slot], self.T[slot], self.rho[slot], self.U[slot] = s, t, rho, u
         self.ST[slot, :] = ts
         self.ST[:, slot] = self.S @ t
@@ -177,11 +182,12 @@ class _Pairs:
             return solve(gT), (gT, None, None)
         g = gT.reshape(-1)
         sg, ST, rho = (self.S @ g).tolist(), self.ST.tolist(), self.rho.tolist()
+        newest_first, oldest_first = self._loops
         alpha = [0.0] * self.size
-        for n, i in enumerate(reversed(order)):         # newest first
-            acc = sg[i]
-            for j in order[len(order) - n:]:            # the newer pairs
-                acc -= alpha[j] * ST[i][j]
+        for i, newer in newest_first:
+            acc, row = sg[i], ST[i]
+            for j in newer:
+                acc -= alpha[j] * row[j]
             alpha[i] = rho[i] * acc
         q = np.dot(np.asarray(alpha), self.T, out=self._q)
         np.subtract(g, q, out=q)
@@ -189,13 +195,14 @@ class _Pairs:
         tr_arr = self.T @ r.reshape(-1)
         tr = tr_arr.tolist()
         coef = [0.0] * self.size                        # α_j − β_j
-        for n, i in enumerate(order):                   # oldest first
+        for i, older in oldest_first:
             acc = tr[i]
-            for j in order[:n]:                         # the older pairs
+            for j in older:
                 acc += coef[j] * ST[j][i]
             coef[i] = alpha[i] - rho[i] * acc
         coef = np.asarray(coef)
-        r += np.dot(coef, self.S, out=self._v).reshape(gT.shape)
+        su = np.dot(coef, self.SU, out=self._v)        # [Σ c_j s_j | Σ c_j A_FF s_j]
+        r += su[:self.length].reshape(gT.shape)
         return r, (q.reshape(gT.shape), coef, tr_arr)
 
     def apply_a(self, parts) -> np.ndarray:
@@ -204,7 +211,7 @@ class _Pairs:
         q, coef, _ = parts
         if coef is None:
             return q
-        out = np.dot(coef, self.U, out=self._v).reshape(q.shape)
+        out = self._v[self.length:].reshape(q.shape)   # Σ c_j A_FF s_j, kept by the two loops
         return np.add(q, out, out=out)
 
     def t_dot_direction(self, parts) -> np.ndarray:
