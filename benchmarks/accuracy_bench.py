@@ -19,6 +19,8 @@ writes what the docs show to ``docs/data/``: ``accelerated.md`` (the two steps),
 hardware-independent; ``tests/test_documented_counts.py`` recomputes every one with
 :func:`iteration_counts`, :func:`rho_sensitivity` and :func:`paper_counts` and fails when
 one no longer reproduces (then re-run this benchmark).
+``python -m benchmarks.accuracy_bench --no-paper`` stops after the two steps and the ρ table
+(about a minute; ``paper.md`` is left as it was).
 """
 
 from __future__ import annotations
@@ -230,7 +232,8 @@ def _write(name: str, header: str, body: str) -> None:
     (DATA / name).write_text(f"{header}\n\n{body}\n", encoding="utf-8")
 
 
-def main() -> None:
+def main(paper: bool = True) -> None:
+    """Print and write both steps' tables and the ρ table, then (``paper``) the paper's."""
     from .iteration_cost import commit
 
     head = commit()
@@ -262,6 +265,8 @@ def main() -> None:
            f"rho = {res['rho']:.4f}); printed by `.venv/bin/python -m benchmarks "
            f"accuracy_bench` at commit {head}:", "\n".join(table))
 
+    if not paper:
+        return
     paper = paper_report(n=N, repeats=PAPER_REPEATS)
     print(paper, flush=True)
     _write("paper.md", f"Printed by `.venv/bin/python -m benchmarks accuracy_bench` at commit "
@@ -272,4 +277,6 @@ def main() -> None:
 
 
 if __name__ == "__main__":
-    main()
+    import sys
+
+    main(paper="--no-paper" not in sys.argv[1:])

@@ -106,29 +106,35 @@ class AndersonSolver(LocalGlobalSolver):
         # row [δ | a] with a = A_FF δ: G(x_j) = y + δ̂_j has a = rhs(x_j), and the
         # extrapolation combines rows, so ‖∇g‖ = ‖a − rhs(x)‖ comes for free (fused.py)
         window = _Window(self.window, m)
-        f_prev = g_prev = None
+        # preallocated rows, two of each in turn: f and [δ̂ | rhs] of this iteration and
+        # the last; the candidate's row (its δ part becomes step.delta when accepted, so
+        # the next candidate goes to the other buffer)
+        fs, gs, cands = np.empty((2, m)), np.empty((2, 2 * m)), np.empty((2, 2 * m))
+        have_prev = False
         k = 0
         while True:
             delta_hat = step.solve()
-            f = (delta_hat - step.delta).reshape(-1)
-            if not np.any(f):
+            f, gx, cand = fs[k % 2], gs[k % 2], cands[k % 2]
+            np.subtract(delta_hat.reshape(-1), step.delta.reshape(-1), out=f)
+            if not np.dot(f, f) and not f.any():
                 return  # a fixed point in floating point
-            gx = np.concatenate((delta_hat.reshape(-1), step.rhs.reshape(-1)))
-            if f_prev is not None:
-                window.append(f, f_prev, gx, g_prev)
-            f_prev, g_prev = f, gx
+            gx[:m] = delta_hat.reshape(-1)
+            gx[m:] = step.rhs.reshape(-1)
+            if have_prev:
+                window.append(f, fs[1 - k % 2], gx, gs[1 - k % 2])
+            have_prev = True
             new = gx
             if window.count:
-                cand = gx - window.extrapolation(f)
-                cand_delta = cand[:m].reshape(shape)
-                if (np.all(np.isfinite(cand_delta))
-                        and step.trial(cand_delta) < 0.0):
+                np.subtract(gx, window.extrapolation(f), out=cand)
+                # a non-finite candidate needs no check of its own: its energy difference
+                # is then +inf or NaN (the mass term ½ m Δx (δ + δ') is), never < 0
+                if step.trial(cand[:m].reshape(shape)) < 0.0:
                     step.accept()
                     new = cand
                 else:
                     self.rejections += 1  # safeguard: take the plain local/global iterate
                     window.clear()
-                    f_prev = g_prev = None
+                    have_prev = False
             if new is gx:
                 step.advance(delta_hat)
             k += 1
@@ -152,6 +158,7 @@ class _Window:
         self.F = np.empty((size, length))
         self.G = np.empty((size, 2 * length))
         self.gram = np.empty((size, size))
+        self._out = np.empty(2 * length)
 
     def clear(self) -> None:
         self.count = self.head = 0
@@ -174,4 +181,4 @@ class _Window:
         _, theta, info = _posv(self.gram[:n, :n], F @ f)   # Cholesky of the Gram matrix
         if info != 0 or not np.all(np.isfinite(theta)):    # singular: least squares
             theta = np.linalg.lstsq(F.T, f, rcond=None)[0]
-        return theta @ self.G[:n]
+        return np.dot(theta, self.G[:n], out=self._out)

@@ -68,11 +68,15 @@ class SpringDirections:
             xc.take(b, out=tmp, mode="clip")
             np.subtract(pc, tmp, out=pc)
 
-    def _scale(self, pT: np.ndarray, length_given: np.ndarray | None = None) -> np.ndarray:
-        """pT *= r / |p| in place; returns the springs with |p| = 0 (left at 0 in pT)."""
+    def _scale(self, pT: np.ndarray, length_given: np.ndarray | None = None,
+               source: np.ndarray | None = None) -> np.ndarray:
+        """pT = (r / |p|) p, p = ``source`` (default pT itself); returns the springs with
+        |p| = 0 (left at 0 in pT)."""
         length = self._length
+        if source is None:
+            source = pT
         if length_given is None:
-            np.einsum("ij,ij->j", pT, pT, out=length)        # |p|
+            np.einsum("ij,ij->j", source, source, out=length)   # |p|
             np.sqrt(length, out=length)
         else:                                                # |p| known by the caller
             np.copyto(length, length_given)
@@ -81,7 +85,7 @@ class SpringDirections:
             coincident = np.flatnonzero(length == 0)
             length[coincident] = np.inf                      # r / inf = 0, no division by 0
         np.divide(self.rest, length, out=length)             # d = (r / |p|) p
-        np.multiply(pT, length, out=pT)
+        np.multiply(source, length, out=pT)
         return coincident
 
     def previous(self, springs: np.ndarray) -> np.ndarray:
@@ -138,7 +142,8 @@ class SpringDirections:
         return dT
 
     def e_into(self, xT: np.ndarray, pT: np.ndarray, pyT: np.ndarray,
-               length: np.ndarray | None = None) -> np.ndarray:
+               length: np.ndarray | None = None,
+               source: np.ndarray | None = None) -> np.ndarray:
         """e = d(x) − p(y) in place over pT, which holds x's spring vectors p(x) on entry.
 
         Parameters
@@ -152,13 +157,16 @@ class SpringDirections:
             p(y) [m].
         length : ndarray, shape (s,), optional
             |p(x)| [m] when the caller has it (the same values the step would compute).
+        source : ndarray, shape (3, s), optional
+            p(x) [m] when it is held elsewhere (then pT's content on entry is ignored and
+            ``source`` is left unchanged).
 
         Returns
         -------
         ndarray, shape (3, s)
             pT, now e [m].
         """
-        coincident = self._scale(pT, length)
+        coincident = self._scale(pT, length, source)
         if len(coincident):
             pT[:, coincident] = self.previous(coincident)
         self._record(xT, pT, coincident)

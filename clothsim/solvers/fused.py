@@ -17,7 +17,13 @@ Anderson and L-BFGS also compare g at two points: :meth:`FusedStep.trial` puts a
 candidate's positions in the spare buffer and returns g(candidate) − g(x) from spring
 vectors the local step needs anyway (:meth:`FusedStep.accept` then takes it without
 recomputing them), without cancellation: from δ's change and the change of spring lengths,
-as :func:`~clothsim.solvers.descent.objective_difference`.
+as :func:`~clothsim.solvers.descent.objective_difference`. The candidate's spring vectors
+are p' = p + Δp, Δp = Δx_a − Δx_b gathered from the exact position change Δx = x' − x (one
+gather instead of two). They differ from x'_a − x'_b by rounding, which would add up over
+accepted moves: :meth:`FusedStep.accept` therefore gathers p from the positions on the
+first move (where x_0's pins may jump to their targets and pinned-together ends become
+exactly coincident) and every :data:`RESYNC`-th after it, so the spring vectors are never
+more than RESYNC additions (each one rounding of p) away from the positions' own.
 
 Every iterate after x_0 has its exactly pinned vertices at their targets (the x_0 a caller
 passes may not: its gradient is then computed from the definition).
@@ -30,6 +36,10 @@ import math
 import numpy as np
 
 from ..factorization import spmv_add
+
+#: :meth:`FusedStep.accept` gathers the spring vectors from the positions on the first
+#: accepted move and every RESYNC-th after it; in between p' = p + Δp (trial)
+RESYNC = 8
 
 
 def _norm(aT: np.ndarray) -> float:
@@ -99,7 +109,7 @@ class FusedStep:
             self._p = np.empty_like(eT)
             dirs.vectors_into(xT, self._p)
             self._l = np.sqrt(np.einsum("ij,ij->j", self._p, self._p))
-            self._p_trial, self._l_trial = np.empty_like(eT), None
+            self._p_trial, self._l_spare = np.empty_like(eT), np.empty_like(self._l)
             self._setup_energy(solver, problem)
         self.energy = energy
         # local step at x_0; x_0 = y (pins applied) has p(y)'s vectors but at the exact pins
@@ -202,10 +212,11 @@ class FusedStep:
         self._first = False
         self.x, self.delta = self._xT.T, deltaT
 
-    def _local(self, length: np.ndarray | None = None) -> None:
-        """Local step at the current x (its spring vectors in eT, their lengths if known)
-        and its rhs."""
-        self._right_hand_side(self.dirs.e_into(self._xT, self.eT, self.pyT, length),
+    def _local(self, length: np.ndarray | None = None,
+               source: np.ndarray | None = None) -> None:
+        """Local step at the current x (its spring vectors in eT or ``source``, their
+        lengths if known) and its rhs."""
+        self._right_hand_side(self.dirs.e_into(self._xT, self.eT, self.pyT, length, source),
                               self._rhs_next)
         self._rhs, self._rhs_next = self._rhs_next, self._rhs
 
@@ -219,12 +230,13 @@ class FusedStep:
         """
         xT = self._place(deltaT)
         self._swap(deltaT)
-        self.dirs.vectors_into(xT, self.eT)
-        if self.energy:
-            np.copyto(self._p, self.eT)
-            self._l = np.sqrt(np.einsum("ij,ij->j", self._p, self._p))
-            self._local(self._l)
+        if self.energy:   # the spring vectors stay in _p for the next trial
+            self.dirs.vectors_into(xT, self._p)
+            np.einsum("ij,ij->j", self._p, self._p, out=self._l)
+            np.sqrt(self._l, out=self._l)
+            self._local(self._l, self._p)
         else:
+            self.dirs.vectors_into(xT, self.eT)
             self._local()
 
     def gradient_norm(self, aT: np.ndarray) -> float:
@@ -262,6 +274,13 @@ class FusedStep:
         self._a3 = np.ascontiguousarray((self.dirs.a[None, :] + shift).reshape(-1))
         self._b3 = np.ascontiguousarray((self.dirs.b[None, :] + shift).reshape(-1))
         self._tmp = np.empty(self.eT.size)
+        self._accepted = 0
+        self._w = self._tmp.reshape(self.eT.shape)       # p + p' (after the gathers)
+        self._s, self._num = np.empty(len(self._k)), np.empty(len(self._k))
+        self._mv = np.empty((3, len(self._mF)))
+        if self.runs is not None:   # Δx over the free vertices: views of its runs
+            self._dx_runs = [self._dxT[:, start:stop] for start, stop, _ in self.runs]
+            self._dxF = np.empty_like(self._mv)
 
     def _vectors(self, xT: np.ndarray, pT: np.ndarray) -> None:
         """p = x_a − x_b into pT, all coordinates in two takes (as SpringDirections does)."""
@@ -273,8 +292,9 @@ class FusedStep:
     def trial(self, deltaT: np.ndarray) -> float:
         """g(y + δ) − g(x) without cancellation, x the current iterate [J·s²].
 
-        Puts the candidate x' in the spare buffer with its spring vectors; :meth:`accept`
-        then moves there without recomputing them (until the next :meth:`trial`). As in
+        Puts the candidate x' in the spare buffer with its spring vectors p' = p + Δp;
+        :meth:`accept` then moves there without recomputing them (until the next
+        :meth:`trial`; see the module docstring for how p' is kept in step with x'). As in
         :func:`~.descent.objective_difference`, everything is formed from Δx = x' − x (exact:
         a difference of nearby floats) and the spring vectors' changes Δp = Δx_a − Δx_b, so
         the comparison still resolves g's change far below 1e-8 relative residual.
@@ -292,18 +312,25 @@ class FusedStep:
         """
         xT = self._place(deltaT)
         p, pn, dxT, dp = self._p, self._p_trial, self._dxT, self._dpT
-        self._vectors(xT, pn)
         np.subtract(xT, self._xT, out=dxT)
         self._vectors(dxT, dp)
-        ln = np.sqrt(np.einsum("ij,ij->j", pn, pn))
-        self._l_trial, self._trial_delta = ln, deltaT
-        s = self._l + ln
-        num = np.einsum("ij,ij->j", p + pn, dp)      # (2p + Δp)·Δp, Δp exact to rounding
+        np.add(p, dp, out=pn)                          # p' = p + Δp (accept re-syncs)
+        ln = self._l_spare                             # |p'|, kept for accept
+        np.einsum("ij,ij->j", pn, pn, out=ln)
+        np.sqrt(ln, out=ln)
+        self._trial_delta = deltaT
+        s, num, w = self._s, self._num, self._w
+        np.add(self._l, ln, out=s)
+        np.add(p, pn, out=w)
+        np.einsum("ij,ij->j", w, dp, out=num)        # (2p + Δp)·Δp, Δp exact to rounding
         if s.min() > 0:
-            dl = np.divide(num, s, out=num)
+            np.divide(num, s, out=num)
         else:                                          # springs whose ends coincide twice
-            dl = np.divide(num, s, out=np.zeros_like(s), where=s > 0)
-        e = 0.5 * float(np.dot(self._k * dl, s - self._two_r))
+            np.divide(num, s, out=num, where=s > 0)
+            num[~(s > 0)] = 0.0
+        np.multiply(num, self._k, out=num)
+        np.subtract(s, self._two_r, out=s)
+        e = 0.5 * float(np.dot(num, s))
         if self._fT is not None:
             e -= float(np.vdot(dxT, self._fT))
         if self._anchor is not None:
@@ -312,9 +339,14 @@ class FusedStep:
             e += float(np.sum(k * da * (self._xT[:, av] - qT + 0.5 * da)))
         # ½ Δxᵀ M (2(x − y) + Δx), 2(x − y) + Δx = δ + δ' to rounding (a factor, not a
         # difference): over the free vertices, where Δx lives
-        dxF = dxT[:, self.free] if self.runs is None else np.concatenate(
-            [dxT[:, start:stop] for start, stop, _ in self.runs], axis=1)
-        mass = 0.5 * float(np.einsum("ij,ij,j->", dxF, self.delta + deltaT, self._mF))
+        if self.runs is None:
+            dxF = dxT[:, self.free]
+        else:
+            dxF = np.concatenate(self._dx_runs, axis=1, out=self._dxF)
+        mv = self._mv
+        np.add(self.delta, deltaT, out=mv)
+        np.multiply(mv, self._mF, out=mv)
+        mass = 0.5 * float(np.dot(dxF.reshape(-1), mv.reshape(-1)))
         return mass + self.h2 * e
 
     def accept(self) -> None:
@@ -322,6 +354,10 @@ class FusedStep:
         deltaT = self._trial_delta
         self._swap(deltaT)
         self._p, self._p_trial = self._p_trial, self._p
-        self._l = self._l_trial
-        np.copyto(self.eT, self._p)
-        self._local(self._l)
+        self._l, self._l_spare = self._l_spare, self._l
+        self._accepted += 1
+        if self._accepted % RESYNC == 1:   # the first move and every RESYNC-th: p(x) afresh
+            self._vectors(self._xT, self._p)
+            np.einsum("ij,ij->j", self._p, self._p, out=self._l)
+            np.sqrt(self._l, out=self._l)
+        self._local(self._l, self._p)

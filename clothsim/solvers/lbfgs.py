@@ -24,6 +24,7 @@ J. Nocedal, S. J. Wright. Numerical Optimization, 2nd ed., Springer 2006, Alg. 7
 
 from __future__ import annotations
 
+import math
 from collections.abc import Iterator
 
 import numpy as np
@@ -95,19 +96,27 @@ class LBFGSSolver(LocalGlobalSolver):
             ‖∇g(x)‖ over the free degrees of freedom [N·s²].
         """
         step = FusedStep(self, problem, x0, energy=True)
-        a = step.a0                        # A_FF δ_F of the current iterate
+        shape = step.delta.shape
+        a = step.a0.copy()                 # A_FF δ_F of the current iterate
         grad = a - step.rhs                # ∇g over the free vertices, coordinate-major
         k = 0
         yield Iterate(k, step.x, step.norm0)
         hist = _Pairs(self.window, grad.size)
+        # preallocated: the candidates' δ in turn (an accepted one becomes step.delta),
+        # the next gradient, and the pair (s, t, A_FF s) of the step
+        cands, grad_new = np.empty((2,) + shape), np.empty(shape)
+        s, t, u = np.empty(shape), np.empty(shape), np.empty(shape)
+        sf, tf, uf = s.reshape(-1), t.reshape(-1), u.reshape(-1)     # flat views
         while True:
             r, r_parts = hist.inverse_hessian_times(grad, step.solve_columns)
-            slope = -float(np.vdot(grad, r))
+            slope = -float(np.dot(grad.reshape(-1), r.reshape(-1)))
             if not slope < 0.0:
                 return  # no descent direction at working precision: optimal to rounding
-            delta, alpha = step.delta, 1.0
+            delta, alpha, cand = step.delta, 1.0, cands[k % 2]
             for _ in range(MAX_HALVINGS):   # backtracking Armijo (descent.armijo), fused
-                if step.trial(delta - alpha * r) <= ARMIJO_C * alpha * slope:
+                np.multiply(r, -alpha, out=s)           # s = −α r: exact (α a power of 2)
+                np.add(delta, s, out=cand)              # δ − α r
+                if step.trial(cand) <= ARMIJO_C * alpha * slope:
                     break
                 alpha *= 0.5
             else:
@@ -115,17 +124,17 @@ class LBFGSSolver(LocalGlobalSolver):
             step.accept()
             # ∇g(x_{k+1}) = A_FF δ_{k+1} − rhs(x_{k+1}), A_FF δ_{k+1} = A_FF δ_k − α A_FF r
             # with A_FF r = q + Σ c_j A_FF s_j (H₀ = A_FF⁻¹; the pairs keep A_FF s_j)
-            As = -alpha * hist.apply_a(r_parts)
-            a_new = a + As
-            grad_new = a_new - step.rhs
-            s, t = -alpha * r, grad_new - grad
-            st = float(np.vdot(s, t))
+            np.multiply(hist.apply_a(r_parts), -alpha, out=u)
+            np.add(a, u, out=a)
+            np.subtract(a, step.rhs, out=grad_new)
+            np.subtract(grad_new, grad, out=t)
+            st = float(np.dot(sf, tf))
             if st > 0.0:
-                hist.append(s.reshape(-1), t.reshape(-1), 1.0 / st, As.reshape(-1))
-            a = a_new
-            grad = grad_new
+                hist.append(sf, tf, 1.0 / st, uf, hist.t_dot_direction(r_parts) * -alpha)
+            grad, grad_new = grad_new, grad
             k += 1
-            yield Iterate(k, step.x, float(np.linalg.norm(grad)))
+            g = grad.reshape(-1)
+            yield Iterate(k, step.x, math.sqrt(float(np.dot(g, g))))
 
 
 class _Pairs:
@@ -138,55 +147,77 @@ class _Pairs:
     """
 
     def __init__(self, size: int, length: int):
-        self.size = size
-        self.S = np.zeros((size, length))
+        self.size, self.length = size, length
+        # s_j and A_FF s_j side by side: one product with the coefficients gives both
+        self.SU = np.zeros((size, 2 * length))
+        self.S, self.U = self.SU[:, :length], self.SU[:, length:]
         self.T = np.zeros((size, length))
         self.ST = np.zeros((size, size))
         self.rho = np.zeros(size)
-        self.U = np.zeros((size, length))   # A_FF s_j
         self.order: list[int] = []     # slots, oldest first
+        self._loops = ([], [])         # per slot: the newer pairs, the older pairs
+        self._q, self._v = np.empty(length), np.empty(2 * length)
 
-    def append(self, s: np.ndarray, t: np.ndarray, rho: float, u: np.ndarray) -> None:
+    def append(self, s: np.ndarray, t: np.ndarray, rho: float, u: np.ndarray,
+               ts: np.ndarray) -> None:
+        """Keep the pair (s, t) with ρ = 1 / sᵀt and u = A_FF s; ``ts`` holds t_jᵀ s for
+        the kept pairs (:meth:`t_dot_direction`), so only the sᵢᵀ t column is a product."""
         if len(self.order) < self.size:
             slot = len(self.order)
         else:
             slot = self.order.pop(0)
         self.order.append(slot)
+        order = self.order
+        self._loops = ([(i, order[len(order) - n:]) for n, i in enumerate(reversed(order))],
+                       [(i, order[:n]) for n, i in enumerate(order)])
         self.S[slot], self.T[slot], self.rho[slot], self.U[slot] = s, t, rho, u
-        self.ST[slot, :] = self.T @ s
+        self.ST[slot, :] = ts
         self.ST[:, slot] = self.S @ t
 
     def inverse_hessian_times(self, gT: np.ndarray, solve) -> np.ndarray:
         """H ∇g by the two loops, H₀ applied by ``solve`` (coordinate-major, shape of gT),
-        and what :meth:`apply_a` needs."""
+        and what :meth:`apply_a` and :meth:`t_dot_direction` need."""
         order = self.order
         if not order:
-            return solve(gT), (gT, None)
+            return solve(gT), (gT, None, None)
         g = gT.reshape(-1)
         sg, ST, rho = (self.S @ g).tolist(), self.ST.tolist(), self.rho.tolist()
+        newest_first, oldest_first = self._loops
         alpha = [0.0] * self.size
-        for n, i in enumerate(reversed(order)):         # newest first
-            acc = sg[i]
-            for j in order[len(order) - n:]:            # the newer pairs
-                acc -= alpha[j] * ST[i][j]
+        for i, newer in newest_first:
+            acc, row = sg[i], ST[i]
+            for j in newer:
+                acc -= alpha[j] * row[j]
             alpha[i] = rho[i] * acc
-        q = g - np.asarray(alpha) @ self.T
+        q = np.dot(np.asarray(alpha), self.T, out=self._q)
+        np.subtract(g, q, out=q)
         r = solve(q.reshape(gT.shape))
-        tr = (self.T @ r.reshape(-1)).tolist()
+        tr_arr = self.T @ r.reshape(-1)
+        tr = tr_arr.tolist()
         coef = [0.0] * self.size                        # α_j − β_j
-        for n, i in enumerate(order):                   # oldest first
+        for i, older in oldest_first:
             acc = tr[i]
-            for j in order[:n]:                         # the older pairs
+            for j in older:
                 acc += coef[j] * ST[j][i]
             coef[i] = alpha[i] - rho[i] * acc
         coef = np.asarray(coef)
-        r += (coef @ self.S).reshape(gT.shape)
-        return r, (q.reshape(gT.shape), coef)
+        su = np.dot(coef, self.SU, out=self._v)        # [Σ c_j s_j | Σ c_j A_FF s_j]
+        r += su[:self.length].reshape(gT.shape)
+        return r, (q.reshape(gT.shape), coef, tr_arr)
 
     def apply_a(self, parts) -> np.ndarray:
         """A_FF r for the r of :meth:`inverse_hessian_times`, from its ``parts``
         (q, the coefficients of the s_j): q + Σ c_j A_FF s_j, without a product with A_FF."""
-        q, coef = parts
+        q, coef, _ = parts
         if coef is None:
-            return q.copy()
-        return q + (coef @ self.U).reshape(q.shape)
+            return q
+        out = self._v[self.length:].reshape(q.shape)   # Σ c_j A_FF s_j, kept by the two loops
+        return np.add(q, out, out=out)
+
+    def t_dot_direction(self, parts) -> np.ndarray:
+        """t_jᵀ r for every slot, r from :meth:`inverse_hessian_times`: t_jᵀ H₀ q + Σ_i c_i
+        s_iᵀ t_j from the kept products (no pass over the vectors)."""
+        _, coef, tr = parts
+        if coef is None:
+            return np.zeros(self.size)
+        return tr + coef @ self.ST

@@ -83,3 +83,45 @@ def test_trial_is_the_objective_difference():
             x_new[step.free] = problem.y[step.free] + cand.T
             ref = objective_difference(model, problem, x, x_new - x)
             assert fused == pytest.approx(ref, rel=1e-6, abs=1e-22), (offset, scale)
+
+
+@pytest.mark.parametrize("given", [False, True])
+def test_accept_is_advance(given):
+    """Moving by trial + accept (spring vectors p' = p + Δp from the trial) gives the same
+    iterate and directions as advance (gathered afresh), bit for bit, and the same
+    right-hand side to rounding (bit for bit where accept re-syncs p from the positions):
+    with two exact pins at one point (their spring's ends coincide at every iterate, its
+    direction is carried), a spring whose ends coincide in y, gravity and a penalty pin."""
+    from clothsim.gallery import grid_cloth
+    from clothsim.solvers.base import StepProblem
+    from clothsim.solvers.fused import RESYNC
+
+    model = grid_cloth(6, k=400.0, plane="xy", total_mass=0.5)
+    rng = np.random.default_rng(7)
+    x = model.mesh.vertices + rng.normal(scale=0.02, size=model.mesh.vertices.shape)
+    v = rng.normal(scale=0.3, size=x.shape)
+    a, b = model.springs.spring_vertices[0]
+    v[b], x[b] = v[a], x[a]                     # ends coincide in y = x + h v
+    problem = StepProblem(1 / 30, x, v, f_ext=model.vertex_mass[:, None] * [0.0, -9.81, 0.0],
+                          fixed_vertices=[30, 31, 35],
+                          fixed_positions=model.mesh.vertices[[30, 30, 35]],
+                          anchor_vertices=[0], anchor_positions=x[[0]] + 0.01,
+                          anchor_stiffness=[50.0])
+    x0 = problem.initial_guess()
+    if given:   # pins away from their targets at x_0
+        x0 = x0 + rng.normal(scale=0.01, size=x0.shape)
+    solver, other = make_solver("anderson", model), make_solver("anderson", model)
+    fused = FusedStep(solver, problem, x0 if given else None, energy=True)
+    plain = FusedStep(other, problem, x0 if given else None, energy=True)
+    floor = gradient_noise_floor(model, problem, problem.y)
+    for k in range(RESYNC + 4):
+        cand = fused.solve() + (0.0 if k % 2 else 1e-3 * rng.normal(size=fused.delta.shape))
+        fused.trial(cand)
+        fused.accept()
+        plain.advance(cand.copy())
+        np.testing.assert_array_equal(fused.x, plain.x)
+        np.testing.assert_array_equal(fused.current_directions()(),
+                                      plain.current_directions()())
+        if k % RESYNC == 0:     # re-synced: the same spring vectors
+            np.testing.assert_array_equal(fused.rhs, plain.rhs)
+        assert np.linalg.norm(fused.rhs - plain.rhs) <= floor, k
