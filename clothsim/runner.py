@@ -246,6 +246,12 @@ def _run_locked(scene, model, sim, out: Path, frames: int, progress, resume: boo
         if obstacles is not None:
             writer.add_static(OBSTACLES_NAME)  # trajectory.pvd shows the whole scene
         run.done = start
+        # the factorization mode weighs the run's solves: the first run's count, kept by a
+        # resumed run so that it factors in the same mode (and repeats it bit for bit)
+        sim.expect_steps(frames * substeps)
+        if resuming and isinstance(previous.get("expected_solves"), int):
+            sim.solver.expected_solves = previous["expected_solves"]
+        run.info["expected_solves"] = getattr(sim.solver, "expected_solves", None)
         run.info["solver_state"] = get_state()
         run.save_npz(store, model, fps, force=True)
         run.write("running", None)

@@ -191,9 +191,10 @@ KEYS: tuple[Key, ...] = (
         "`\"cholmod\"`, `\"splu\"`."),
     Key("solver", "cholmod_mode", "string", "auto", "",
         "CHOLMOD's factorization of the global step (local/global family): `\"auto\"` by "
-        "size (simplicial below 150 000 free vertices, where its solves are faster; "
-        "supernodal above, where it factors 3-5x faster), `\"simplicial\"`, "
-        "`\"supernodal\"`. The run's `run.json` records the choice and why."),
+        "predicted cost, the factorization plus the run's frames × substeps × iterations "
+        "solves (simplicial's solves are faster on small cloths, supernodal's factor on "
+        "large ones; docs/performance.md), `\"simplicial\"`, `\"supernodal\"`. The "
+        "run's `run.json` records the choice and why."),
     Key("solver", "initial_guess", "string", "y", "",
         "Where each step's iteration starts: `\"y\"`, the inertial target x_n + h v_n (the "
         "paper), or `\"x_n\"`, the previous positions (most ports, the assignment's "
