@@ -333,14 +333,16 @@ class Factor:
 
     @cached_property
     def condition_estimate(self) -> float:
-        """Estimate of the 1-norm condition number ‖A‖₁ ‖A⁻¹‖₁ (Higham's onenormest)."""
+        """Estimate of the 1-norm condition number ‖A‖₁ ‖A⁻¹‖₁ (‖A‖₁ exact, ‖A⁻¹‖₁ by
+        Higham's onenormest)."""
         n = self.shape[0]
         if n <= 3:
             Ad = self.A.toarray()
             return float(np.linalg.cond(Ad, 1))
         inv = spla.LinearOperator(self.shape, matvec=self.solve, rmatvec=self.solve,
                                   matmat=self.solve, dtype=np.float64)
-        return float(spla.onenormest(self.A) * spla.onenormest(inv))
+        norm_A = float(abs(self.A).sum(axis=0).max())   # exact, and cheaper than estimated
+        return norm_A * float(spla.onenormest(inv))
 
 
 # -- helpers of the iterations around a factor --------------------------------------------
