@@ -29,12 +29,12 @@ logger = logging.getLogger(__name__)
 PVD_NAME = "trajectory.pvd"
 FRAME_COMPRESSIONS = ("auto", "zlib", "none")
 #: Vertices up to which "auto" compresses frames. meshio's zlib (level 6, one core) costs
-#: about 4 µs per vertex and frame and halves the file, while writing the uncompressed
-#: bytes costs about a tenth of that (benchmarks/scale_ladder.py, its "frame write"
+#: about 4 µs of CPU per vertex and frame and shrinks the file to about a third, while the
+#: raw write costs about a tenth of that (benchmarks/scale_ladder.py, its "frame write"
 #: table): compression never saves time, only disk. Up to 100 000 vertices (257² and
 #: smaller) it costs well under half a second a frame and small frames are worth keeping
-#: small; above, it costs seconds a frame, as much as a step, for files that are large
-#: either way.
+#: small; above, it costs a second or more a frame, as much as a step, for files that are
+#: large either way.
 ZLIB_UP_TO = 100_000
 
 
@@ -65,9 +65,9 @@ def choose_frame_compression(vertex_count: int, requested: str = "auto") -> tupl
         return requested, f"{requested}: requested by output.frame_compression"
     if vertex_count <= ZLIB_UP_TO:
         return "zlib", (f"zlib: {vertex_count} vertices <= {ZLIB_UP_TO}, where compressing "
-                        f"a frame costs well under a second and halves the file")
+                        f"a frame costs well under a second for a file a third the size")
     return "none", (f"none: {vertex_count} vertices > {ZLIB_UP_TO}, where zlib would cost "
-                    f"seconds a frame (about 4 us per vertex) to halve the file")
+                    f"about a second or more a frame (about 4 us per vertex)")
 
 
 class FrameWriter:

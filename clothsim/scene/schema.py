@@ -202,7 +202,7 @@ KEYS: tuple[Key, ...] = (
     # [output]
     Key("output", "frame_compression", "string", "auto", "",
         "How `clothsim run` writes the `frame_%06d.vtu` files: `\"zlib\"` (compressed, about "
-        "half the size), `\"none\"` (raw binary, several times faster to write) or "
+        "a third of the size), `\"none\"` (raw binary, several times faster to write) or "
         "`\"auto\"`: zlib up to 100 000 vertices, none above (docs/performance.md). Both "
         "read in ParaView and meshio. The run's `run.json` records the choice and why; it "
         "is not part of the scene hash (a run may be resumed with another)."),
