@@ -7,7 +7,8 @@ leaves and what ``resume`` guarantees: ``docs/reliability.md``):
 file                 content
 ===================  ==============================================================
 ``frame_%06d.vtu``   one VTK file per frame (frame 0 = initial state), written as
-                     soon as the frame is computed (:class:`clothsim.io.FrameWriter`)
+                     soon as the frame is computed (:class:`clothsim.io.FrameWriter`);
+                     zlib-compressed or raw by ``[output] frame_compression``
 ``trajectory.pvd``   ParaView collection of the frames with their times
 ``trajectory.npz``   ``positions``, ``velocities`` (frames+1, n, 3), ``time``
                      (frames+1,), ``triangles`` (m, 3), ``springs`` (s, 2),
@@ -95,8 +96,9 @@ class RunResult:
 
 
 def scene_hash(scene: Scene, model) -> str:
-    """SHA-256 (hex, 16 digits) of the resolved scene (without ``scene.frames``) and the
-    model's arrays: what ``resume`` checks before continuing a run.
+    """SHA-256 (hex, 16 digits) of the resolved scene (without ``scene.frames`` and the
+    ``[output]`` table, which change no state) and the model's arrays: what ``resume``
+    checks before continuing a run.
 
     Parameters
     ----------
@@ -112,6 +114,7 @@ def scene_hash(scene: Scene, model) -> str:
     """
     doc = copy.deepcopy(scene.to_dict())
     doc.get("scene", {}).pop("frames", None)
+    doc.pop("output", None)
     digest = hashlib.sha256(json.dumps(doc, sort_keys=True, default=str).encode())
     s = model.springs
     for a in (model.mesh.vertices, model.mesh.triangles, model.mesh.strands, s.spring_vertices,
@@ -220,7 +223,9 @@ def _run_locked(scene, model, sim, out: Path, frames: int, progress, resume: boo
     store = TrajectoryStore(out, n)
     try:
         writer = FrameWriter(out, model.mesh, springs=model.springs,
-                             pinned=lambda t: pinned_mask(sim.effects, n, t))
+                             pinned=lambda t: pinned_mask(sim.effects, n, t),
+                             compression=scene.data["output"]["frame_compression"])
+        run.info["frame_compression"] = writer.compression_reason
         if resuming:
             for j in range(start + 1):
                 x, v = read_frame(out / writer.filename(j))
@@ -241,6 +246,12 @@ def _run_locked(scene, model, sim, out: Path, frames: int, progress, resume: boo
         if obstacles is not None:
             writer.add_static(OBSTACLES_NAME)  # trajectory.pvd shows the whole scene
         run.done = start
+        # the factorization mode weighs the run's solves: the first run's count, kept by a
+        # resumed run so that it factors in the same mode (and repeats it bit for bit)
+        sim.expect_steps(frames * substeps)
+        if resuming and isinstance(previous.get("expected_solves"), int):
+            sim.solver.expected_solves = previous["expected_solves"]
+        run.info["expected_solves"] = getattr(sim.solver, "expected_solves", None)
         run.info["solver_state"] = get_state()
         run.save_npz(store, model, fps, force=True)
         run.write("running", None)

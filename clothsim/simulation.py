@@ -290,7 +290,25 @@ class Simulation:
         """The solver of the next step: :attr:`solver`, or one for the damped step model."""
         if not self._damped:
             return self.solver
-        return make_solver(self.solver.name, self.step_model(state), **self._solver_options)
+        solver = make_solver(self.solver.name, self.step_model(state), **self._solver_options)
+        if hasattr(solver, "expected_solves"):   # its factor serves this one step
+            solver.expected_solves = solver.iterations
+        return solver
+
+    def expect_steps(self, steps: int | None) -> None:
+        """Tell the solver how many steps follow, so that its next factorization's mode
+        (:func:`clothsim.factorization.choose_cholmod_mode`) weighs the solves ahead:
+        ``steps`` × iterations (at most, with a tolerance). :meth:`run` and
+        :func:`clothsim.run_scene` call it; solvers without a factorization ignore it.
+
+        Parameters
+        ----------
+        steps : int or None
+            Steps of length h still to come; None: unknown.
+        """
+        if hasattr(self.solver, "expected_solves"):
+            self.solver.expected_solves = (None if steps is None
+                                           else max(int(steps), 1) * self.solver.iterations)
 
     def step(self) -> StepRecord:
         """Advance one time step h.
@@ -347,6 +365,7 @@ class Simulation:
             One record per step.
         """
         records = []
+        self.expect_steps(steps)
         for _ in range(int(steps)):
             rec = self.step()
             records.append(rec)

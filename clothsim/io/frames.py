@@ -2,6 +2,9 @@
 ``trajectory.pvd`` listing them (and, beside each frame, the scene's static parts such as
 ``obstacles.vtu``, so that opening the one file shows the scene).
 
+Frames are binary VTU, zlib-compressed or not (:func:`choose_frame_compression`, the
+scene's ``[output] frame_compression``); meshio, ParaView and :func:`read_frame` read both.
+
 :class:`FrameWriter` writes them (each file to a temporary name, then :func:`os.replace`,
 so an interrupted run leaves only complete files); :func:`read_frame` reads a frame back bit
 for bit; :func:`read_pvd` lists a collection.
@@ -24,6 +27,47 @@ from .common import MeshioFailure, atomic_path, load_meshio, one_line, quietly
 logger = logging.getLogger(__name__)
 
 PVD_NAME = "trajectory.pvd"
+FRAME_COMPRESSIONS = ("auto", "zlib", "none")
+#: Vertices up to which "auto" compresses frames. meshio's zlib (level 6, one core) costs
+#: about 4 µs of CPU per vertex and frame and shrinks the file to about a third, while the
+#: raw write costs about a tenth of that (benchmarks/scale_ladder.py, its "frame write"
+#: table): compression never saves time, only disk. Up to 100 000 vertices (257² and
+#: smaller) it costs well under half a second a frame and small frames are worth keeping
+#: small; above, it costs a second or more a frame, as much as a step, for files that are
+#: large either way.
+ZLIB_UP_TO = 100_000
+
+
+def choose_frame_compression(vertex_count: int, requested: str = "auto") -> tuple[str, str]:
+    """How frames of a cloth of ``vertex_count`` vertices are written, and why.
+
+    Parameters
+    ----------
+    vertex_count : int
+        Vertices of the cloth.
+    requested : {"auto", "zlib", "none"}
+        ``[output] frame_compression``: "auto" decides by size (:data:`ZLIB_UP_TO`).
+
+    Returns
+    -------
+    (str, str)
+        "zlib" or "none", and the reason in one line.
+
+    Raises
+    ------
+    InputError
+        For an unknown ``requested``.
+    """
+    if requested not in FRAME_COMPRESSIONS:
+        raise InputError(f"output.frame_compression: must be one of "
+                         f"{', '.join(map(repr, FRAME_COMPRESSIONS))}, got {requested!r}")
+    if requested != "auto":
+        return requested, f"{requested}: requested by output.frame_compression"
+    if vertex_count <= ZLIB_UP_TO:
+        return "zlib", (f"zlib: {vertex_count} vertices <= {ZLIB_UP_TO}, where compressing "
+                        f"a frame costs well under a second for a file a third the size")
+    return "none", (f"none: {vertex_count} vertices > {ZLIB_UP_TO}, where zlib would cost "
+                    f"about a second or more a frame (about 4 us per vertex)")
 
 
 class FrameWriter:
@@ -61,6 +105,16 @@ class FrameWriter:
     pinned : ndarray (n,) of bool, or callable, optional
         The pinned vertices, or a function of the frame's time [s] returning them (pins
         released in time).
+    compression : {"auto", "zlib", "none"}
+        The frames' data arrays zlib-compressed or raw (base64, as VTK's XML writers do
+        without a compressor); "auto" by size (:func:`choose_frame_compression`).
+
+    Attributes
+    ----------
+    compression : str
+        "zlib" or "none", what is written.
+    compression_reason : str
+        Why, in one line (recorded in run.json).
 
     Examples
     --------
@@ -74,7 +128,9 @@ class FrameWriter:
     """
 
     def __init__(self, out_dir, mesh: Mesh, *, basename: str = "frame", springs=None,
-                 pinned=None):
+                 pinned=None, compression: str = "auto"):
+        self.compression, self.compression_reason = choose_frame_compression(
+            mesh.vertex_count, compression)
         if not re.fullmatch(r"[A-Za-z0-9_.-]+", basename):
             raise InputError(f"basename: only letters, digits, '_', '.', '-' allowed, got "
                              f"{basename!r}")
@@ -148,7 +204,8 @@ class FrameWriter:
         point_data, cell_data = self._fields(x, v, float(time))
         with atomic_path(path) as tmp:
             meshio.write(tmp, meshio.Mesh(x, self._cells, point_data=point_data,
-                                          cell_data=cell_data), file_format="vtu")
+                                          cell_data=cell_data), file_format="vtu",
+                         compression=None if self.compression == "none" else "zlib")
         self._entries[index] = float(time)
         self._write_pvd()
         logger.debug("wrote %s (t = %g s)", path, time)

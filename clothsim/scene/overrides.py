@@ -22,11 +22,12 @@ import tomllib
 
 from ..errors import SceneError
 from .checks import suggest
+from .schema import TOP_KEYS
 
 _PART = re.compile(r"^(?P<name>[A-Za-z_][\w-]*)(?:\[(?P<index>\d+)\])?$")
 _BARE = re.compile(r"^[\w.:/+-]+$")
 #: The scene document's tables; a --set outside them is an unknown key.
-TABLES = ("scene", "cloth", "springs", "solver", "effects")
+TABLES = TOP_KEYS
 
 
 def parse_value(text: str, where: str):

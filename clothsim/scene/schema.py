@@ -20,7 +20,7 @@ REQUIRED = object()   #: marker: the key has no default and must be given (when 
 NONE = object()       #: marker: absent means "not used" (no default value)
 
 SHAPES = ("grid", "mesh", "polygon", "jacobson", "files")
-TABLES = ("scene", "cloth", "springs", "solver")
+TABLES = ("scene", "cloth", "springs", "solver", "output")
 TOP_KEYS = TABLES + ("effects",)
 
 # Upper bounds that keep a run finite (a larger value is almost surely a typo, and would
@@ -56,7 +56,7 @@ class Key:
     Attributes
     ----------
     table : str
-        ``"scene"``, ``"cloth"``, ``"springs"`` or ``"solver"``.
+        ``"scene"``, ``"cloth"``, ``"springs"``, ``"solver"`` or ``"output"``.
     name : str
         The key.
     type : str
@@ -191,13 +191,21 @@ KEYS: tuple[Key, ...] = (
         "`\"cholmod\"`, `\"splu\"`."),
     Key("solver", "cholmod_mode", "string", "auto", "",
         "CHOLMOD's factorization of the global step (local/global family): `\"auto\"` by "
-        "size (simplicial below 150 000 free vertices, where its solves are faster; "
-        "supernodal above, where it factors 3-5x faster), `\"simplicial\"`, "
-        "`\"supernodal\"`. The run's `run.json` records the choice and why."),
+        "predicted cost, the factorization plus the run's frames × substeps × iterations "
+        "solves (simplicial's solves are faster on small cloths, supernodal's factor on "
+        "large ones; docs/performance.md), `\"simplicial\"`, `\"supernodal\"`. The "
+        "run's `run.json` records the choice and why."),
     Key("solver", "initial_guess", "string", "y", "",
         "Where each step's iteration starts: `\"y\"`, the inertial target x_n + h v_n (the "
         "paper), or `\"x_n\"`, the previous positions (most ports, the assignment's "
         "`main.cpp`). With a fixed iteration count the answer depends on it."),
+    # [output]
+    Key("output", "frame_compression", "string", "auto", "",
+        "How `clothsim run` writes the `frame_%06d.vtu` files: `\"zlib\"` (compressed, about "
+        "a third of the size), `\"none\"` (raw binary, several times faster to write) or "
+        "`\"auto\"`: zlib up to 100 000 vertices, none above (docs/performance.md). Both "
+        "read in ParaView and meshio. The run's `run.json` records the choice and why; it "
+        "is not part of the scene hash (a run may be resumed with another)."),
 )
 
 
@@ -239,7 +247,7 @@ def keys(table: str, shape: str | None = None) -> tuple[str, ...]:
     Parameters
     ----------
     table : str
-        ``"scene"``, ``"cloth"``, ``"springs"`` or ``"solver"``.
+        ``"scene"``, ``"cloth"``, ``"springs"``, ``"solver"`` or ``"output"``.
     shape : str, optional
         A cloth shape (``"grid"``, ``"polygon"``, ...): only the keys it uses.
 
@@ -315,7 +323,8 @@ def schema_markdown() -> str:
     Returns
     -------
     str
-        One section per table (``[scene]``, ``[cloth]``, ``[springs]``, ``[solver]``), each a
+        One section per table (``[scene]``, ``[cloth]``, ``[springs]``, ``[solver]``,
+        ``[output]``), each a
         table of key, type, default, unit, the cloth shapes that use it, and meaning.
     """
     out = []

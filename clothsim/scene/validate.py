@@ -14,6 +14,7 @@ from typing import Any
 
 from ..effects.pins import PIN_METHODS
 from ..factorization import BACKENDS, CHOLMOD_MODES
+from ..io.frames import FRAME_COMPRESSIONS
 from ..mesh import PLANES
 from ..model import MASS_LUMPINGS
 from ..problem import INITIAL_GUESSES
@@ -304,8 +305,8 @@ def validate(raw: dict, base_dir: Path, default_name: str) -> dict:
     Returns
     -------
     dict
-        The ``scene``, ``cloth``, ``springs``, ``solver`` and ``effects`` tables, checked,
-        with defaults filled in (lengths [m], masses [kg], times [s], stiffnesses [N/m]).
+        The ``scene``, ``cloth``, ``springs``, ``solver``, ``output`` and ``effects`` tables,
+        checked, with defaults filled in (lengths [m], masses [kg], times [s], stiffnesses [N/m]).
 
     Raises
     ------
@@ -327,6 +328,11 @@ def validate(raw: dict, base_dir: Path, default_name: str) -> dict:
                                     so.get("backend", d("solver", "backend")),
                                     so.get("initial_guess", d("solver", "initial_guess")),
                                     so.get("cholmod_mode", d("solver", "cholmod_mode")))
+    ou = table(raw.get("output", {}), "output")
+    check_keys(ou, "output", schema.keys("output"))
+    out["output"] = {"frame_compression": string(
+        ou.get("frame_compression", d("output", "frame_compression")),
+        "output.frame_compression", choices=FRAME_COMPRESSIONS)}
     effects = raw.get("effects", [])
     if not isinstance(effects, list):
         raise Invalid("effects", f"expected an array of tables ([[effects]]), got "

@@ -72,9 +72,13 @@ class LocalGlobalSolver(Solver):
         The factorization backend that ran last.
     cholmod_mode : {"auto", "simplicial", "supernodal"}
         CHOLMOD's mode for the next factorization (``[solver] cholmod_mode``); "auto"
-        chooses by size (:func:`clothsim.factorization.choose_cholmod_mode`).
+        chooses by predicted cost (:func:`clothsim.factorization.choose_cholmod_mode`).
+    expected_solves : int or None
+        Solves the next factorization is expected to serve, for "auto" (set by
+        :meth:`clothsim.Simulation.expect_steps`); None: unknown.
     factorization : str or None
-        The mode of the last factorization and why, e.g. "simplicial: 441 free vertices < …".
+        The mode of the last factorization and why, e.g. "simplicial: 439 free vertices, 600
+        solves assumed (…): predicted factor … s + 600 x … ms = … s, supernodal …".
     analysis_count : int
         CHOLMOD symbolic analyses done: a refactorization with the same free vertices (h or
         the penalty pins changed) reuses the last one.
@@ -82,6 +86,7 @@ class LocalGlobalSolver(Solver):
 
     name = "local-global"
     cholmod_mode = "auto"
+    expected_solves: int | None = None
     factorization: str | None = None
     analysis_count = 0
 
@@ -135,7 +140,8 @@ class LocalGlobalSolver(Solver):
             sysf = factor_system(self.model, problem, self._Js, self._a, self._b,
                                  backend=self.backend_requested,
                                  check_conditioning=self.check_conditioning,
-                                 cholmod_mode=self.cholmod_mode, previous=self._cache)
+                                 cholmod_mode=self.cholmod_mode, previous=self._cache,
+                                 expected_solves=self.expected_solves)
         self.factor_count += 1
         self.analysis_count += sysf.A_FF_factor.analyzed
         self.backend = sysf.A_FF_factor.backend

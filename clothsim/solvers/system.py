@@ -63,7 +63,8 @@ class SystemFactor:
 def factor_system(model: Model, problem: StepProblem, Js: sp.csr_matrix, a: np.ndarray,
                   b: np.ndarray, *, backend: str = "auto",
                   check_conditioning: bool = True, cholmod_mode: str = "auto",
-                  previous: SystemFactor | None = None) -> SystemFactor:
+                  previous: SystemFactor | None = None,
+                  expected_solves: int | None = None) -> SystemFactor:
     """Assemble and factor M_s + h² (L_s + K_anchor) for this problem's h and pins.
 
     Parameters
@@ -81,10 +82,13 @@ def factor_system(model: Model, problem: StepProblem, Js: sp.csr_matrix, a: np.n
     check_conditioning : bool
         Warn when the condition estimate passes the threshold.
     cholmod_mode : {"auto", "simplicial", "supernodal"}
-        CHOLMOD's mode; "auto" by size (:func:`clothsim.factorization.choose_cholmod_mode`).
+        CHOLMOD's mode; "auto" by predicted cost
+        (:func:`clothsim.factorization.choose_cholmod_mode`).
     previous : SystemFactor, optional
         The factor this one replaces: with the same free vertices (h or the penalty pins
         changed) its symbolic analysis is reused.
+    expected_solves : int, optional
+        Solves the run expects (None: unknown), for "auto".
 
     Returns
     -------
@@ -98,7 +102,7 @@ def factor_system(model: Model, problem: StepProblem, Js: sp.csr_matrix, a: np.n
     A_csr = A.tocsr()
     A_FF = A_csr[free][:, free]
     A_FP = A_csr[free][:, fixed]
-    mode, reason = choose_cholmod_mode(len(free), cholmod_mode)
+    mode, reason = choose_cholmod_mode(len(free), cholmod_mode, expected_solves)
     factor = Factor(A_FF, backend=backend, check_conditioning=check_conditioning,
                     cholmod_mode=mode,
                     reuse=None if previous is None else previous.A_FF_factor)
