@@ -19,6 +19,7 @@ import numpy as np
 from ..errors import InputError
 from ..factorization import cholmod_available
 from .answer import answer_table, short_answer
+from .limits import method_limits, worse_minimum_notes
 from .problems import load_problems, record_problems, save_problems
 from .report import (
     fixed_budget_measure,
@@ -31,6 +32,7 @@ from .report import (
 )
 from .study import (
     BUDGETS,
+    DEFAULT_CAP,
     KINDS,
     TOLERANCES,
     ConfigResult,
@@ -177,9 +179,10 @@ def _run(scene, out, methods, problems, frames, repeats, jobs, scheduler, target
     options = {}
     if "chebyshev" in methods:
         options["chebyshev"] = {"rho": chebyshev_rho(model, steps)}
+    cap = QUICK["cap"] if quick else DEFAULT_CAP
     configs = default_configurations(methods, budgets=budgets, tolerances=tolerances,
-                                     options=options,
-                                     **({"cap": QUICK["cap"]} if quick else {}))
+                                     options=options, cap=cap)
+    method_limits(model, steps, methods, options=options, cap=cap)  # may add minima
     notes = []
     nothing = not any(s.measured for s in steps)
     if nothing:  # early stop: no step can be measured, so nothing below would be used
@@ -225,6 +228,7 @@ def _run(scene, out, methods, problems, frames, repeats, jobs, scheduler, target
         notes.append(f"{kinds.count('several-minima')} step(s) have several certified minima "
                      f"(Newton from y, x_n and converged local/global end at different "
                      f"minima): measured by the relative objective gap, not by a distance")
+    notes += worse_minimum_notes(steps, target if target is not None else 1e-3)
     failed = kinds.count("saddle") + kinds.count("reference-failed")
     if failed:
         notes.append(f"{failed} step(s) have no certified reference ({kinds.count('saddle')} "
