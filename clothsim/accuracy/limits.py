@@ -37,6 +37,7 @@ import numpy as np
 from ..model import Model
 from ..solvers import NewtonSolver, make_solver
 from ..solvers.descent import objective_difference
+from .phases import advance
 from .reference import REFERENCE_ITERATIONS, SAME_POINT
 
 log = logging.getLogger(__name__)
@@ -164,6 +165,7 @@ def method_limits(model: Model, steps: Sequence, methods: Sequence[str], *,
                 lim = _own_limit(model, problem, m, dict((options or {}).get(m, {})), cap,
                                  backend)
             limits[m] = lim
+            advance()
             if lim.certified and lim.x is not None:
                 _merge_minimum(model, problem, ref, lim.x)
         if s.kind == "unique" and ref.minima > 1:

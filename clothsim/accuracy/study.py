@@ -40,6 +40,7 @@ from ..errors import ClothsimError
 from ..model import Model
 from ..solvers import estimate_spectral_radius, make_solver
 from .limits import limit_error
+from .phases import advance
 from .problems import RecordedStep, classify
 from .reference import CertifiedReference, certified_reference
 
@@ -214,6 +215,7 @@ def prepare_steps(model: Model, recorded: Sequence[RecordedStep], *,
         rho = (estimate_spectral_radius(model, rec.problem, backend=backend)
                if kind in MEASURED else math.nan)
         out.append(StudyStep(rec, kind, ratio, err1, ref if kind != "at-rest" else None, rho))
+        advance()
         log.info("step %d: %s (|grad g(y)|/floor %.2e, one-iteration error %.2e, "
                  "residual %.1e, min eig %.3g, uncertainty %.1e, rho %.4f)", rec.index, kind,
                  ratio, err1, ref.residual, ref.min_eigenvalue, ref.uncertainty, rho)
@@ -333,9 +335,13 @@ def measure(model: Model, steps: Sequence[StudyStep], configs: Sequence[Configur
     unique = np.array([s.kind == "unique" for s in measured], dtype=bool)
     tasks = [(c, s) for c in configs for s in measured]
     if jobs == 1 and scheduler is None:
-        results = [_solve_one(model, c, s) for c, s in tasks]
+        results = []
+        for c, s in tasks:
+            results.append(_solve_one(model, c, s))
+            advance()
     else:
         results = _parallel(model, tasks, jobs, scheduler)
+        advance(len(tasks))
     out, i = [], 0
     for c in configs:
         chunk = results[i:i + len(measured)]

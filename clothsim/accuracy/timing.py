@@ -22,6 +22,7 @@ import numpy as np
 
 from ..model import Model
 from ..solvers import LocalGlobalSolver, estimate_spectral_radius
+from .phases import advance
 from .study import BLOW_UPS, ConfigResult, StudyStep
 
 
@@ -83,6 +84,7 @@ def time_configurations(model: Model, steps: Sequence[StudyStep],
                     broken.add(i)
                     continue
                 res.seconds.append((time.perf_counter() - t0) / len(measured))
+                advance()
     for i in broken:
         results[i].diverged = max(results[i].diverged, 1)
         results[i].seconds.clear()

@@ -3,6 +3,7 @@ is x*."""
 
 import csv
 import functools
+import json
 import warnings
 
 import numpy as np
@@ -104,5 +105,7 @@ def test_on_a_convex_step_every_limit_is_x_star(tmp_path):
         err, lim = float(r["solver_error_max"]), float(r["limit_error_max"])
         assert lim == pytest.approx(err, rel=1e-6, abs=1e-10), r["method"]
         assert abs(float(r["limit_gap_max"])) <= ROUNDING
+    phases = json.loads((tmp_path / "accuracy.json").read_text())["phase_seconds"]
+    assert {"recording", "references", "limits", "errors", "timing"} == set(phases)
     steps_md = (tmp_path / "steps.md").read_text()
     assert "lbfgs: x_best" in steps_md and "newton: x_best" in steps_md
