@@ -346,8 +346,10 @@ def reference_runs(factory: SimulationFactory, *, h: float, frames: int, frame_t
     fine, coarse : Trajectory
         The runs at h and 2h (``Trajectory.contact`` recorded).
     """
-    return tuple(run_trajectory(factory(method, step, iterations, tolerance), frames=frames,
-                                frame_time=frame_time, record_contact=True)
+    from .converged import warm_started
+
+    return tuple(run_trajectory(warm_started(factory(method, step, iterations, tolerance)),
+                                frames=frames, frame_time=frame_time, record_contact=True)
                  for step in (h, 2.0 * h))
 
 
