@@ -37,6 +37,7 @@ import numpy as np
 from ..model import Model
 from ..solvers import NewtonSolver, make_solver
 from ..solvers.descent import objective_difference
+from .blowups import BLOW_UPS
 from .phases import advance
 from .reference import REFERENCE_ITERATIONS, SAME_POINT
 
@@ -89,8 +90,6 @@ def _newton(model, backend):
 
 def _own_limit(model: Model, problem, method: str, options: dict, cap: int,
                backend: str) -> MethodLimit:
-    from .study import BLOW_UPS
-
     try:
         solver = make_solver(method, model, iterations=cap, tolerance=LIMIT_TOLERANCE,
                              backend=backend, **options)

@@ -36,9 +36,9 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from ..errors import ClothsimError
 from ..model import Model
 from ..solvers import estimate_spectral_radius, make_solver
+from .blowups import BLOW_UPS  # noqa: F401  (re-exported: timing, timestep)
 from .limits import limit_error
 from .phases import advance
 from .problems import RecordedStep, classify
@@ -278,12 +278,6 @@ def chebyshev_rho(model: Model, steps: Sequence[StudyStep], *, backend: str = "a
             else estimate_spectral_radius(model, s.step.problem, backend=backend)
             for s in steps if s.measured]
     return max(rhos, default=0.0)
-
-
-BLOW_UPS = (ClothsimError, FloatingPointError, OverflowError, ValueError, ZeroDivisionError,
-            np.linalg.LinAlgError)
-"""What a configuration that blows up raises (a non-finite state or force, a failed
-factorization): recorded as diverged, the study goes on."""
 
 
 def _solve_one(model: Model, config: Configuration, study_step: StudyStep) -> tuple:

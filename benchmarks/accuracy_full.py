@@ -1,0 +1,65 @@
+"""The full ``clothsim accuracy`` study (no ``--quick``) of the seed's demo at 41 × 41.
+
+Runs the drop-on-square scene (a cloth dropped onto a box: free fall, then contact and
+crumpling) at 41 × 41 vertices, in this process, exactly as
+``clothsim accuracy drop-on-square --set cloth.resolution=[41,41] --no-plots`` does, and
+prints the wall and CPU seconds of each phase (from ``accuracy.json``'s
+``phase_seconds``) and in total, the commit, the load average and the report's first line.
+It writes the same as Markdown to ``docs/data/accuracy-full.md``, which
+docs/performance.md includes. The machine is shared: the wall time includes waiting for a
+core, the CPU time does not (CPU is this process's: the study runs in one thread).
+Run: ``python -m benchmarks accuracy_full`` (it takes minutes).
+"""
+
+from __future__ import annotations
+
+import json
+import sys
+import tempfile
+import time
+import warnings
+from pathlib import Path
+
+from .accuracy_quick import commit, scene
+
+N = 41
+TARGET_SECONDS = 600.0
+ROOT = Path(__file__).resolve().parent.parent
+OUT = ROOT / "docs" / "data" / "accuracy-full.md"
+
+
+def main(argv: list[str] | None = None) -> None:
+    from clothsim.accuracy import run_accuracy
+    from clothsim.accuracy.phases import PHASES
+
+    load = Path("/proc/loadavg").read_text().split()[0]
+    with tempfile.TemporaryDirectory() as out, warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        t0, c0 = time.perf_counter(), time.process_time()
+        text = run_accuracy(scene(N), Path(out), plots=False)
+        wall, cpu = time.perf_counter() - t0, time.process_time() - c0
+        phases = json.loads((Path(out) / "accuracy.json").read_text())["phase_seconds"]
+    head = text.splitlines()[0].lstrip("# ")
+    lines = [f"Measured by `python -m benchmarks accuracy_full` at commit {commit()} (one "
+             f"BLAS/OpenMP thread; load average {load} at the start): `clothsim accuracy "
+             f"drop-on-square --set cloth.resolution=[{N},{N}]`, the full study.", "",
+             f"Result: {head}.", "",
+             "| phase | wall [s] | CPU [s] |", "|---|---|---|"]
+    for name in PHASES:
+        if name in phases:
+            lines.append(f"| {name} | {phases[name]['wall']:.1f} | {phases[name]['cpu']:.1f} |")
+    rest_wall = wall - sum(p["wall"] for p in phases.values())
+    rest_cpu = cpu - sum(p["cpu"] for p in phases.values())
+    lines += [f"| other (set-up, one-off costs, files) | {rest_wall:.1f} | {rest_cpu:.1f} |",
+              f"| **total** | **{wall:.1f}** | **{cpu:.1f}** |", "",
+              f"Target: ≤ {TARGET_SECONDS / 60:.0f} min of wall time — "
+              f"{'met' if wall <= TARGET_SECONDS else 'missed'} "
+              f"({wall / 60:.1f} min wall, {cpu / 60:.1f} min CPU)."]
+    for line in lines:
+        print(f"   {line}")
+    OUT.write_text("\n".join(lines) + "\n")
+    print(f"   written to {OUT.relative_to(ROOT)}")
+
+
+if __name__ == "__main__":
+    main(sys.argv[1:])
