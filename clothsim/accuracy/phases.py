@@ -12,10 +12,13 @@ off when stderr is not a terminal or ``TQDM_DISABLE`` is set (the CLI sets it th
 
 from __future__ import annotations
 
+import logging
 import os
 import sys
 import time
 from contextlib import contextmanager
+
+log = logging.getLogger(__name__)
 
 PHASES = ("recording", "references", "limits", "errors", "timing", "time-step study",
           "trajectories")
@@ -91,3 +94,4 @@ class Phases:
             spent = self.seconds.setdefault(name, {"wall": 0.0, "cpu": 0.0})
             spent["wall"] += time.perf_counter() - t0
             spent["cpu"] += time.process_time() - c0
+            log.info("phase %s: %.1f s wall, %.1f s CPU", name, spent["wall"], spent["cpu"])

@@ -68,10 +68,14 @@ def time_configurations(model: Model, steps: Sequence[StudyStep],
     with warnings.catch_warnings(), _limited_threads(threads), np.errstate(all="ignore"):
         warnings.simplefilter("ignore")
         for i, solver in enumerate(solvers):  # warm-up: factor M + h² L, estimate ρ (one-off)
+            its, tol = solver.iterations, solver.tolerance
+            solver.iterations, solver.tolerance = 1, None  # one iteration does all of it
             try:
                 solver.solve(measured[0].step.problem)
             except BLOW_UPS:
                 broken.add(i)
+            finally:
+                solver.iterations, solver.tolerance = its, tol
         for _ in range(repeats):
             for i, (solver, res) in enumerate(zip(solvers, results)):
                 if i in broken or res.diverged:  # a blown-up configuration is not timed
