@@ -9,9 +9,10 @@ import time
 
 BENCHMARKS = ("stiffness", "stability_figures", "performance", "iteration_cost",
               "accuracy_bench", "accuracy_quick")
-#: run only when named: the 257² × 500-frame memory run and the scale ladder up to 1025²
-#: take minutes each; accuracy_docs regenerates the accuracy page's two study reports (minutes)
-LONG = ("memory", "scale_ladder", "accuracy_docs")
+#: run only when named: the 257² × 500-frame memory run, the scale ladder up to 1025² and
+#: the full accuracy study at 41² take minutes each; accuracy_docs regenerates the accuracy
+#: page's two study reports (minutes)
+LONG = ("memory", "scale_ladder", "accuracy_full", "accuracy_docs")
 
 
 def main(argv: list[str]) -> int:

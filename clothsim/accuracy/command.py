@@ -19,6 +19,9 @@ import numpy as np
 from ..errors import InputError
 from ..factorization import cholmod_available
 from .answer import answer_table, short_answer
+from .converged import warm_started
+from .limits import method_limits, worse_minimum_notes
+from .phases import Phases
 from .problems import load_problems, record_problems, save_problems
 from .report import (
     fixed_budget_measure,
@@ -31,6 +34,7 @@ from .report import (
 )
 from .study import (
     BUDGETS,
+    DEFAULT_CAP,
     KINDS,
     TOLERANCES,
     ConfigResult,
@@ -167,19 +171,26 @@ def _run(scene, out, methods, problems, frames, repeats, jobs, scheduler, target
     factory, model, frame_time = scene_factory(scene)
     frames = scene.frames if frames is None else frames
     h = scene.h
+    phases = Phases()
     if steps_file is not None:
         recorded = load_problems(steps_file)
     else:
-        sim = factory("newton", h, 100, 1e-10)
-        recorded = record_problems(sim, steps=max(1, frames * scene.substeps), count=problems)
+        sim = warm_started(factory("newton", h, 100, 1e-10))
+        with phases.phase("recording", max(1, frames * scene.substeps), "step"):
+            recorded = record_problems(sim, steps=max(1, frames * scene.substeps),
+                                       count=problems)
     save_problems(recorded, out / "problems.npz")
-    steps = prepare_steps(model, recorded)
+    with phases.phase("references", len(recorded), "step"):
+        steps = prepare_steps(model, recorded)
     options = {}
     if "chebyshev" in methods:
         options["chebyshev"] = {"rho": chebyshev_rho(model, steps)}
+    cap = QUICK["cap"] if quick else DEFAULT_CAP
     configs = default_configurations(methods, budgets=budgets, tolerances=tolerances,
-                                     options=options,
-                                     **({"cap": QUICK["cap"]} if quick else {}))
+                                     options=options, cap=cap)
+    measured = sum(1 for s in steps if s.measured)
+    with phases.phase("limits", measured * len(methods), "limit"):
+        method_limits(model, steps, methods, options=options, cap=cap)  # may add minima
     notes = []
     nothing = not any(s.measured for s in steps)
     if nothing:  # early stop: no step can be measured, so nothing below would be used
@@ -187,29 +198,38 @@ def _run(scene, out, methods, problems, frames, repeats, jobs, scheduler, target
                      "were not run" + (", nor the time-step check" if quick else ""))
         results = [ConfigResult(c, np.zeros(0), np.zeros(0, dtype=int)) for c in configs]
     else:
-        results = measure(model, steps, configs, jobs=jobs, scheduler=scheduler)
+        with phases.phase("errors", measured * len(configs), "solve"):
+            results = measure(model, steps, configs, jobs=jobs, scheduler=scheduler)
     write_csv(rows(results, steps, h=h), out / "accuracy.csv")  # errors kept if timing fails
     if not nothing:
-        time_configurations(model, steps, results, repeats=repeats, threads=threads)
+        with phases.phase("timing", repeats * len(configs), "config"):
+            time_configurations(model, steps, results, repeats=repeats, threads=threads)
         write_csv(rows(results, steps, h=h), out / "accuracy.csv")
     ts_error, ts, traj = math.nan, None, {}
     if time_steps and frames > 0 and not (nothing and quick):
-        from .timestep import time_step_study, trajectory_errors
+        from .timestep import TRAJECTORY_BUDGETS, time_step_study, trajectory_errors
 
-        ts = time_step_study(factory, frame_time=frame_time,
-                             frames=min(frames, QUICK_TIME_STEP_FRAMES if quick else 30),
-                             time_steps=(h, h / 2) if quick else (h, h / 2, h / 4))
+        ts_frames = min(frames, QUICK_TIME_STEP_FRAMES if quick else 30)
+        ts_hs = (h, h / 2) if quick else (h, h / 2, h / 4)
+        runs = 2 + sum(1 for x in ts_hs if not math.isclose(x, h / 4))  # h/4 is reused
+        with phases.phase("time-step study", ts_frames * runs, "frame"):
+            ts = time_step_study(factory, frame_time=frame_time, frames=ts_frames,
+                                 time_steps=ts_hs, reference_h=h / 8)
         # no contact-free window: the CSV cell stays empty
         ts_error = ts.errors[ts.time_steps.index(h)] if ts.window is not None else None
         notes.append(ts.note)
         if not quick:
-            traj = trajectory_errors(factory, configs, ts.reference, h=h,
-                                     frame_time=frame_time)
+            runs = sum(1 for c in configs
+                       if c.tolerance is not None or c.iterations in TRAJECTORY_BUDGETS)
+            with phases.phase("trajectories", ts_frames * runs, "frame"):
+                traj = trajectory_errors(factory, configs, ts.reference, h=h,
+                                         frame_time=frame_time)
     table = rows(results, steps, h=h, time_step_error=ts_error, trajectory_errors=traj)
     write_csv(table, out / "accuracy.csv")
     info = machine_info(threads) | one_off_costs(model, steps, threads=threads)
     info |= {"commit": commit, "scene": scene.name, "h": h, "frames": frames, "repeats": repeats,
-             "chebyshev_rho": options.get("chebyshev", {}).get("rho")}
+             "chebyshev_rho": options.get("chebyshev", {}).get("rho"),
+             "phase_seconds": phases.seconds}
     write_sidecar(info, out / "accuracy.json")
     (out / "steps.md").write_text(steps_table(steps) + "\n")
     kinds = [s.kind for s in steps]
@@ -225,6 +245,7 @@ def _run(scene, out, methods, problems, frames, repeats, jobs, scheduler, target
         notes.append(f"{kinds.count('several-minima')} step(s) have several certified minima "
                      f"(Newton from y, x_n and converged local/global end at different "
                      f"minima): measured by the relative objective gap, not by a distance")
+    notes += worse_minimum_notes(steps, target if target is not None else 1e-3)
     failed = kinds.count("saddle") + kinds.count("reference-failed")
     if failed:
         notes.append(f"{failed} step(s) have no certified reference ({kinds.count('saddle')} "
@@ -236,7 +257,6 @@ def _run(scene, out, methods, problems, frames, repeats, jobs, scheduler, target
         plot_fixed_budget(table, out / "fixed_budget.png", title=scene.name,
                           uncertainty=reference_uncertainty(steps))
     levels = (target,) if target is not None else ACCURACY_LEVELS
-    measured = sum(1 for s in steps if s.measured)
     classes = ", ".join(f"{kinds.count(k)} {k}" for k in KINDS)
     text = [f"# accuracy of {scene.name}: h = {h:.4g} s, {measured} of {len(steps)} recorded "
             f"steps measured ({classes})", "",

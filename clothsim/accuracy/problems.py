@@ -38,6 +38,7 @@ from ..model import Model
 from ..simulation import Simulation
 from ..solvers import LocalGlobalSolver, StepProblem, objective_gradient
 from ..solvers.base import gradient_noise_floor
+from .phases import advance
 
 log = logging.getLogger(__name__)
 
@@ -172,6 +173,7 @@ def record_problems(sim: Simulation, *, steps: int, count: int = 8) -> list[Reco
             record = sim.step()
             if rec is not None:
                 rec.converged = record.converged
+            advance()
     return out
 
 

@@ -23,7 +23,7 @@ from __future__ import annotations
 
 import math
 import warnings
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 
 import numpy as np
 
@@ -72,6 +72,14 @@ class CertifiedReference:
         The lowest certified minimum [m] (x* when it is the only one).
     objective_scale : float
         g(y) − g(x_best) [J·s²], the denominator of the relative objective gap.
+    minimum_points : list of ndarray
+        The distinct certified minima [m] (more are added by
+        :func:`~clothsim.accuracy.limits.method_limits`: each method's own limit).
+    local_global : NewtonResult or None
+        Newton to the floor from converged local/global: local/global's own limit (reused
+        by :func:`~clothsim.accuracy.limits.method_limits`).
+    local_global_converged : bool
+        Local/global reached its 1e-6 relative residual before that polish.
     """
 
     x: np.ndarray
@@ -87,6 +95,9 @@ class CertifiedReference:
     minima: int = 1
     x_best: np.ndarray | None = None
     objective_scale: float = math.nan
+    minimum_points: list = field(default_factory=list)
+    local_global: object = None
+    local_global_converged: bool = False
 
     def objective_gap(self, model: Model, problem: StepProblem, x: np.ndarray) -> float:
         """(g(x) − g(x_best)) / (g(y) − g(x_best)), without cancellation.
@@ -182,7 +193,8 @@ def certified_reference(model: Model, problem: StepProblem, *, backend: str = "a
             ends.append(newton().solve(problem, x0=x_n))
             lg = LocalGlobalSolver(model, iterations=5000, tolerance=1e-6, backend=backend,
                                    check_conditioning=False)
-            ends.append(newton().solve(problem, x0=lg.solve(problem).x))
+            lg_end = lg.solve(problem)
+            ends.append(newton().solve(problem, x0=lg_end.x))
     minima = []  # distinct certified minima, x* first when certified
     for r in ends:
         if r.certified and all(float(np.linalg.norm(r.x - m)) / scale > SAME_POINT
@@ -201,4 +213,6 @@ def certified_reference(model: Model, problem: StepProblem, *, backend: str = "a
                               math.nan if several else max(agree, default=0.0), several,
                               dgs[i_best] if minima else 0.0, bool(res.certified),
                               bool(res.at_floor), bool(res.positive_definite), len(minima),
-                              x_best, float(objective_scale))
+                              x_best, float(objective_scale), minima,
+                              ends[2] if second_start else None,
+                              bool(second_start and lg_end.converged))

@@ -21,7 +21,9 @@ from .timing import median_iqr
 
 COLUMNS = ("method", "h", "iterations", "tolerance", "solver_error_median",
            "solver_error_p90", "solver_error_max", "objective_gap_median", "objective_gap_p90",
-           "objective_gap_max", "iterations_median", "iterations_max",
+           "objective_gap_max", "limit_error_median", "limit_error_p90", "limit_error_max",
+           "limit_gap_median", "limit_gap_max", "residual_median", "residual_p90",
+           "residual_max", "iterations_median", "iterations_max",
            "steps_measured", "steps_skipped", "steps_unique", "steps_several_minima",
            "steps_saddle", "steps_reference_failed", "steps_at_rest", "steps_trivial",
            "time_step_error", "trajectory_error",
@@ -74,6 +76,14 @@ class Row:
         or on its trajectory (its errors there are inf; it is never an answer).
     steps_diverged : int
         Measured steps on which it blew up.
+    limit_error_median, limit_error_p90, limit_error_max : float
+        ‖x − x_lim‖ / ‖x_lim − x_n‖ to its method's own limit over the measured steps
+        (:mod:`clothsim.accuracy.limits`).
+    limit_gap_median, limit_gap_max : float
+        The objective gap of its method's own limit (the basin it converges to) over the
+        measured steps: 0 when the method ends at x_best on every step.
+    residual_median, residual_p90, residual_max : float
+        Relative residual ‖∇g(x)‖ / ‖∇g(y)‖ after its solve over the measured steps.
     setting : str
         A short description, e.g. ``"chebyshev, 10 it/step"``.
     """
@@ -107,6 +117,14 @@ class Row:
     factorizations_per_step: float
     status: str = "ok"
     steps_diverged: int = 0
+    limit_error_median: float = math.nan
+    limit_error_p90: float = math.nan
+    limit_error_max: float = math.nan
+    limit_gap_median: float = math.nan
+    limit_gap_max: float = math.nan
+    residual_median: float = math.nan
+    residual_p90: float = math.nan
+    residual_max: float = math.nan
 
     @property
     def setting(self) -> str:
@@ -152,14 +170,24 @@ def rows(results: Sequence[ConfigResult], steps: Sequence[StudyStep], *, h: floa
         solves = it_med if c.method != "newton" else 0.0
         traj = (trajectory_errors or {}).get(c, math.nan)
         diverged = bool(r.diverged or r.trajectory_diverged or traj == math.inf)
+        limit = _known(r.limit_errors)  # NaN: no limit computed (left out)
+        basin = _known([s.limits[c.method].gap for s in steps
+                        if s.measured and c.method in s.limits])
+        resid = _known(r.residuals)
         out.append(Row(c.method, h, c.iterations, c.tolerance, med, p90, mx, *gaps, it_med,
                        float(r.iterations.max()) if len(r.iterations) else math.nan,
                        measured, len(steps) - measured, count["unique"],
                        count["several-minima"], count["saddle"], count["reference-failed"],
                        count["at-rest"], count["trivial"], time_step_error,
                        traj, sec, iqr, len(r.seconds), solves, r.factorizations,
-                       "diverged" if diverged else "ok", int(r.diverged)))
+                       "diverged" if diverged else "ok", int(r.diverged), *limit,
+                       basin[0], basin[2], *resid))
     return out
+
+
+def _known(values):
+    v = np.asarray(values, dtype=np.float64)
+    return quantiles(v[~np.isnan(v)])
 
 
 def _median(v):

@@ -36,9 +36,11 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from ..errors import ClothsimError
 from ..model import Model
 from ..solvers import estimate_spectral_radius, make_solver
+from .blowups import BLOW_UPS  # noqa: F401  (re-exported: timing, timestep)
+from .limits import limit_error
+from .phases import advance
 from .problems import RecordedStep, classify
 from .reference import CertifiedReference, certified_reference
 
@@ -119,6 +121,9 @@ class StudyStep:
         Relative error of one local/global iteration.
     reference : CertifiedReference or None
         The certified x* (None for steps at rest).
+    limits : dict
+        Method → :class:`~clothsim.accuracy.limits.MethodLimit`, its own limit (measured
+        steps, after :func:`~clothsim.accuracy.limits.method_limits`).
     """
 
     step: RecordedStep
@@ -127,6 +132,7 @@ class StudyStep:
     one_iteration_error: float
     reference: CertifiedReference | None = None
     rho: float = math.nan          # local/global decay rate (measured steps)
+    limits: dict = field(default_factory=dict)
 
     @property
     def measured(self) -> bool:
@@ -158,6 +164,11 @@ class ConfigResult:
         Relative objective gap (g(x) − g(x_best)) / (g(y) − g(x_best)) per measured step.
     unique : ndarray of bool, shape (m,)
         Which measured steps are "unique" (their solver error is defined).
+    limit_errors : ndarray, shape (m,)
+        ‖x − x_lim‖ / ‖x_lim − x_n‖ to the method's own limit per measured step (NaN: no
+        limit computed).
+    residuals : ndarray, shape (m,)
+        Relative residual ‖∇g(x)‖ / ‖∇g(x_0)‖ (x_0 = y) per measured step.
     """
 
     config: Configuration
@@ -169,6 +180,8 @@ class ConfigResult:
     trajectory_diverged: bool = False
     gaps: np.ndarray = field(default_factory=lambda: np.zeros(0))
     unique: np.ndarray = field(default_factory=lambda: np.zeros(0, dtype=bool))
+    limit_errors: np.ndarray = field(default_factory=lambda: np.zeros(0))
+    residuals: np.ndarray = field(default_factory=lambda: np.zeros(0))
 
 
 def prepare_steps(model: Model, recorded: Sequence[RecordedStep], *,
@@ -202,6 +215,7 @@ def prepare_steps(model: Model, recorded: Sequence[RecordedStep], *,
         rho = (estimate_spectral_radius(model, rec.problem, backend=backend)
                if kind in MEASURED else math.nan)
         out.append(StudyStep(rec, kind, ratio, err1, ref if kind != "at-rest" else None, rho))
+        advance()
         log.info("step %d: %s (|grad g(y)|/floor %.2e, one-iteration error %.2e, "
                  "residual %.1e, min eig %.3g, uncertainty %.1e, rho %.4f)", rec.index, kind,
                  ratio, err1, ref.residual, ref.min_eigenvalue, ref.uncertainty, rho)
@@ -266,15 +280,9 @@ def chebyshev_rho(model: Model, steps: Sequence[StudyStep], *, backend: str = "a
     return max(rhos, default=0.0)
 
 
-BLOW_UPS = (ClothsimError, FloatingPointError, OverflowError, ValueError, ZeroDivisionError,
-            np.linalg.LinAlgError)
-"""What a configuration that blows up raises (a non-finite state or force, a failed
-factorization): recorded as diverged, the study goes on."""
-
-
-def _solve_one(model: Model, config: Configuration,
-               study_step: StudyStep) -> tuple[float, int, int, bool, float]:
-    """(relative error, iterations, factorizations, diverged, objective gap) of one solve."""
+def _solve_one(model: Model, config: Configuration, study_step: StudyStep) -> tuple:
+    """(relative error, iterations, factorizations, diverged, objective gap, limit error,
+    relative residual) of one solve."""
     problem = study_step.step.problem
     try:
         solver = config.solver(model)
@@ -283,15 +291,16 @@ def _solve_one(model: Model, config: Configuration,
             res = solver.solve(problem)
     except BLOW_UPS as exc:
         log.warning("%s diverged on step %d: %s", config.label, study_step.step.index, exc)
-        return math.inf, 0, 0, True, math.inf
+        return math.inf, 0, 0, True, math.inf, math.inf, math.inf
     x_star = study_step.reference.x
     scale = float(np.linalg.norm(x_star - problem.x)) or 1.0
     err = float(np.linalg.norm(res.x - x_star)) / scale
-    diverged = not math.isfinite(err)
-    gap = math.inf if diverged else study_step.reference.objective_gap(model, problem, res.x)
-    return (math.inf if diverged else err), int(res.iterations), \
+    if not math.isfinite(err):
+        return math.inf, int(res.iterations), 0, True, math.inf, math.inf, math.inf
+    gap = study_step.reference.objective_gap(model, problem, res.x)
+    return err, int(res.iterations), \
         int(getattr(solver, "factor_count", 0) if config.method == "newton" else 0), \
-        diverged, gap
+        False, gap, limit_error(study_step, config.method, res.x), float(res.residual)
 
 
 def measure(model: Model, steps: Sequence[StudyStep], configs: Sequence[Configuration], *,
@@ -320,9 +329,13 @@ def measure(model: Model, steps: Sequence[StudyStep], configs: Sequence[Configur
     unique = np.array([s.kind == "unique" for s in measured], dtype=bool)
     tasks = [(c, s) for c in configs for s in measured]
     if jobs == 1 and scheduler is None:
-        results = [_solve_one(model, c, s) for c, s in tasks]
+        results = []
+        for c, s in tasks:
+            results.append(_solve_one(model, c, s))
+            advance()
     else:
         results = _parallel(model, tasks, jobs, scheduler)
+        advance(len(tasks))
     out, i = [], 0
     for c in configs:
         chunk = results[i:i + len(measured)]
@@ -333,7 +346,9 @@ def measure(model: Model, steps: Sequence[StudyStep], configs: Sequence[Configur
                                 if chunk else 0.0,
                                 diverged=sum(bool(r[3]) for r in chunk),
                                 gaps=np.array([r[4] for r in chunk], dtype=np.float64),
-                                unique=unique.copy()))
+                                unique=unique.copy(),
+                                limit_errors=np.array([r[5] for r in chunk], dtype=np.float64),
+                                residuals=np.array([r[6] for r in chunk], dtype=np.float64)))
     return out
 
 

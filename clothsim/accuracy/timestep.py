@@ -22,6 +22,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from ..solvers import stable_time_step
+from .converged import warm_started
 from .trajectory import (
     SimulationFactory,
     reference_runs,
@@ -129,8 +130,11 @@ def time_step_study(factory: SimulationFactory, *, frame_time: float, frames: in
         warnings.simplefilter("ignore")
         fine, coarse = reference_runs(factory, h=h_ref, frames=frames,
                                       frame_time=frame_time, tolerance=1e-10, iterations=100)
-        runs = [run_trajectory(factory(*CONVERGED[:1], h, *CONVERGED[1:]), frames=frames,
-                               frame_time=frame_time, record_contact=True) for h in hs]
+        # the coarse reference run (2 h_ref, converged alike) is reused when it is a measured h
+        runs = [coarse if math.isclose(h, 2.0 * h_ref, rel_tol=1e-12) else
+                run_trajectory(warm_started(factory(*CONVERGED[:1], h, *CONVERGED[1:])),
+                               frames=frames, frame_time=frame_time, record_contact=True)
+                for h in hs]
         sim = factory(*CONVERGED[:1], hs[0], *CONVERGED[1:])
         problem = sim.problem()
     ref = 2.0 * fine.frames - coarse.frames

@@ -22,6 +22,7 @@ import numpy as np
 
 from ..model import Model
 from ..solvers import LocalGlobalSolver, estimate_spectral_radius
+from .phases import advance
 from .study import BLOW_UPS, ConfigResult, StudyStep
 
 
@@ -67,10 +68,14 @@ def time_configurations(model: Model, steps: Sequence[StudyStep],
     with warnings.catch_warnings(), _limited_threads(threads), np.errstate(all="ignore"):
         warnings.simplefilter("ignore")
         for i, solver in enumerate(solvers):  # warm-up: factor M + h² L, estimate ρ (one-off)
+            its, tol = solver.iterations, solver.tolerance
+            solver.iterations, solver.tolerance = 1, None  # one iteration does all of it
             try:
                 solver.solve(measured[0].step.problem)
             except BLOW_UPS:
                 broken.add(i)
+            finally:
+                solver.iterations, solver.tolerance = its, tol
         for _ in range(repeats):
             for i, (solver, res) in enumerate(zip(solvers, results)):
                 if i in broken or res.diverged:  # a blown-up configuration is not timed
@@ -83,6 +88,7 @@ def time_configurations(model: Model, steps: Sequence[StudyStep],
                     broken.add(i)
                     continue
                 res.seconds.append((time.perf_counter() - t0) / len(measured))
+                advance()
     for i in broken:
         results[i].diverged = max(results[i].diverged, 1)
         results[i].seconds.clear()

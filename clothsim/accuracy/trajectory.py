@@ -23,6 +23,7 @@ from ..errors import InputError
 from ..model import Model
 from ..simulation import Simulation
 from ..solvers import Solver, StepProblem, objective, stable_time_step
+from .phases import advance
 from .trace import EXPLICIT_METHODS, converged_solution
 
 SimulationFactory = Callable[[str, float, "int | None", "float | None"], Simulation]
@@ -198,6 +199,7 @@ def run_trajectory(sim: Simulation, *, frames: int, frame_time: float,
             for _ in range(per_frame):
                 seconds.append(sim.step().seconds)
             contact.append(bool(touched))
+            advance()
             x = sim.state.positions
             out.append(x.copy())
             if record_energy:
@@ -344,8 +346,10 @@ def reference_runs(factory: SimulationFactory, *, h: float, frames: int, frame_t
     fine, coarse : Trajectory
         The runs at h and 2h (``Trajectory.contact`` recorded).
     """
-    return tuple(run_trajectory(factory(method, step, iterations, tolerance), frames=frames,
-                                frame_time=frame_time, record_contact=True)
+    from .converged import warm_started
+
+    return tuple(run_trajectory(warm_started(factory(method, step, iterations, tolerance)),
+                                frames=frames, frame_time=frame_time, record_contact=True)
                  for step in (h, 2.0 * h))
 
 

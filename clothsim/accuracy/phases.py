@@ -1,0 +1,97 @@
+"""The study's phases: a tqdm progress bar each (on stderr) and their wall and CPU seconds.
+
+:func:`run_accuracy <clothsim.accuracy.command.run_accuracy>` opens one phase at a time
+(:data:`PHASES`: recording, references, limits, errors, timing, time-step study,
+trajectories) with :meth:`Phases.phase`; the loops inside call :func:`advance` once per
+unit of work (a step, a solve, a frame), which moves the open phase's bar and does nothing
+when no phase is open (a library call of one function). The bars go to stderr and are
+off when stderr is not a terminal or ``TQDM_DISABLE`` is set (the CLI sets it then,
+:mod:`clothsim.cli.logs`). The seconds per phase land in ``accuracy.json``
+(``phase_seconds``), where ``benchmarks/accuracy_full.py`` reads them.
+"""
+
+from __future__ import annotations
+
+import logging
+import os
+import sys
+import time
+from contextlib import contextmanager
+
+log = logging.getLogger(__name__)
+
+PHASES = ("recording", "references", "limits", "errors", "timing", "time-step study",
+          "trajectories")
+"""The phases of a full study, in the order they run."""
+
+_current = None
+
+
+def advance(n: int = 1) -> None:
+    """Move the open phase's progress bar by ``n`` units (nothing when none is open).
+
+    Parameters
+    ----------
+    n : int
+        Units of work done (steps, solves or frames, as the phase counts them).
+    """
+    if _current is not None:
+        _current.update(n)
+
+
+def _isatty(stream) -> bool:
+    try:
+        return bool(stream.isatty())
+    except (AttributeError, ValueError):
+        return False
+
+
+class Phases:
+    """Wall and CPU seconds of each phase run, with a progress bar per phase.
+
+    Attributes
+    ----------
+    seconds : dict
+        Phase name → {"wall": s, "cpu": s} (CPU: this process only, not joblib workers).
+    """
+
+    def __init__(self, enabled: bool = True):
+        self.seconds: dict[str, dict[str, float]] = {}
+        self.enabled = enabled
+
+    @contextmanager
+    def phase(self, name: str, total: int | None = None, unit: str = "it"):
+        """Run one phase: a bar of ``total`` units on stderr, its seconds recorded.
+
+        Parameters
+        ----------
+        name : str
+            The phase (:data:`PHASES`).
+        total : int, optional
+            Units of work the phase will :func:`advance` by (None: unknown).
+        unit : str
+            What a unit is ("step", "solve", "frame").
+
+        Yields
+        ------
+        tqdm-like
+            The bar (``update(n)``, ``total`` may be raised).
+        """
+        global _current
+        from tqdm import tqdm
+
+        off = (not self.enabled or bool(os.environ.get("TQDM_DISABLE"))
+               or not _isatty(sys.stderr))
+        bar = tqdm(total=total, desc=name, unit=unit, file=sys.stderr, leave=True,
+                   disable=off)
+        previous, _current = _current, bar
+        t0, c0 = time.perf_counter(), time.process_time()
+        try:
+            yield bar
+        finally:
+            _current = previous
+            bar.close()
+            spent = self.seconds.setdefault(name, {"wall": 0.0, "cpu": 0.0})
+            spent["wall"] += time.perf_counter() - t0
+            spent["cpu"] += time.process_time() - c0
+            log.info("phase %s: %.1f s wall, %.1f s CPU", name, spent["wall"], spent["cpu"])

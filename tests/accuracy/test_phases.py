@@ -1,0 +1,39 @@
+"""A progress bar per phase of the study, on stderr, only on a terminal; seconds per phase."""
+
+import io
+import sys
+
+from clothsim.accuracy.phases import PHASES, Phases, advance
+
+
+class Terminal(io.StringIO):
+    def isatty(self):
+        return True
+
+
+def run(monkeypatch, stream, units=3):
+    monkeypatch.setattr(sys, "stderr", stream)
+    phases = Phases()
+    with phases.phase("references", units, "step"):
+        for _ in range(units):
+            advance()
+    advance()  # no phase open: nothing happens
+    return phases
+
+
+def test_a_phase_draws_its_bar_on_a_terminal_and_records_its_seconds(monkeypatch):
+    monkeypatch.delenv("TQDM_DISABLE", raising=False)
+    phases = run(monkeypatch, Terminal())
+    text = sys.stderr.getvalue()
+    assert "references: 100%" in text and "3/3" in text
+    assert set(phases.seconds) == {"references"} and "references" in PHASES
+    assert phases.seconds["references"]["wall"] >= 0 and phases.seconds["references"]["cpu"] >= 0
+
+
+def test_no_bar_off_a_terminal_or_under_tqdm_disable(monkeypatch):
+    monkeypatch.delenv("TQDM_DISABLE", raising=False)
+    run(monkeypatch, io.StringIO())
+    assert sys.stderr.getvalue() == ""
+    monkeypatch.setenv("TQDM_DISABLE", "1")
+    phases = run(monkeypatch, Terminal())
+    assert sys.stderr.getvalue() == "" and "references" in phases.seconds
