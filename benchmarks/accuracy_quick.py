@@ -5,11 +5,13 @@ crumpling) with its resolution set to 21 × 21, in this process, exactly as
 ``clothsim accuracy SCENE --quick --no-plots`` does, and prints the wall and CPU seconds,
 the commit and the report's first line (how many recorded steps were measured, per class).
 The machine is shared: the wall time includes waiting for a core, the CPU time does not.
-Run: ``python -m benchmarks accuracy_quick``.
+Run: ``python -m benchmarks accuracy_quick``; it also writes
+``docs/data/accuracy-quick.md``, which docs/accuracy.md includes.
 """
 
 from __future__ import annotations
 
+import os
 import subprocess
 import tempfile
 import time
@@ -18,6 +20,7 @@ from pathlib import Path
 
 N = 21
 TARGET_SECONDS = 30.0
+OUT = Path(__file__).resolve().parents[1] / "docs" / "data" / "accuracy-quick.md"
 
 
 def scene(n: int = N):
@@ -56,11 +59,15 @@ def main() -> None:
         t0, c0 = time.perf_counter(), time.process_time()
         text = run_accuracy(scene(), Path(out), quick=True, plots=False)
         wall, cpu = time.perf_counter() - t0, time.process_time() - c0
-    print(f"   commit {commit()}: clothsim accuracy drop-on-square ({N}x{N}) --quick")
-    print(f"   {text.splitlines()[0].lstrip('# ')}")
-    print(f"   wall {wall:.1f} s, CPU {cpu:.1f} s (target: {TARGET_SECONDS:.0f} s; "
-          f"{'met' if wall <= TARGET_SECONDS else 'missed'} in wall time, "
-          f"{'met' if cpu <= TARGET_SECONDS else 'missed'} in CPU time)")
+    lines = [f"commit {commit()}: clothsim accuracy drop-on-square ({N}x{N}) --quick",
+             text.splitlines()[0].lstrip("# "),
+             f"wall {wall:.1f} s, CPU {cpu:.1f} s (target: {TARGET_SECONDS:.0f} s; "
+             f"{'met' if wall <= TARGET_SECONDS else 'missed'} in wall time, "
+             f"{'met' if cpu <= TARGET_SECONDS else 'missed'} in CPU time; load average "
+             f"{os.getloadavg()[0]:.2f} at the end)"]
+    print("\n".join(f"   {line}" for line in lines))
+    OUT.write_text("Printed by `.venv/bin/python -m benchmarks accuracy_quick`:\n\n```text\n"
+                   + "\n".join(lines) + "\n```\n", encoding="utf-8")
 
 
 if __name__ == "__main__":
