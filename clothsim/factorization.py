@@ -60,8 +60,8 @@ CHOLMOD_MODES = ("auto", "simplicial", "supernodal")
 #: and flop counts of the factor, so the model predicts from n. The supernodal factor is
 #: ordered by AMD alone: on the cloth grids it factors about 1.5× faster than CHOLMOD's
 #: default (which also tries METIS) at 513² and 1025², and its solves are as fast.
-MODE_COSTS = {"simplicial": ((1.408e-08, 1.629), (2.328e-08, 1.227)),
-              "supernodal": ((9.375e-07, 1.154), (4.961e-08, 1.164))}
+MODE_COSTS = {"simplicial": ((1.463e-07, 1.425), (3.927e-08, 1.178)),
+              "supernodal": ((1.220e-06, 1.147), (6.738e-08, 1.134))}
 #: Solves a factor is assumed to serve when the run's count is unknown (an API user stepping
 #: a simulation): 600, the scene defaults' run (60 frames × 1 substep × 10 iterations).
 ASSUMED_SOLVES = 600
