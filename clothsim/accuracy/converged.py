@@ -53,7 +53,10 @@ class WarmNewtonSolver(NewtonSolver):
             history (L-BFGS's, then Newton's), converged and the certificate.
         """
         start = problem.initial_guess() if x0 is None else np.asarray(x0, dtype=np.float64)
-        lbfgs = LBFGSSolver(self.model, iterations=WARM_CAP, tolerance=WARM_TOLERANCE)
+        lbfgs = self.__dict__.get("_lbfgs")   # one L-BFGS for the run: its factor is cached
+        if lbfgs is None:
+            lbfgs = self._lbfgs = LBFGSSolver(self.model, iterations=WARM_CAP,
+                                              tolerance=WARM_TOLERANCE)
         with warnings.catch_warnings(), np.errstate(all="ignore"):
             warnings.simplefilter("ignore")
             try:

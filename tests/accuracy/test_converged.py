@@ -70,3 +70,14 @@ def test_the_time_step_study_reuses_the_coarse_reference_run_at_h_over_4():
     assert sorted(runs[:2]) == [h / 8, h / 4] and sorted(runs[2:4]) == [h / 2, h]
     assert len(runs) == 5
     assert len(ts.errors) == 3 and all(math.isfinite(e) and e > 0 for e in ts.errors)
+
+
+def test_a_warm_started_run_factors_its_lbfgs_matrix_once():
+    sim = warm_started(box_factory()("newton", 1 / 30, 100, 1e-10))
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        sim.run(1)
+        lbfgs, factor = sim.solver._lbfgs, sim.solver._lbfgs._cache
+        sim.run(3)
+    assert sim.solver._lbfgs is lbfgs and lbfgs._cache is factor is not None
+    assert lbfgs.analysis_count == 1
