@@ -134,6 +134,40 @@ def _scatter(model: Model, per_spring: np.ndarray) -> np.ndarray:
     return out
 
 
+def spring_hessian_blocks(model: Model, x: np.ndarray, *, definite: bool = True) -> np.ndarray:
+    """Each spring's 3 × 3 Hessian block H_i of :func:`spring_energy` (see
+    :func:`spring_hessian`, which places ±H_i; :class:`clothsim.solvers.hessian.FreeHessian`
+    does too, in its fixed pattern).
+
+    Parameters
+    ----------
+    model : Model
+        Springs (a_i, b_i, k_i [N/m], r_i [m]).
+    x : ndarray, shape (n, 3)
+        Positions [m].
+    definite : bool, default True
+        Clamp compressed springs' transverse factor 1 − r/l at 0.
+
+    Returns
+    -------
+    ndarray, shape (s, 3, 3)
+        H_i = k_i [u uᵀ + (1 − r_i/l_i)(I − u uᵀ)] [N/m]; k_i I where l_i = 0.
+    """
+    a, b = model.springs.spring_vertices.T
+    k, r = model.springs.spring_stiffness, model.springs.spring_rest_length
+    p = x[a] - x[b]
+    length = np.sqrt(np.einsum("ij,ij->i", p, p))
+    safe = np.where(length > 0, length, 1.0)
+    u = p / safe[:, None]
+    c = np.where(length > 0, 1.0 - r / safe, 1.0)
+    if definite:
+        c = np.maximum(c, 0.0)
+    uu = u[:, :, None] * u[:, None, :]
+    H = k[:, None, None] * (uu + c[:, None, None] * (np.eye(3)[None] - uu))
+    H[length == 0] = k[length == 0, None, None] * np.eye(3)   # r/l undefined: use k I
+    return H
+
+
 def spring_hessian(model: Model, x: np.ndarray, *, definite: bool = True) -> sp.csr_matrix:
     """Hessian of :func:`spring_energy`, shape (3n, 3n), interleaved layout.
 
@@ -158,18 +192,7 @@ def spring_hessian(model: Model, x: np.ndarray, *, definite: bool = True) -> sp.
     """
     n = model.vertex_count
     a, b = model.springs.spring_vertices.T
-    k, r = model.springs.spring_stiffness, model.springs.spring_rest_length
-    p = spring_vectors(model, x)
-    length = np.linalg.norm(p, axis=1)
-    safe = np.where(length > 0, length, 1.0)
-    u = p / safe[:, None]
-    c = np.where(length > 0, 1.0 - r / safe, 1.0)
-    if definite:
-        c = np.maximum(c, 0.0)
-    uu = u[:, :, None] * u[:, None, :]
-    eye = np.eye(3)[None]
-    H = k[:, None, None] * (uu + c[:, None, None] * (eye - uu))
-    H[length == 0] = k[length == 0, None, None] * eye  # r/l undefined: use k I
+    H = spring_hessian_blocks(model, x, definite=definite)
     ri, ci = np.meshgrid(np.arange(3), np.arange(3), indexing="ij")
     blocks = [(a, a, H), (b, b, H), (a, b, -H), (b, a, -H)]
     rows = np.concatenate([(3 * i[:, None, None] + ri).ravel() for i, _, _ in blocks])

@@ -13,6 +13,7 @@ from __future__ import annotations
 import numpy as np
 import scipy.sparse as sp
 
+from ..energy import spring_hessian_blocks
 from ..model import Model
 from ..problem import StepProblem
 
@@ -82,18 +83,7 @@ class FreeHessian:
         if self._key != free.tobytes():
             self._setup(free)
         model = self.model
-        a, b = model.springs.spring_vertices.T
-        k, r = model.springs.spring_stiffness, model.springs.spring_rest_length
-        p = x[a] - x[b]
-        length = np.sqrt(np.einsum("ij,ij->i", p, p))
-        safe = np.where(length > 0, length, 1.0)
-        u = p / safe[:, None]
-        c = np.where(length > 0, 1.0 - r / safe, 1.0)
-        if definite:
-            c = np.maximum(c, 0.0)
-        uu = u[:, :, None] * u[:, None, :]
-        H = k[:, None, None] * (uu + c[:, None, None] * (np.eye(3)[None] - uu))
-        H[length == 0] = k[length == 0, None, None] * np.eye(3)
+        H = spring_hessian_blocks(model, x, definite=definite)
         H *= problem.h ** 2
         vals = np.concatenate([H.ravel(), H.ravel(), -H.ravel(), -H.ravel()])[self._valid]
         data = np.bincount(self._positions, weights=vals,
