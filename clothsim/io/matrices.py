@@ -11,6 +11,18 @@ from ..errors import InputError
 from .common import is_number, refuse_special
 
 
+def _ascii_lines(path, what: str) -> list[str]:
+    """The lines of an ASCII text file; a one-line InputError saying ``what`` it is not
+    (with the first non-ASCII byte) or why it cannot be read."""
+    try:
+        return Path(path).read_bytes().decode("ascii").splitlines()
+    except UnicodeDecodeError as exc:
+        raise InputError(f"{path}: {what}: byte {exc.start} is not ASCII") from None
+    except (OSError, MemoryError) as exc:
+        raise InputError(f"{path}: cannot read ({getattr(exc, 'strerror', None) or exc})"
+                         ) from None
+
+
 def write_matrix(path, A) -> None:
     """Write a sparse or dense matrix in Matrix Market format, float64 round-trip exact.
 
@@ -61,15 +73,7 @@ def read_matrix(path):
     refuse_special(path)
     if not path.is_file():
         raise InputError(f"matrix: file not found: {path}")
-    try:
-        text = path.read_bytes().decode("ascii")
-    except UnicodeDecodeError as exc:
-        raise InputError(f"{path}: not a Matrix Market file: byte {exc.start} is not "
-                         "ASCII") from None
-    except (OSError, MemoryError) as exc:
-        raise InputError(f"{path}: cannot read ({getattr(exc, 'strerror', None) or exc})"
-                         ) from None
-    lines = text.splitlines()
+    lines = _ascii_lines(path, "not a Matrix Market file")
     head = lines[0].split() if lines else []
     if (len(head) != 5 or head[0].lower() != "%%matrixmarket" or head[1].lower() != "matrix"
             or head[2].lower() not in ("coordinate", "array")
@@ -164,14 +168,7 @@ def read_vector(path) -> np.ndarray:
     refuse_special(path)
     if not Path(path).is_file():
         raise InputError(f"vector: file not found: {path}")
-    try:
-        lines = Path(path).read_text(encoding="ascii").splitlines()
-    except UnicodeDecodeError as exc:
-        raise InputError(f"{path}: not a text file of numbers: byte {exc.start} is not "
-                         "ASCII") from None
-    except (OSError, MemoryError) as exc:
-        raise InputError(f"{path}: cannot read ({getattr(exc, 'strerror', None) or exc})"
-                         ) from None
+    lines = _ascii_lines(path, "not a text file of numbers")
     values = []
     for n, line in enumerate(lines, start=1):
         for token in line.split("#", 1)[0].split():
