@@ -5,6 +5,13 @@ The counts on docs/performance.md and docs/accuracy.md come from files that
 rho-sensitivity.md, paper.md). Timings move with the machine; iteration counts do not.
 This test recomputes each documented count with the benchmark's own functions and fails,
 naming the file and the count, when the code no longer gives it: then re-run the benchmark.
+
+Counts are compared exactly, except Anderson's and L-BFGS's (:data:`ROUNDING_BAND`): their
+least-squares and line-search paths follow the rounding of the BLAS build, and on a slowly
+converging step the first iteration under a level moves with it (the curtain's Anderson
+count to 1e-6 is 428 with one OpenBLAS kernel and 498 with another, numpy 2.4.6). A
+change of the code that matters moves counts by far more (5092 → 461 after the fused
+iteration).
 """
 
 from __future__ import annotations
@@ -20,6 +27,22 @@ from clothsim.solvers import estimate_spectral_radius
 
 DATA = Path(__file__).resolve().parents[1] / "docs" / "data"
 pytestmark = pytest.mark.slow
+ROUNDING_BAND = {"anderson": 0.2, "lbfgs": 0.2}
+"""Relative band of the counts that follow the BLAS build's rounding (module text)."""
+
+
+def same_counts(got: dict, doc: dict) -> bool:
+    """Documented and recomputed counts agree: exactly, or within :data:`ROUNDING_BAND`."""
+    if set(got) != set(doc):
+        return False
+    for method, d in doc.items():
+        g, band = got[method], ROUNDING_BAND.get(method, 0.0)
+        if g is None or d is None:
+            if g != d:
+                return False
+        elif abs(g - d) > band * d:
+            return False
+    return True
 
 
 def _read(name: str) -> str:
@@ -82,6 +105,14 @@ def buckling():
     return model, problem, ref, estimate_spectral_radius(model, problem), counts
 
 
+def test_the_band_is_narrow_and_only_for_rounding_sensitive_methods():
+    doc = {"local-global": 29745, "chebyshev": 1694, "anderson": 428, "lbfgs": None}
+    assert same_counts(dict(doc, anderson=498), doc)
+    assert not same_counts(dict(doc, anderson=600), doc)
+    assert not same_counts(dict(doc, chebyshev=1695), doc)
+    assert not same_counts(dict(doc, lbfgs=10), doc)
+
+
 def test_the_documents_hold_counts():
     acc = documented_accelerated()
     assert set(acc) == set(bench.STEPS) and all(set(v) == set(bench.METHODS)
@@ -100,7 +131,8 @@ def test_accelerated_counts_reproduce_on_the_buckling_step(buckling):
     got = bench.iteration_counts(model, problem, ref.x, level, rho,
                                  methods=[m for m in bench.METHODS if m != "local-global"])
     got["local-global"] = counts["local-global"][level]
-    assert got == doc, f"docs/data/accelerated.md (buckling): documented {doc}, now {got}"
+    assert same_counts(got, doc), (
+        f"docs/data/accelerated.md (buckling): documented {doc}, now {got}")
 
 
 def test_rho_sensitivity_reproduces(buckling):
@@ -128,4 +160,5 @@ def test_accelerated_counts_reproduce_on_the_curtain_step():
     rho = estimate_spectral_radius(model, problem)
     doc = documented_accelerated()["curtain"]
     got = bench.iteration_counts(model, problem, ref.x, bench.STEPS["curtain"][3], rho)
-    assert got == doc, f"docs/data/accelerated.md (curtain): documented {doc}, now {got}"
+    assert same_counts(got, doc), (
+        f"docs/data/accelerated.md (curtain): documented {doc}, now {got}")

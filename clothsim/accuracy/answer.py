@@ -87,9 +87,10 @@ def answer_table(table: Sequence[Row], *, levels: Sequence[float] = ACCURACY_LEV
             if r is None:
                 lines.append(f"| {level:.0e} | {name} | no setting reaches this | | |")
             else:
+                iqr = r.seconds_per_step_iqr
+                spread = f"{1e3 * iqr:.2g}" if math.isfinite(iqr) else "(1 repeat)"
                 lines.append(f"| {level:.0e} | {name} | {r.setting} | "
-                             f"{1e3 * r.seconds_per_step_median:.3g} | "
-                             f"{1e3 * r.seconds_per_step_iqr:.2g} |")
+                             f"{1e3 * r.seconds_per_step_median:.3g} | {spread} |")
     return "\n".join(lines)
 
 

@@ -1,10 +1,10 @@
 """The study's phases: a tqdm progress bar each (on stderr) and their wall and CPU seconds.
 
 :func:`run_accuracy <clothsim.accuracy.command.run_accuracy>` opens one phase at a time
-(:data:`PHASES`: recording, references, limits, errors, timing, time-step study,
-trajectories) with :meth:`Phases.phase`; the loops inside call :func:`advance` once per
-unit of work (a step, a solve, a frame), which moves the open phase's bar and does nothing
-when no phase is open (a library call of one function). The bars go to stderr and are
+(:data:`PHASES`: recording, references, limits, errors, time-step study, trajectories,
+timing) with :meth:`Phases.phase`; the loops inside call :func:`advance` once per unit of
+work (a step, a solve, a frame), which moves the open phase's bar and does nothing when no
+phase is open (a library call of one function). The bars go to stderr and are
 off when stderr is not a terminal or ``TQDM_DISABLE`` is set (the CLI sets it then,
 :mod:`clothsim.cli.logs`). The seconds per phase land in ``accuracy.json``
 (``phase_seconds``), where ``benchmarks/accuracy_full.py`` reads them.
@@ -20,8 +20,8 @@ from contextlib import contextmanager
 
 log = logging.getLogger(__name__)
 
-PHASES = ("recording", "references", "limits", "errors", "timing", "time-step study",
-          "trajectories")
+PHASES = ("recording", "references", "limits", "errors", "time-step study", "trajectories",
+          "timing")
 """The phases of a full study, in the order they run."""
 
 _current = None
@@ -37,6 +37,19 @@ def advance(n: int = 1) -> None:
     """
     if _current is not None:
         _current.update(n)
+
+
+def shrink(n: int) -> None:
+    """Lower the open phase's expected total by ``n`` units (work found unnecessary).
+
+    Parameters
+    ----------
+    n : int
+        Units of work the phase will not do after all.
+    """
+    if _current is not None and _current.total is not None and n:
+        _current.total = max(_current.n, _current.total - n)
+        _current.refresh()
 
 
 def _isatty(stream) -> bool:

@@ -2,7 +2,10 @@
 
 :func:`time_configurations` solves every measured step with every configuration, ``repeats``
 times, interleaved (repeat 1 of every configuration, then repeat 2, …), so a slow phase of
-a shared machine hits all configurations alike. BLAS/OpenMP threads are fixed with
+a shared machine hits all configurations alike. Given the errors the answers use, it
+repeats only the configurations an answer could choose: after the first repeat, one that
+another setting beats in every error at half its time or less is not timed again
+(:mod:`.dominance`). BLAS/OpenMP threads are fixed with
 threadpoolctl during measurement. The cached factorization of M + h² L is built before
 timing (a one-off cost, reported apart by :func:`one_off_costs`, as is ρ estimation for
 Chebyshev). :func:`machine_info` is written next to the CSV.
@@ -22,7 +25,8 @@ import numpy as np
 
 from ..model import Model
 from ..solvers import LocalGlobalSolver, estimate_spectral_radius
-from .phases import advance
+from .dominance import dominated
+from .phases import advance, shrink
 from .study import BLOW_UPS, ConfigResult, StudyStep
 
 
@@ -36,11 +40,15 @@ def _limited_threads(threads: int):
 
 def time_configurations(model: Model, steps: Sequence[StudyStep],
                         results: Sequence[ConfigResult], *, repeats: int = 5,
-                        threads: int = 1) -> None:
-    """Fill each result's ``seconds`` with ``repeats`` per-step wall times [s].
+                        threads: int = 1,
+                        errors: Sequence[Sequence[float]] | None = None,
+                        levels=None) -> set[int]:
+    """Fill each result's ``seconds`` with up to ``repeats`` per-step wall times [s].
 
     Each repeat solves all measured steps with one configuration and records the mean
-    seconds per step; configurations are interleaved within each repeat.
+    seconds per step; configurations are interleaved within each repeat. With ``errors``,
+    repeats after the first skip the configurations no answer can choose
+    (:func:`~.dominance.dominated`); they keep their one time.
 
     Parameters
     ----------
@@ -54,15 +62,22 @@ def time_configurations(model: Model, steps: Sequence[StudyStep],
         Interleaved repeats.
     threads : int, default 1
         BLAS threads during timing.
+    errors : sequence of sequence of float, optional
+        Per result, the errors the answers read (same order for all; NaN: not measured);
+        None times every configuration ``repeats`` times.
+    levels : sequence, optional
+        Per error, the targets the answers ask about (:func:`~.dominance.dominated`).
 
     Returns
     -------
-    None
-        ``results`` are changed in place.
+    set of int
+        Indices of the results timed once because they are dominated (empty without
+        ``errors``); ``results`` are changed in place.
     """
     measured = [s for s in steps if s.measured]
     if not measured:
-        return
+        return set()
+    skipped: set[int] = set()
     solvers = [r.config.solver(model) for r in results]
     broken = set()
     with warnings.catch_warnings(), _limited_threads(threads), np.errstate(all="ignore"):
@@ -76,9 +91,15 @@ def time_configurations(model: Model, steps: Sequence[StudyStep],
                 broken.add(i)
             finally:
                 solver.iterations, solver.tolerance = its, tol
-        for _ in range(repeats):
+        for repeat in range(repeats):
+            if repeat == 1 and errors is not None:  # only what an answer could choose
+                first = [r.seconds[0] if r.seconds and i not in broken else math.nan
+                         for i, r in enumerate(results)]
+                skipped = dominated([r.config.method for r in results], first, errors,
+                                    levels=levels)
+                shrink(len(skipped) * (repeats - 1))
             for i, (solver, res) in enumerate(zip(solvers, results)):
-                if i in broken or res.diverged:  # a blown-up configuration is not timed
+                if i in broken or res.diverged or i in skipped:  # blown up: not timed
                     continue
                 t0 = time.perf_counter()
                 try:
@@ -92,10 +113,11 @@ def time_configurations(model: Model, steps: Sequence[StudyStep],
     for i in broken:
         results[i].diverged = max(results[i].diverged, 1)
         results[i].seconds.clear()
+    return skipped - broken
 
 
 def median_iqr(seconds: Sequence[float]) -> tuple[float, float]:
-    """(median, inter-quartile range) [s]; NaN when empty.
+    """(median, inter-quartile range) [s]; NaN when empty (the IQR too for one sample).
 
     Parameters
     ----------
@@ -105,10 +127,12 @@ def median_iqr(seconds: Sequence[float]) -> tuple[float, float]:
     Returns
     -------
     tuple of float
-        (median, q3 − q1) [s].
+        (median, q3 − q1) [s]; the IQR is NaN for a single repeat.
     """
     if not len(seconds):
         return math.nan, math.nan
+    if len(seconds) == 1:   # no spread is measured by one repeat
+        return float(seconds[0]), math.nan
     q1, q2, q3 = np.quantile(np.asarray(seconds), [0.25, 0.5, 0.75])
     return float(q2), float(q3 - q1)
 

@@ -132,7 +132,8 @@ def build_parser() -> argparse.ArgumentParser:
     acc.add_argument("--frames", type=count(0, MAX_FRAMES), default=None,
                      help="frames of the recorded run (default: the scene's)")
     acc.add_argument("--repeats", type=count(1, 10_000), default=5,
-                     help="interleaved timing repeats (5)")
+                     help="interleaved timing repeats (5) of every setting an answer "
+                          "could choose (the others: 1)")
     acc.add_argument("--target", type=float, default=None,
                      help="report only this solver-error level (e.g. 1e-6)")
     acc.add_argument("--jobs", type=count(1, 1024), default=1, help="parallel workers (joblib)")
