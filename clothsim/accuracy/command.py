@@ -117,7 +117,8 @@ def run_accuracy(scene, out, *, methods: Sequence[str] = ITERATIVE_METHODS,
     repeats : int
         Interleaved timing repeats (≥ 5 for a referee; fewer only to try things).
     jobs : int
-        Parallel workers for the error measurement (joblib).
+        Parallel workers for the error measurement and the trajectory runs (joblib;
+        the results do not depend on it).
     scheduler : str, optional
         Dask scheduler address (joblib's dask backend).
     target : float, optional
@@ -222,7 +223,7 @@ def _run(scene, out, methods, problems, frames, repeats, jobs, scheduler, target
                        if c.tolerance is not None or c.iterations in TRAJECTORY_BUDGETS)
             with phases.phase("trajectories", ts_frames * runs, "frame"):
                 traj = trajectory_errors(factory, configs, ts.reference, h=h,
-                                         frame_time=frame_time)
+                                         frame_time=frame_time, jobs=jobs)
     table = rows(results, steps, h=h, time_step_error=ts_error, trajectory_errors=traj)
     write_csv(table, out / "accuracy.csv")
     if not nothing:   # last: which settings an answer could choose is known by now

@@ -23,6 +23,7 @@ import numpy as np
 
 from ..solvers import stable_time_step
 from .converged import warm_started
+from .phases import advance
 from .trajectory import (
     SimulationFactory,
     reference_runs,
@@ -171,7 +172,7 @@ TRAJECTORY_BUDGETS = (1, 5, 10, 20)
 
 
 def trajectory_errors(factory: SimulationFactory, configs, reference: np.ndarray, *,
-                      h: float, frame_time: float) -> dict:
+                      h: float, frame_time: float, jobs: int = 1) -> dict:
     """Trajectory error (against ``reference``) of the configurations a user would run
     for a whole trajectory: budgets 1, 5, 10, 20 and every tolerance, at step h.
 
@@ -187,6 +188,9 @@ def trajectory_errors(factory: SimulationFactory, configs, reference: np.ndarray
         Time step [s].
     frame_time : float
         Time between frames [s].
+    jobs : int, default 1
+        Parallel workers (joblib, loky backend), one run each; every run is
+        deterministic, so any ``jobs`` gives the same errors.
 
     Returns
     -------
@@ -195,23 +199,37 @@ def trajectory_errors(factory: SimulationFactory, configs, reference: np.ndarray
         inf for a run that blew up (a non-finite state or force): it is recorded, and the
         other runs go on.
     """
-    from .study import BLOW_UPS
+    chosen = [c for c in configs
+              if c.tolerance is not None or c.iterations in TRAJECTORY_BUDGETS]
+    if jobs == 1 or len(chosen) < 2:
+        return {c: _trajectory_error(factory, c, reference, h, frame_time) for c in chosen}
+    import joblib
 
     frames = len(reference) - 1
     out = {}
+    runs = joblib.Parallel(n_jobs=jobs, backend="loky", return_as="generator")(
+        joblib.delayed(_trajectory_error)(factory, c, reference, h, frame_time)
+        for c in chosen)
+    for c, err in zip(chosen, runs):
+        out[c] = err
+        advance(frames)   # the workers' frames, in the parent's progress bar
+    return out
+
+
+def _trajectory_error(factory, c, reference, h, frame_time) -> float:
+    """One configuration's trajectory error (inf when it blew up)."""
+    from .study import BLOW_UPS
+
+    frames = len(reference) - 1
     with warnings.catch_warnings(), np.errstate(all="ignore"):
         warnings.simplefilter("ignore")
-        for c in configs:
-            if c.tolerance is None and c.iterations not in TRAJECTORY_BUDGETS:
-                continue
-            try:
-                sim = factory(c.method, h, c.iterations, c.tolerance)
-                for name, value in c.options:  # the study's settings, e.g. Chebyshev's ρ
-                    setattr(sim.solver, name, value)
-                err = trajectory_error(run_trajectory(sim, frames=frames,
-                                                      frame_time=frame_time).frames, reference)
-            except BLOW_UPS as exc:
-                log.warning("%s: trajectory diverged: %s", c.label, exc)
-                err = math.inf
-            out[c] = err if math.isfinite(err) else math.inf
-    return out
+        try:
+            sim = factory(c.method, h, c.iterations, c.tolerance)
+            for name, value in c.options:  # the study's settings, e.g. Chebyshev's ρ
+                setattr(sim.solver, name, value)
+            err = trajectory_error(run_trajectory(sim, frames=frames,
+                                                  frame_time=frame_time).frames, reference)
+        except BLOW_UPS as exc:
+            log.warning("%s: trajectory diverged: %s", c.label, exc)
+            err = math.inf
+    return err if math.isfinite(err) else math.inf

@@ -136,7 +136,9 @@ def build_parser() -> argparse.ArgumentParser:
                           "could choose (the others: 1)")
     acc.add_argument("--target", type=float, default=None,
                      help="report only this solver-error level (e.g. 1e-6)")
-    acc.add_argument("--jobs", type=count(1, 1024), default=1, help="parallel workers (joblib)")
+    acc.add_argument("--jobs", type=count(1, 1024), default=1,
+                     help="parallel workers for the errors and the trajectory runs "
+                          "(joblib; same results for any number)")
     acc.add_argument("--scheduler", default=None, metavar="ADDRESS",
                      help="Dask scheduler address (joblib's dask backend)")
     acc.add_argument("--no-time-steps", action="store_true",

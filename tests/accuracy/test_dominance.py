@@ -131,3 +131,29 @@ def test_a_single_repeat_study_says_nothing_about_domination(tmp_path):
     text = study(tmp_path, repeats=1)
     assert "timed once" not in text
     assert all(r["repeats"] == "1" for r in read(tmp_path / "accuracy.csv"))
+
+
+def test_trajectory_errors_are_the_same_for_any_number_of_jobs():
+    """The trajectory runs in parallel workers give the serial runs' errors, bit for bit."""
+    import warnings
+
+    from clothsim.accuracy import scene_factory
+    from clothsim.accuracy.study import default_configurations
+    from clothsim.accuracy.timestep import time_step_study, trajectory_errors
+    from clothsim.scene import Scene
+
+    from .test_study import TINY
+
+    factory, model, frame_time = scene_factory(Scene.from_dict(TINY))
+    h = frame_time
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        ts = time_step_study(factory, frame_time=frame_time, frames=4, time_steps=(h, h / 2),
+                             reference_h=h / 8)
+        configs = default_configurations(("local-global", "anderson"), budgets=(1, 5, 50),
+                                         tolerances=(1e-6,))
+        serial = trajectory_errors(factory, configs, ts.reference, h=h, frame_time=frame_time)
+        parallel = trajectory_errors(factory, configs, ts.reference, h=h,
+                                     frame_time=frame_time, jobs=2)
+    assert len(serial) == 6 and serial == parallel     # budget 50 is not a trajectory budget
+    assert all(0 < e < math.inf for e in serial.values())
