@@ -117,8 +117,8 @@ def run_accuracy(scene, out, *, methods: Sequence[str] = ITERATIVE_METHODS,
     repeats : int
         Interleaved timing repeats (≥ 5 for a referee; fewer only to try things).
     jobs : int
-        Parallel workers for the error measurement and the trajectory runs (joblib;
-        the results do not depend on it).
+        Parallel workers for the references, the methods' own limits, the error
+        measurement and the trajectory runs (joblib; the results do not depend on it).
     scheduler : str, optional
         Dask scheduler address (joblib's dask backend).
     target : float, optional
@@ -185,7 +185,7 @@ def _run(scene, out, methods, problems, frames, repeats, jobs, scheduler, target
                                        count=problems)
     save_problems(recorded, out / "problems.npz")
     with phases.phase("references", len(recorded), "step"):
-        steps = prepare_steps(model, recorded)
+        steps = prepare_steps(model, recorded, jobs=jobs)
     options = {}
     if "chebyshev" in methods:
         options["chebyshev"] = {"rho": chebyshev_rho(model, steps)}
@@ -194,7 +194,8 @@ def _run(scene, out, methods, problems, frames, repeats, jobs, scheduler, target
                                      options=options, cap=cap)
     measured = sum(1 for s in steps if s.measured)
     with phases.phase("limits", measured * len(methods), "limit"):
-        method_limits(model, steps, methods, options=options, cap=cap)  # may add minima
+        method_limits(model, steps, methods, options=options, cap=cap,  # may add minima
+                      jobs=jobs)
     notes = []
     nothing = not any(s.measured for s in steps)
     if nothing:  # early stop: no step can be measured, so nothing below would be used

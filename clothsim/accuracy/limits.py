@@ -38,6 +38,7 @@ from ..model import Model
 from ..solvers import NewtonSolver, make_solver
 from ..solvers.descent import objective_difference
 from .blowups import BLOW_UPS
+from .parallel import map_jobs
 from .phases import advance
 from .reference import REFERENCE_ITERATIONS, SAME_POINT
 
@@ -126,7 +127,7 @@ def _merge_minimum(model: Model, problem, ref, x: np.ndarray) -> bool:
 
 def method_limits(model: Model, steps: Sequence, methods: Sequence[str], *,
                   options: dict | None = None, cap: int = LIMIT_CAP,
-                  backend: str = "auto") -> None:
+                  backend: str = "auto", jobs: int = 1) -> None:
     """Each method's own limit on every measured step (module text), in place.
 
     Fills ``step.limits`` (method → :class:`MethodLimit`), adds every certified limit to
@@ -147,7 +148,16 @@ def method_limits(model: Model, steps: Sequence, methods: Sequence[str], *,
         Iteration cap of a method's run.
     backend : {"auto", "cholmod", "splu"}
         Factorization backend.
+    jobs : int, default 1
+        Parallel workers for the methods' own runs (:func:`~.parallel.map_jobs`; the
+        limits are merged in order afterwards, so the result does not depend on it).
     """
+    def known(s, m):   # the reference's own runs give Newton's and local/global's limits
+        return m == "newton" or (m == "local-global" and s.reference.local_global is not None)
+
+    runs = [(model, s.step.problem, m, dict((options or {}).get(m, {})), cap, backend)
+            for s in steps if s.measured for m in methods if not known(s, m)]
+    own = iter(map_jobs(_own_limit, runs, jobs=jobs, each=lambda _: advance()))
     for s in steps:
         if not s.measured:
             continue
@@ -156,15 +166,15 @@ def method_limits(model: Model, steps: Sequence, methods: Sequence[str], *,
         for m in methods:
             if m == "newton":
                 lim = MethodLimit(m, ref.x, bool(ref.at_floor), bool(ref.certified))
-            elif m == "local-global" and ref.local_global is not None:
+                advance()
+            elif known(s, m):
                 lg = ref.local_global
                 lim = MethodLimit(m, lg.x, bool(ref.local_global_converged),
                                   bool(lg.certified))
+                advance()
             else:
-                lim = _own_limit(model, problem, m, dict((options or {}).get(m, {})), cap,
-                                 backend)
+                lim = next(own)
             limits[m] = lim
-            advance()
             if lim.certified and lim.x is not None:
                 _merge_minimum(model, problem, ref, lim.x)
         if s.kind == "unique" and ref.minima > 1:

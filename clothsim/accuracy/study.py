@@ -40,6 +40,7 @@ from ..model import Model
 from ..solvers import estimate_spectral_radius, make_solver
 from .blowups import BLOW_UPS  # noqa: F401  (re-exported: timing, timestep)
 from .limits import limit_error
+from .parallel import map_jobs
 from .phases import advance
 from .problems import RecordedStep, classify
 from .reference import CertifiedReference, certified_reference
@@ -185,7 +186,7 @@ class ConfigResult:
 
 
 def prepare_steps(model: Model, recorded: Sequence[RecordedStep], *,
-                  backend: str = "auto") -> list[StudyStep]:
+                  backend: str = "auto", jobs: int = 1) -> list[StudyStep]:
     """Classify each recorded step and certify the reference of those worth measuring.
 
     Parameters
@@ -196,30 +197,38 @@ def prepare_steps(model: Model, recorded: Sequence[RecordedStep], *,
         Steps recorded from a run (:mod:`clothsim.accuracy.problems`).
     backend : {"auto", "cholmod", "splu"}
         Factorization backend.
+    jobs : int, default 1
+        Parallel workers, one step each (:func:`~.parallel.map_jobs`; same result).
 
     Returns
     -------
     list of StudyStep
         One per recorded step, in order.
     """
-    out = []
-    for rec in recorded:
-        ref = certified_reference(model, rec.problem, backend=backend)
-        kind, ratio, err1 = classify(model, rec.problem, ref.x)
-        if kind == "measured":
-            if not ref.certified:
-                kind = ("saddle" if ref.at_floor and not ref.positive_definite
-                        else "reference-failed")
-            else:
-                kind = "several-minima" if ref.two_minima else "unique"
-        rho = (estimate_spectral_radius(model, rec.problem, backend=backend)
-               if kind in MEASURED else math.nan)
-        out.append(StudyStep(rec, kind, ratio, err1, ref if kind != "at-rest" else None, rho))
-        advance()
-        log.info("step %d: %s (|grad g(y)|/floor %.2e, one-iteration error %.2e, "
-                 "residual %.1e, min eig %.3g, uncertainty %.1e, rho %.4f)", rec.index, kind,
-                 ratio, err1, ref.residual, ref.min_eigenvalue, ref.uncertainty, rho)
+    out = map_jobs(_prepare_one, [(model, rec, backend) for rec in recorded], jobs=jobs,
+                   each=lambda _: advance())
+    for s in out:
+        ref = s.reference
+        log.info("step %d: %s (|grad g(y)|/floor %.2e, one-iteration error %.2e%s, rho %.4f)",
+                 s.step.index, s.kind, s.rest_ratio, s.one_iteration_error,
+                 "" if ref is None else f", residual {ref.residual:.1e}, min eig "
+                 f"{ref.min_eigenvalue:.3g}, uncertainty {ref.uncertainty:.1e}", s.rho)
     return out
+
+
+def _prepare_one(model: Model, rec: RecordedStep, backend: str) -> StudyStep:
+    """One recorded step, classified, with its certified reference and ρ."""
+    ref = certified_reference(model, rec.problem, backend=backend)
+    kind, ratio, err1 = classify(model, rec.problem, ref.x)
+    if kind == "measured":
+        if not ref.certified:
+            kind = ("saddle" if ref.at_floor and not ref.positive_definite
+                    else "reference-failed")
+        else:
+            kind = "several-minima" if ref.two_minima else "unique"
+    rho = (estimate_spectral_radius(model, rec.problem, backend=backend)
+           if kind in MEASURED else math.nan)
+    return StudyStep(rec, kind, ratio, err1, ref if kind != "at-rest" else None, rho)
 
 
 def default_configurations(methods: Sequence[str], *, budgets: Sequence[int] = BUDGETS,
@@ -327,15 +336,9 @@ def measure(model: Model, steps: Sequence[StudyStep], configs: Sequence[Configur
     """
     measured = [s for s in steps if s.measured]
     unique = np.array([s.kind == "unique" for s in measured], dtype=bool)
-    tasks = [(c, s) for c in configs for s in measured]
-    if jobs == 1 and scheduler is None:
-        results = []
-        for c, s in tasks:
-            results.append(_solve_one(model, c, s))
-            advance()
-    else:
-        results = _parallel(model, tasks, jobs, scheduler)
-        advance(len(tasks))
+    tasks = [(model, c, s) for c in configs for s in measured]
+    results = map_jobs(_solve_one, tasks, jobs=jobs, scheduler=scheduler,
+                       each=lambda _: advance())
     out, i = [], 0
     for c in configs:
         chunk = results[i:i + len(measured)]
@@ -350,18 +353,6 @@ def measure(model: Model, steps: Sequence[StudyStep], configs: Sequence[Configur
                                 limit_errors=np.array([r[5] for r in chunk], dtype=np.float64),
                                 residuals=np.array([r[6] for r in chunk], dtype=np.float64)))
     return out
-
-
-def _parallel(model, tasks, jobs, scheduler):
-    import joblib
-
-    if scheduler is not None:
-        from dask.distributed import Client  # only with --scheduler
-
-        with Client(scheduler), joblib.parallel_backend("dask"):
-            return joblib.Parallel()(joblib.delayed(_solve_one)(model, c, s) for c, s in tasks)
-    return joblib.Parallel(n_jobs=jobs, backend="loky")(
-        joblib.delayed(_solve_one)(model, c, s) for c, s in tasks)
 
 
 def quantiles(values: np.ndarray) -> tuple[float, float, float]:

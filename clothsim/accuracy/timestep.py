@@ -23,6 +23,7 @@ import numpy as np
 
 from ..solvers import stable_time_step
 from .converged import warm_started
+from .parallel import map_jobs
 from .phases import advance
 from .trajectory import (
     SimulationFactory,
@@ -201,19 +202,11 @@ def trajectory_errors(factory: SimulationFactory, configs, reference: np.ndarray
     """
     chosen = [c for c in configs
               if c.tolerance is not None or c.iterations in TRAJECTORY_BUDGETS]
-    if jobs == 1 or len(chosen) < 2:
-        return {c: _trajectory_error(factory, c, reference, h, frame_time) for c in chosen}
-    import joblib
-
     frames = len(reference) - 1
-    out = {}
-    runs = joblib.Parallel(n_jobs=jobs, backend="loky", return_as="generator")(
-        joblib.delayed(_trajectory_error)(factory, c, reference, h, frame_time)
-        for c in chosen)
-    for c, err in zip(chosen, runs):
-        out[c] = err
-        advance(frames)   # the workers' frames, in the parent's progress bar
-    return out
+    errs = map_jobs(_trajectory_error,
+                    [(factory, c, reference, h, frame_time) for c in chosen], jobs=jobs,
+                    each=None if jobs == 1 else lambda _: advance(frames))
+    return dict(zip(chosen, errs))
 
 
 def _trajectory_error(factory, c, reference, h, frame_time) -> float:
