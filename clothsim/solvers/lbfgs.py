@@ -24,6 +24,7 @@ J. Nocedal, S. J. Wright. Numerical Optimization, 2nd ed., Springer 2006, Alg. 7
 
 from __future__ import annotations
 
+import functools
 import math
 from collections.abc import Iterator
 
@@ -154,6 +155,7 @@ class _Pairs:
         self.T = np.zeros((size, length))
         self.ST = np.zeros((size, size))
         self.rho = np.zeros(size)
+        self._rho = [0.0] * size       # the same, as Python floats for the loops
         self.order: list[int] = []     # slots, oldest first
         self._loops = ([], [])         # per slot: the newer pairs, the older pairs
         self._q, self._v = np.empty(length), np.empty(2 * length)
@@ -167,10 +169,9 @@ class _Pairs:
         else:
             slot = self.order.pop(0)
         self.order.append(slot)
-        order = self.order
-        self._loops = ([(i, order[len(order) - n:]) for n, i in enumerate(reversed(order))],
-                       [(i, order[:n]) for n, i in enumerate(order)])
+        self._loops = _loops(tuple(self.order))
         self.S[slot], self.T[slot], self.rho[slot], self.U[slot] = s, t, rho, u
+        self._rho[slot] = float(rho)
         self.ST[slot, :] = ts
         self.ST[:, slot] = self.S @ t
 
@@ -181,7 +182,7 @@ class _Pairs:
         if not order:
             return solve(gT), (gT, None, None)
         g = gT.reshape(-1)
-        sg, ST, rho = (self.S @ g).tolist(), self.ST.tolist(), self.rho.tolist()
+        sg, ST, rho = (self.S @ g).tolist(), self.ST.tolist(), self._rho
         newest_first, oldest_first = self._loops
         alpha = [0.0] * self.size
         for i, newer in newest_first:
@@ -221,3 +222,13 @@ class _Pairs:
         if coef is None:
             return np.zeros(self.size)
         return tr + coef @ self.ST
+
+
+@functools.lru_cache(maxsize=1024)
+def _loops(order: tuple) -> tuple:
+    """Per kept slot (oldest first in ``order``), the slots the two loops read: newest first
+    with the newer pairs, oldest first with the older ones. A window of m pairs meets at
+    most 2m orders (filling, then rotating), so they are built once and cached."""
+    newest_first = tuple((i, order[len(order) - n:]) for n, i in enumerate(reversed(order)))
+    oldest_first = tuple((i, order[:n]) for n, i in enumerate(order))
+    return newest_first, oldest_first
