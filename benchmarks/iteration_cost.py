@@ -16,6 +16,7 @@ from __future__ import annotations
 import subprocess
 import time
 import warnings
+from pathlib import Path
 
 import numpy as np
 from threadpoolctl import threadpool_limits
@@ -79,20 +80,41 @@ def measure(n: int, repeats: int = REPEATS) -> dict:
             "cpu_ratios": {m: float(np.median(t[m][:, 1] / base[:, 1])) for m in METHODS}}
 
 
+TARGETS = {"chebyshev": 1.15, "anderson": 2.0, "lbfgs": 2.0}
+"""Issue 20's per-iteration targets (ratio to local/global)."""
+OUT = ROOT / "docs" / "data" / "iteration-cost.md"
+
+
 def main() -> list[dict]:
     import sksparse.cholmod  # noqa: F401  (load CHOLMOD's OpenMP and BLAS: limited too)
 
-    print(f"per-iteration cost / local/global's, wall [CPU] (median of {REPEATS} "
-          f"interleaved repeats of {ITERATIONS} iterations, 1 thread), commit {commit()}")
-    results = []
+    load = Path("/proc/loadavg").read_text().split()[0] if Path("/proc/loadavg").exists() \
+        else "unknown"
+    head = (f"per-iteration cost / local/global's, wall [CPU] (median of {REPEATS} "
+            f"interleaved repeats of {ITERATIONS} iterations, 1 thread), commit {commit()}, "
+            f"load average {load} at the start")
+    print(head)
+    lines, verdicts, results = [head], [], []
     with threadpool_limits(1):
         for n in SIZES:
             res = measure(n)
             results.append(res)
             ratios = "  ".join(f"{m} {res['ratios'][m]:.2f} [{res['cpu_ratios'][m]:.2f}]"
                                for m in METHODS[1:])
-            print(f"  {n}x{n}: local/global {1e6 * res['local-global_s']:.0f} us/iteration; "
-                  f"{ratios}", flush=True)
+            line = (f"  {n}x{n}: local/global {1e6 * res['local-global_s']:.0f} us/iteration; "
+                    f"{ratios}")
+            print(line, flush=True)
+            lines.append(line)
+            for m, target in TARGETS.items():
+                wall = res["ratios"][m]
+                verdicts.append(f"  {n}x{n} {m} <= {target:g}: "
+                                f"{'met' if wall <= target else 'missed'} ({wall:.2f})")
+    lines += ["targets (issue 20), on the wall-time ratio:", *verdicts]
+    for v in verdicts:
+        print(v)
+    OUT.write_text("Printed by `.venv/bin/python -m benchmarks iteration_cost`:\n\n```text\n"
+                   + "\n".join(lines) + "\n```\n", encoding="utf-8")
+    print(f"   written to {OUT.relative_to(ROOT)}")
     return results
 
 

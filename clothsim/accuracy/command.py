@@ -118,7 +118,8 @@ def run_accuracy(scene, out, *, methods: Sequence[str] = ITERATIVE_METHODS,
         Interleaved timing repeats (≥ 5 for a referee; fewer only to try things).
     jobs : int
         Parallel workers for the references, the methods' own limits, the error
-        measurement and the trajectory runs (joblib; the results do not depend on it).
+        measurement, the time-step study's runs and the trajectory runs (joblib; the
+        results do not depend on it).
     scheduler : str, optional
         Dask scheduler address (joblib's dask backend).
     target : float, optional
@@ -215,7 +216,7 @@ def _run(scene, out, methods, problems, frames, repeats, jobs, scheduler, target
         runs = 2 + sum(1 for x in ts_hs if not math.isclose(x, h / 4))  # h/4 is reused
         with phases.phase("time-step study", ts_frames * runs, "frame"):
             ts = time_step_study(factory, frame_time=frame_time, frames=ts_frames,
-                                 time_steps=ts_hs, reference_h=h / 8)
+                                 time_steps=ts_hs, reference_h=h / 8, jobs=jobs)
         # no contact-free window: the CSV cell stays empty
         ts_error = ts.errors[ts.time_steps.index(h)] if ts.window is not None else None
         notes.append(ts.note)

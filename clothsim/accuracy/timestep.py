@@ -27,7 +27,6 @@ from .parallel import map_jobs
 from .phases import advance
 from .trajectory import (
     SimulationFactory,
-    reference_runs,
     run_trajectory,
     trajectory_error,
 )
@@ -104,8 +103,8 @@ def contact_free_window(contact: np.ndarray) -> tuple[int, int] | None:
 
 
 def time_step_study(factory: SimulationFactory, *, frame_time: float, frames: int,
-                    time_steps: Sequence[float], reference_h: float | None = None
-                    ) -> TimeStepStudy:
+                    time_steps: Sequence[float], reference_h: float | None = None,
+                    jobs: int = 1) -> TimeStepStudy:
     """Converged runs at each h against a small-h reference (see the module text).
 
     Parameters
@@ -120,6 +119,9 @@ def time_step_study(factory: SimulationFactory, *, frame_time: float, frames: in
         At least three h [s].
     reference_h : float, optional
         Default min(time_steps) / 8.
+    jobs : int, default 1
+        Parallel workers, one converged run each (:func:`~.parallel.map_jobs`; the runs
+        are deterministic, so the result does not depend on it).
 
     Returns
     -------
@@ -128,15 +130,17 @@ def time_step_study(factory: SimulationFactory, *, frame_time: float, frames: in
     """
     hs = sorted(float(h) for h in time_steps)
     h_ref = hs[0] / 8.0 if reference_h is None else reference_h
+    # the reference runs (h_ref and 2 h_ref, as reference_runs) and the measured ones, all
+    # converged alike; the coarse reference run is reused when it is a measured h
+    own = [h for h in hs if not math.isclose(h, 2.0 * h_ref, rel_tol=1e-12)]
+    steps = [h_ref, 2.0 * h_ref, *own]          # the longest run first, for the workers
     with warnings.catch_warnings():
         warnings.simplefilter("ignore")
-        fine, coarse = reference_runs(factory, h=h_ref, frames=frames,
-                                      frame_time=frame_time, tolerance=1e-10, iterations=100)
-        # the coarse reference run (2 h_ref, converged alike) is reused when it is a measured h
-        runs = [coarse if math.isclose(h, 2.0 * h_ref, rel_tol=1e-12) else
-                run_trajectory(warm_started(factory(*CONVERGED[:1], h, *CONVERGED[1:])),
-                               frames=frames, frame_time=frame_time, record_contact=True)
-                for h in hs]
+        done = map_jobs(_converged_run, [(factory, step, frames, frame_time) for step in steps],
+                        jobs=jobs, each=None if jobs == 1 else lambda _: advance(frames))
+        fine, coarse = done[0], done[1]
+        by_h = dict(zip(own, done[2:]))
+        runs = [by_h.get(h, coarse) for h in hs]
         sim = factory(*CONVERGED[:1], hs[0], *CONVERGED[1:])
         problem = sim.problem()
     ref = 2.0 * fine.frames - coarse.frames
@@ -207,6 +211,14 @@ def trajectory_errors(factory: SimulationFactory, configs, reference: np.ndarray
                     [(factory, c, reference, h, frame_time) for c in chosen], jobs=jobs,
                     each=None if jobs == 1 else lambda _: advance(frames))
     return dict(zip(chosen, errs))
+
+
+def _converged_run(factory, h, frames, frame_time):
+    """One converged run at h with its contact flags (:data:`CONVERGED`, warm-started)."""
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        return run_trajectory(warm_started(factory(*CONVERGED[:1], h, *CONVERGED[1:])),
+                              frames=frames, frame_time=frame_time, record_contact=True)
 
 
 def _trajectory_error(factory, c, reference, h, frame_time) -> float:

@@ -56,3 +56,22 @@ def test_references_and_own_limits_of_a_contact_scene_do_not_depend_on_jobs():
             assert (lim.converged, lim.certified) == (other.converged, other.certified)
             assert lim.x is None and other.x is None or np.array_equal(lim.x, other.x)
             assert np.array_equal(lim.gap, other.gap, equal_nan=True)
+
+
+def test_the_time_step_study_does_not_depend_on_jobs():
+    """Its converged runs (the reference's at h/8 and h/4, and h, h/2) in 2 workers give the
+    serial study's errors, slope, contact window and reference, bit for bit."""
+    from clothsim.accuracy.timestep import time_step_study
+
+    scene = small_drop_on_square(5, 8)
+    factory, _, frame_time = scene_factory(scene)
+    h = scene.h
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        one, two = (time_step_study(factory, frame_time=frame_time, frames=8,
+                                    time_steps=(h, h / 2, h / 4), reference_h=h / 8, jobs=j)
+                    for j in (1, 2))
+    assert one.time_steps == two.time_steps and one.window == two.window
+    assert np.array_equal(one.errors, two.errors, equal_nan=True)
+    assert np.array_equal(one.reference, two.reference)
+    assert np.array_equal(one.contact, two.contact)
