@@ -206,11 +206,20 @@ def trajectory_errors(factory: SimulationFactory, configs, reference: np.ndarray
     """
     chosen = [c for c in configs
               if c.tolerance is not None or c.iterations in TRAJECTORY_BUDGETS]
+    if jobs > 1:   # the likely longest runs first, so that no worker is left with them last
+        chosen.sort(key=_likely_cost, reverse=True)
     frames = len(reference) - 1
     errs = map_jobs(_trajectory_error,
                     [(factory, c, reference, h, frame_time) for c in chosen], jobs=jobs,
                     each=None if jobs == 1 else lambda _: advance(frames))
     return dict(zip(chosen, errs))
+
+
+def _likely_cost(c) -> tuple:
+    """A sort key: Newton's runs (a factorization per iteration) before the others, then
+    tight tolerances before loose ones, then large budgets before small ones."""
+    tight = -math.log10(c.tolerance) if c.tolerance is not None else 0.0
+    return (c.method == "newton", tight, c.iterations if c.tolerance is None else 0)
 
 
 def _converged_run(factory, h, frames, frame_time):
