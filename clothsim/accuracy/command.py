@@ -240,9 +240,10 @@ def _run(scene, out, methods, problems, frames, repeats, jobs, scheduler, target
         table = rows(results, steps, h=h, time_step_error=ts_error, trajectory_errors=traj)
         write_csv(table, out / "accuracy.csv")
         if once and repeats > 1:
-            notes.append(f"{len(once)} configuration(s) timed once (column 'repeats'): another "
-                         f"setting is as accurate in every error and at least "
-                         f"{DOMINANCE_MARGIN:g}x faster, so no answer can choose them")
+            notes.append(f"{len(once)} configuration(s) timed once (column 'repeats'): for "
+                         f"each, another setting reaches every target it reaches, in every "
+                         f"error, in at most 1/{DOMINANCE_MARGIN:g} of its time, so no answer "
+                         f"can choose it")
     info = machine_info(threads) | one_off_costs(model, steps, threads=threads)
     info |= {"commit": commit, "scene": scene.name, "h": h, "frames": frames, "repeats": repeats,
              "chebyshev_rho": options.get("chebyshev", {}).get("rho"),
