@@ -125,6 +125,12 @@ def _merge_minimum(model: Model, problem, ref, x: np.ndarray) -> bool:
     return True
 
 
+def _known(step, method: str) -> bool:
+    """The reference's own runs give Newton's and (when run) local/global's limit."""
+    return method == "newton" or (method == "local-global"
+                                  and step.reference.local_global is not None)
+
+
 def method_limits(model: Model, steps: Sequence, methods: Sequence[str], *,
                   options: dict | None = None, cap: int = LIMIT_CAP,
                   backend: str = "auto", jobs: int = 1) -> None:
@@ -152,11 +158,8 @@ def method_limits(model: Model, steps: Sequence, methods: Sequence[str], *,
         Parallel workers for the methods' own runs (:func:`~.parallel.map_jobs`; the
         limits are merged in order afterwards, so the result does not depend on it).
     """
-    def known(s, m):   # the reference's own runs give Newton's and local/global's limits
-        return m == "newton" or (m == "local-global" and s.reference.local_global is not None)
-
     runs = [(model, s.step.problem, m, dict((options or {}).get(m, {})), cap, backend)
-            for s in steps if s.measured for m in methods if not known(s, m)]
+            for s in steps if s.measured for m in methods if not _known(s, m)]
     own = iter(map_jobs(_own_limit, runs, jobs=jobs, each=lambda _: advance()))
     for s in steps:
         if not s.measured:
@@ -167,7 +170,7 @@ def method_limits(model: Model, steps: Sequence, methods: Sequence[str], *,
             if m == "newton":
                 lim = MethodLimit(m, ref.x, bool(ref.at_floor), bool(ref.certified))
                 advance()
-            elif known(s, m):
+            elif _known(s, m):
                 lg = ref.local_global
                 lim = MethodLimit(m, lg.x, bool(ref.local_global_converged),
                                   bool(lg.certified))
