@@ -3,9 +3,9 @@
 :func:`time_configurations` solves every measured step with every configuration, ``repeats``
 times, interleaved (repeat 1 of every configuration, then repeat 2, …), so a slow phase of
 a shared machine hits all configurations alike. Given the errors the answers use, it
-repeats only the configurations an answer could choose: after the first repeat, one that
-another setting beats in every error at half its time or less is not timed again
-(:mod:`.dominance`). BLAS/OpenMP threads are fixed with
+repeats only the configurations an answer could choose: after the first repeat, one for
+which another setting reaches every answered target it reaches, in every error, in at most
+half its time, is not timed again (:mod:`.dominance`). BLAS/OpenMP threads are fixed with
 threadpoolctl during measurement. The cached factorization of M + h² L is built before
 timing (a one-off cost, reported apart by :func:`one_off_costs`, as is ρ estimation for
 Chebyshev). :func:`machine_info` is written next to the CSV.
