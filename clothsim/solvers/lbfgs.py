@@ -154,8 +154,7 @@ class _Pairs:
         self.S, self.U = self.SU[:, :length], self.SU[:, length:]
         self.T = np.zeros((size, length))
         self.ST = np.zeros((size, size))
-        self.rho = np.zeros(size)
-        self._rho = [0.0] * size       # the same, as Python floats for the loops
+        self.rho = [0.0] * size        # ρ_j, as Python floats: the loops are Python
         self.order: list[int] = []     # slots, oldest first
         self._loops = ([], [])         # per slot: the newer pairs, the older pairs
         self._q, self._v = np.empty(length), np.empty(2 * length)
@@ -170,8 +169,8 @@ class _Pairs:
             slot = self.order.pop(0)
         self.order.append(slot)
         self._loops = _loops(tuple(self.order))
-        self.S[slot], self.T[slot], self.rho[slot], self.U[slot] = s, t, rho, u
-        self._rho[slot] = float(rho)
+        self.S[slot], self.T[slot], self.U[slot] = s, t, u
+        self.rho[slot] = float(rho)
         self.ST[slot, :] = ts
         self.ST[:, slot] = self.S @ t
 
@@ -182,7 +181,7 @@ class _Pairs:
         if not order:
             return solve(gT), (gT, None, None)
         g = gT.reshape(-1)
-        sg, ST, rho = (self.S @ g).tolist(), self.ST.tolist(), self._rho
+        sg, ST, rho = (self.S @ g).tolist(), self.ST.tolist(), self.rho
         newest_first, oldest_first = self._loops
         alpha = [0.0] * self.size
         for i, newer in newest_first:
