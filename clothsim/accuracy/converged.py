@@ -21,6 +21,7 @@ import numpy as np
 from ..simulation import Simulation
 from ..solvers import LBFGSSolver, NewtonSolver, StepProblem, objective_gradient
 from ..solvers.newton import NewtonResult
+from .trajectory import Trajectory, run_trajectory
 
 WARM_TOLERANCE = 1e-6
 """Relative residual at which L-BFGS hands over to Newton."""
@@ -105,3 +106,37 @@ def warm_started(sim: Simulation) -> Simulation:
         sim.solver = WarmNewtonSolver(sim.model, iterations=s.iterations,
                                       tolerance=s.tolerance, indefinite=s.indefinite)
     return sim
+
+
+def converged_run(factory, h: float, frames: int, frame_time: float, method: str = "newton",
+                  iterations: int = 50, tolerance: float = 1e-10) -> Trajectory:
+    """One run at h solved to convergence every step, with its contact flags.
+
+    The single run behind :func:`~clothsim.accuracy.trajectory.reference_runs` and the
+    time-step study (:mod:`~clothsim.accuracy.timestep`): the factory's simulation, given
+    the warm-started solver (:func:`warm_started`), run for ``frames`` frames.
+
+    Parameters
+    ----------
+    factory : callable
+        ``factory(method, h, iterations, tolerance) -> Simulation``.
+    h : float
+        Time step [s].
+    frames : int
+        Frames to run.
+    frame_time : float
+        Time between frames [s].
+    method : str, default "newton"
+        Converged solver.
+    iterations : int, default 50
+        Its iteration cap per step.
+    tolerance : float, default 1e-10
+        Its relative residual tolerance.
+
+    Returns
+    -------
+    Trajectory
+        The run (``Trajectory.contact`` recorded).
+    """
+    return run_trajectory(warm_started(factory(method, h, iterations, tolerance)),
+                          frames=frames, frame_time=frame_time, record_contact=True)

@@ -22,7 +22,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from ..solvers import stable_time_step
-from .converged import warm_started
+from .converged import converged_run
 from .parallel import map_jobs
 from .phases import advance
 from .trajectory import (
@@ -226,8 +226,7 @@ def _converged_run(factory, h, frames, frame_time):
     """One converged run at h with its contact flags (:data:`CONVERGED`, warm-started)."""
     with warnings.catch_warnings():
         warnings.simplefilter("ignore")
-        return run_trajectory(warm_started(factory(*CONVERGED[:1], h, *CONVERGED[1:])),
-                              frames=frames, frame_time=frame_time, record_contact=True)
+        return converged_run(factory, h, frames, frame_time, *CONVERGED)
 
 
 def _trajectory_error(factory, c, reference, h, frame_time) -> float:

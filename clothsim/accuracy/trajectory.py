@@ -346,10 +346,9 @@ def reference_runs(factory: SimulationFactory, *, h: float, frames: int, frame_t
     fine, coarse : Trajectory
         The runs at h and 2h (``Trajectory.contact`` recorded).
     """
-    from .converged import warm_started
+    from .converged import converged_run
 
-    return tuple(run_trajectory(warm_started(factory(method, step, iterations, tolerance)),
-                                frames=frames, frame_time=frame_time, record_contact=True)
+    return tuple(converged_run(factory, step, frames, frame_time, method, iterations, tolerance)
                  for step in (h, 2.0 * h))
 
 
