@@ -178,13 +178,13 @@ def _run(scene, out, methods, problems, frames, repeats, jobs, scheduler, target
     h = scene.h
     phases = Phases()
     if steps_file is not None:
-        recorded = load_problems(steps_file)
+        recorded = load_problems(steps_file, model, h)
     else:
         sim = warm_started(factory("newton", h, 100, 1e-10))
         with phases.phase("recording", max(1, frames * scene.substeps), "step"):
             recorded = record_problems(sim, steps=max(1, frames * scene.substeps),
                                        count=problems)
-    save_problems(recorded, out / "problems.npz")
+    save_problems(recorded, out / "problems.npz", model)
     with phases.phase("references", len(recorded), "step"):
         steps = prepare_steps(model, recorded, jobs=jobs)
     options = {}

@@ -7,8 +7,10 @@ the study then solves exactly these problems (never its own drifting state), so 
 comparable. The run uses one BLAS/OpenMP thread (a recording does not depend on the
 machine's thread count), and a recorded step whose solve missed its tolerance is marked
 (:attr:`RecordedStep.converged`). :func:`save_problems` writes the recorded problems to a
-``.npz`` file and :func:`load_problems` reads them back exactly, so a study can be re-run
-on the same steps. :func:`classify` names the steps that teach nothing:
+``.npz`` file with a digest of the model they belong to (:func:`step_digest`), and
+:func:`load_problems` reads them back exactly, so a study can be re-run on the same steps
+(a file recorded on another cloth or at another h is refused). :func:`classify` names the
+steps that teach nothing:
 
 ``"at-rest"``
     ‖∇g(y)‖ within 1e3 of its rounding floor
@@ -24,6 +26,7 @@ on the same steps. :func:`classify` names the steps that teach nothing:
 from __future__ import annotations
 
 import copy
+import hashlib
 import logging
 import os
 import warnings
@@ -72,7 +75,29 @@ _ARRAYS = ("x", "v", "y", "f_ext", "fixed_vertices", "fixed_positions", "anchor_
            "anchor_positions", "anchor_stiffness")
 
 
-def save_problems(recorded, path) -> Path:
+def step_digest(model: Model) -> str:
+    """SHA-256 (hex, 16 digits) of what a step problem is solved with besides its own
+    arrays: the masses and the springs (ends, stiffness, rest lengths, damping).
+
+    Parameters
+    ----------
+    model : Model
+        The cloth.
+
+    Returns
+    -------
+    str
+        16 hexadecimal digits; equal for two models whose step problems are the same.
+    """
+    digest = hashlib.sha256()
+    s = model.springs
+    for a in (model.vertex_mass, s.spring_vertices, s.spring_stiffness, s.spring_rest_length,
+              s.spring_damping):
+        digest.update(np.ascontiguousarray(a, dtype=np.float64).tobytes())
+    return digest.hexdigest()[:16]
+
+
+def save_problems(recorded, path, model: Model | None = None) -> Path:
     """Write recorded step problems to an ``.npz`` file (exactly; :func:`load_problems`).
 
     Parameters
@@ -81,6 +106,9 @@ def save_problems(recorded, path) -> Path:
         The steps.
     path : str or Path
         The file (overwritten, written atomically).
+    model : Model, optional
+        The cloth they belong to: its :func:`step_digest` is saved, for
+        :func:`load_problems` to check.
 
     Returns
     -------
@@ -94,6 +122,8 @@ def save_problems(recorded, path) -> Path:
             "start": np.array([r.problem.start for r in recorded]),
             "converged": np.array([-1 if r.converged is None else int(r.converged)
                                    for r in recorded], dtype=np.int64)}
+    if model is not None:
+        data["model_digest"] = np.array(step_digest(model))
     for i, r in enumerate(recorded):
         for name in _ARRAYS:
             value = getattr(r.problem, name)
@@ -106,13 +136,20 @@ def save_problems(recorded, path) -> Path:
     return path
 
 
-def load_problems(path) -> list[RecordedStep]:
+def load_problems(path, model: Model | None = None,
+                  h: float | None = None) -> list[RecordedStep]:
     """Read the step problems :func:`save_problems` wrote.
 
     Parameters
     ----------
     path : str or Path
         The ``.npz`` file.
+    model : Model, optional
+        The cloth the problems will be solved with: refused when their vertex count
+        differs, or when the file's :func:`step_digest` (files of earlier versions have
+        none) is another model's.
+    h : float, optional
+        The time step they must have been recorded at [s].
 
     Returns
     -------
@@ -122,7 +159,8 @@ def load_problems(path) -> list[RecordedStep]:
     Raises
     ------
     InputError
-        When the file is missing or is not a saved problem set.
+        When the file is missing, is not a saved problem set, or does not belong to
+        ``model`` and ``h``.
     """
     path = Path(path)
     if not path.is_file():
@@ -140,6 +178,23 @@ def load_problems(path) -> list[RecordedStep]:
     except (KeyError, ValueError, OSError) as exc:
         raise InputError(f"accuracy.steps: {str(path)!r} is not a saved problem set "
                          f"({exc})") from None
+    where = f"accuracy.steps: {str(path)!r}"
+    if model is not None:
+        n = model.vertex_count
+        sizes = sorted({len(r.problem.y) for r in out} - {n})
+        if sizes:
+            raise InputError(f"{where} holds step problems of {sizes[0]} vertices; this "
+                             f"scene's cloth has {n} (record them anew: drop --steps)")
+        saved = str(data["model_digest"]) if "model_digest" in data else None
+        if saved is not None and saved != step_digest(model):
+            raise InputError(f"{where} was recorded on another cloth (masses or springs "
+                             f"differ: model digest {saved}, this scene's "
+                             f"{step_digest(model)}); record them anew: drop --steps")
+    if h is not None:
+        other = sorted({r.problem.h for r in out if r.problem.h != h})
+        if other:
+            raise InputError(f"{where} was recorded at h = {other[0]:.6g} s; this scene "
+                             f"steps at h = {h:.6g} s")
     return out
 
 

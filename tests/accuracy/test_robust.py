@@ -88,6 +88,52 @@ def test_saved_steps_are_re_measured_exactly(tmp_path):
         study(tmp_path / "c", steps_file=tmp_path / "missing.npz")
 
 
+def with_changes(**changes):
+    """TINY with some of its sections replaced (a deep copy)."""
+    import copy
+
+    data = copy.deepcopy(TINY)
+    for section, values in changes.items():
+        data[section].update(values)
+    return data
+
+
+def test_saved_steps_of_another_cloth_or_h_are_refused_by_name(tmp_path):
+    study(tmp_path / "a")
+    saved = tmp_path / "a" / "problems.npz"
+
+    def again(data, name):
+        with warnings.catch_warnings():
+            warnings.simplefilter("ignore")
+            return run_accuracy(Scene.from_dict(data), tmp_path / name, steps_file=saved,
+                                methods=("local-global",), repeats=1, budgets=(1,),
+                                tolerances=(), time_steps=False, plots=False)
+
+    cases = {"n": (with_changes(cloth={"resolution": [5, 5]}), "16 vertices; this scene's "
+                   "cloth has 25"),
+             "k": (with_changes(springs={"structural": 50.0}), "another cloth"),
+             "m": (with_changes(cloth={"mass": 2.0}), "another cloth"),
+             "h": (with_changes(scene={"substeps": 2}), "recorded at h = 0.0333333 s")}
+    for name, (data, message) in cases.items():
+        with pytest.raises(InputError, match="^accuracy.steps: .*" + message):
+            again(data, name)
+        assert not (tmp_path / name / "accuracy.csv").exists()
+    again(TINY, "same")  # the same cloth at the same h: re-measured
+    assert (tmp_path / "same" / "accuracy.csv").exists()
+
+
+def test_saved_steps_without_a_model_digest_still_load(tmp_path):
+    from clothsim.accuracy.command import scene_factory
+
+    study(tmp_path / "a")
+    _, model, _ = scene_factory(Scene.from_dict(TINY))
+    recorded = load_problems(tmp_path / "a" / "problems.npz", model, 1 / 30)
+    old = save_problems(recorded, tmp_path / "old.npz")   # as earlier versions wrote it
+    with np.load(old) as z:
+        assert "model_digest" not in z.files
+    assert len(load_problems(old, model, 1 / 30)) == len(recorded)
+
+
 def test_recorded_steps_that_missed_their_tolerance_are_marked(tmp_path):
     model = gallery.grid_cloth(4, k=800.0, plane="xy", center=(0.0, 1.0, 0.0))
     sim = cs.Simulation(model, h=1 / 30, solver="newton", iterations=1, tolerance=1e-14,
