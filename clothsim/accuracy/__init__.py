@@ -21,6 +21,7 @@ the results and explains every CSV column.
 
 from .answer import answer_table
 from .command import run_accuracy, scene_factory
+from .converged import reference_trajectory
 from .damping import (
     damping_curves,
     energy_curves,
@@ -66,7 +67,6 @@ from .trajectory import (
     Trajectory,
     convergence_slope,
     mechanical_energy,
-    reference_trajectory,
     run_trajectory,
     steps_per_frame,
     trajectory_error,

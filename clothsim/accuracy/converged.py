@@ -1,4 +1,4 @@
-"""Converged runs in less time: Newton warm-started by L-BFGS.
+"""Converged runs, in less time: Newton warm-started by L-BFGS.
 
 The study's converged runs — the recording run (:func:`~clothsim.accuracy.problems.
 record_problems`), the time-step study's runs and its small-h reference — need each step
@@ -10,6 +10,10 @@ floor, and reports its certificate (λ_min > 0) as before.
 :func:`warm_started` swaps this solver into a converged Newton simulation. The references
 (:mod:`clothsim.accuracy.reference`) still run Newton from y and x_n: those starts are the
 point of the several-minima check.
+
+:func:`converged_run` is one such run at a given h; :func:`reference_runs` makes them at h
+and 2h, and :func:`reference_trajectory` Richardson-extrapolates them into the reference of
+trajectory errors (:mod:`clothsim.accuracy.trajectory`).
 """
 
 from __future__ import annotations
@@ -21,7 +25,7 @@ import numpy as np
 from ..simulation import Simulation
 from ..solvers import LBFGSSolver, NewtonSolver, StepProblem, objective_gradient
 from ..solvers.newton import NewtonResult
-from .trajectory import Trajectory, run_trajectory
+from .trajectory import SimulationFactory, Trajectory, run_trajectory, trajectory_error
 
 WARM_TOLERANCE = 1e-6
 """Relative residual at which L-BFGS hands over to Newton."""
@@ -112,7 +116,7 @@ def converged_run(factory, h: float, frames: int, frame_time: float, method: str
                   iterations: int = 50, tolerance: float = 1e-10) -> Trajectory:
     """One run at h solved to convergence every step, with its contact flags.
 
-    The single run behind :func:`~clothsim.accuracy.trajectory.reference_runs` and the
+    The single run behind :func:`reference_runs` and the
     time-step study (:mod:`~clothsim.accuracy.timestep`): the factory's simulation, given
     the warm-started solver (:func:`warm_started`), run for ``frames`` frames.
 
@@ -140,3 +144,77 @@ def converged_run(factory, h: float, frames: int, frame_time: float, method: str
     """
     return run_trajectory(warm_started(factory(method, h, iterations, tolerance)),
                           frames=frames, frame_time=frame_time, record_contact=True)
+
+
+def reference_trajectory(factory: SimulationFactory, *, h: float, frames: int,
+                         frame_time: float, method: str = "newton",
+                         tolerance: float = 1e-10, iterations: int = 50,
+                         extrapolate: bool = True) -> tuple[np.ndarray, float]:
+    """A converged, small-h reference trajectory for :func:`trajectory_error`.
+
+    Implicit Euler solved to ``tolerance`` at h and at 2h. Its global error is
+    X(h) − X_exact = C h + O(h²) (first order), so with ``extrapolate`` the returned
+    frames are Richardson's 2 X(h) − X(2h), whose error is O(h²).
+
+    Parameters
+    ----------
+    factory : callable
+        ``factory(method, h, iterations, tolerance) -> Simulation``.
+    h : float
+        The reference time step [s] (2h must divide ``frame_time`` too).
+    frames : int
+        Frames to run.
+    frame_time : float
+        Time between frames [s].
+    method : str, default "newton"
+        Solver of the reference runs.
+    tolerance : float, default 1e-10
+        Relative residual per step.
+    iterations : int, default 50
+        Maximum iterations per step.
+    extrapolate : bool, default True
+        Return the Richardson extrapolation rather than X(h).
+
+    Returns
+    -------
+    frames : ndarray, shape (frames + 1, n, 3) [m]
+    error_estimate : float
+        ‖X(h) − X(2h)‖ / ‖X(h) − X_0‖, about the relative error of the *unextrapolated*
+        X(h) (an upper bound for the extrapolated one when the error is first order).
+    """
+    fine, coarse = (r.frames for r in reference_runs(
+        factory, h=h, frames=frames, frame_time=frame_time, method=method,
+        tolerance=tolerance, iterations=iterations))
+    estimate = trajectory_error(coarse, fine)
+    return (2.0 * fine - coarse if extrapolate else fine), estimate
+
+
+def reference_runs(factory: SimulationFactory, *, h: float, frames: int, frame_time: float,
+                   method: str = "newton", tolerance: float = 1e-10, iterations: int = 50
+                   ) -> tuple[Trajectory, Trajectory]:
+    """The runs at h and 2h of :func:`reference_trajectory`, with their contact flags.
+
+    Parameters
+    ----------
+    factory : callable
+        ``factory(method, h, iterations, tolerance) -> Simulation``.
+    h : float
+        The fine time step [s]; the coarse run uses 2h.
+    frames : int
+        Frames to run.
+    frame_time : float
+        Time between frames [s].
+    method : str
+        Converged solver of the reference runs.
+    tolerance : float
+        Its relative residual tolerance.
+    iterations : int
+        Its iteration cap per step.
+
+    Returns
+    -------
+    fine, coarse : Trajectory
+        The runs at h and 2h (``Trajectory.contact`` recorded).
+    """
+    return tuple(converged_run(factory, step, frames, frame_time, method, iterations, tolerance)
+                 for step in (h, 2.0 * h))

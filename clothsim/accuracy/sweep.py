@@ -13,12 +13,13 @@ from pathlib import Path
 import numpy as np
 
 from ..errors import InputError
+from ..io.common import atomic_path
+from .converged import reference_trajectory
 from .trace import ACCURACY_LEVELS, EXPLICIT_METHODS, IterateTrace
 from .trajectory import (
     SimulationFactory,
     SweepRow,
     _stable_explicit_step,
-    reference_trajectory,
     run_trajectory,
     steps_per_frame,
     trajectory_error,
@@ -166,7 +167,7 @@ def write_csv(rows: Iterable[SweepRow], path) -> Path:
         ``path``.
     """
     path = Path(path)
-    with path.open("w", newline="") as fh:
+    with atomic_path(path) as tmp, tmp.open("w", newline="") as fh:
         w = csv.DictWriter(fh, fieldnames=CSV_FIELDS)
         w.writeheader()
         for row in rows:

@@ -1,7 +1,7 @@
 """Time-step error, separated from solver error.
 
 Converged solves only (Newton to 1e-10) at several h, against a Richardson-extrapolated
-run at a much smaller h (:func:`~.trajectory.reference_trajectory`). The fitted slope of
+run at a much smaller h (:func:`~.converged.reference_trajectory`). The fitted slope of
 error against h is implicit Euler's order (1) only once ω_max h ≲ 1, ω_max the stiffest
 angular frequency (2 / the explicit stability limit). Far above that, implicit Euler damps
 the stiff modes completely and the error hardly changes with h: :func:`time_step_study`

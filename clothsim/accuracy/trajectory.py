@@ -1,7 +1,8 @@
 """Trajectory accuracy: runs recorded frame by frame, compared with a converged small-h run.
 
 Vertex positions at every frame of a run, against a reference run with a much smaller time
-step solved to convergence and Richardson-extrapolated (:func:`reference_trajectory`):
+step solved to convergence and Richardson-extrapolated
+(:func:`~clothsim.accuracy.converged.reference_trajectory`):
 ‖X − X_ref‖ / ‖X_ref − X_0‖ over all frames (Frobenius norms over frames × vertices);
 :func:`convergence_slope` fits its log-log slope against h (implicit Euler: 1 once h is well
 below the stiffest oscillation period 2π/ω_max).
@@ -274,82 +275,6 @@ def trajectory_error(frames: np.ndarray, reference: np.ndarray) -> float:
         return math.inf
     den = float(np.linalg.norm(reference - reference[0]))
     return float(np.linalg.norm(frames - reference)) / (den or 1.0)
-
-
-def reference_trajectory(factory: SimulationFactory, *, h: float, frames: int,
-                         frame_time: float, method: str = "newton",
-                         tolerance: float = 1e-10, iterations: int = 50,
-                         extrapolate: bool = True) -> tuple[np.ndarray, float]:
-    """A converged, small-h reference trajectory for :func:`trajectory_error`.
-
-    Implicit Euler solved to ``tolerance`` at h and at 2h. Its global error is
-    X(h) − X_exact = C h + O(h²) (first order), so with ``extrapolate`` the returned
-    frames are Richardson's 2 X(h) − X(2h), whose error is O(h²).
-
-    Parameters
-    ----------
-    factory : callable
-        ``factory(method, h, iterations, tolerance) -> Simulation``.
-    h : float
-        The reference time step [s] (2h must divide ``frame_time`` too).
-    frames : int
-        Frames to run.
-    frame_time : float
-        Time between frames [s].
-    method : str, default "newton"
-        Solver of the reference runs.
-    tolerance : float, default 1e-10
-        Relative residual per step.
-    iterations : int, default 50
-        Maximum iterations per step.
-    extrapolate : bool, default True
-        Return the Richardson extrapolation rather than X(h).
-
-    Returns
-    -------
-    frames : ndarray, shape (frames + 1, n, 3) [m]
-    error_estimate : float
-        ‖X(h) − X(2h)‖ / ‖X(h) − X_0‖, about the relative error of the *unextrapolated*
-        X(h) (an upper bound for the extrapolated one when the error is first order).
-    """
-    fine, coarse = (r.frames for r in reference_runs(
-        factory, h=h, frames=frames, frame_time=frame_time, method=method,
-        tolerance=tolerance, iterations=iterations))
-    estimate = trajectory_error(coarse, fine)
-    return (2.0 * fine - coarse if extrapolate else fine), estimate
-
-
-def reference_runs(factory: SimulationFactory, *, h: float, frames: int, frame_time: float,
-                   method: str = "newton", tolerance: float = 1e-10, iterations: int = 50
-                   ) -> tuple[Trajectory, Trajectory]:
-    """The runs at h and 2h of :func:`reference_trajectory`, with their contact flags.
-
-    Parameters
-    ----------
-    factory : callable
-        ``factory(method, h, iterations, tolerance) -> Simulation``.
-    h : float
-        The fine time step [s]; the coarse run uses 2h.
-    frames : int
-        Frames to run.
-    frame_time : float
-        Time between frames [s].
-    method : str
-        Converged solver of the reference runs.
-    tolerance : float
-        Its relative residual tolerance.
-    iterations : int
-        Its iteration cap per step.
-
-    Returns
-    -------
-    fine, coarse : Trajectory
-        The runs at h and 2h (``Trajectory.contact`` recorded).
-    """
-    from .converged import converged_run
-
-    return tuple(converged_run(factory, step, frames, frame_time, method, iterations, tolerance)
-                 for step in (h, 2.0 * h))
 
 
 def convergence_slope(rows: Sequence[SweepRow], *, method: str,
