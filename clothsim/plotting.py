@@ -32,6 +32,7 @@ import numpy as np
 
 from .camera import View
 from .display import decimate, obstacle_surfaces
+from .io.common import atomic_path
 from .painter import SceneArtist, frame_axes
 
 log = logging.getLogger(__name__)
@@ -204,9 +205,8 @@ def write_preview(path, positions, mesh, *, times=None, effects=(), max_frames: 
 
     span = float(times[idx[-1]] - times[idx[0]]) if times is not None and len(idx) > 1 else 0
     fps = max(1.0, min(30.0, (len(idx) - 1) / span)) if span > 0 else 10.0
-    tmp = path.with_name(f".{path.stem}.tmp.gif")
-    _save_gif(fig, art.moving() + [title], frame, len(idx), tmp, fps)
-    tmp.replace(path)
+    with atomic_path(path) as tmp:
+        _save_gif(fig, art.moving() + [title], frame, len(idx), tmp, fps)
     log.info("wrote %s (%d frames)", path, len(idx))
     return path
 
@@ -269,9 +269,8 @@ def write_final_image(path, positions, mesh, *, title: str = "", effects=(), t: 
     note = _draw(ax, mesh, positions, effects, None, t, None, None, True, MAX_TRIANGLES)
     if title or note:
         fig.suptitle(", ".join(x for x in (title, note) if x), fontsize=10)
-    tmp = path.with_name(f".{path.stem}.tmp.png")
-    fig.savefig(tmp, format="png")
-    tmp.replace(path)
+    with atomic_path(path) as tmp:
+        fig.savefig(tmp, format="png")
     return path
 
 

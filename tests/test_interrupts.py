@@ -98,7 +98,7 @@ def assert_truthful(out: Path) -> int:
     for k in range(last + 1):  # every frame reads back and is the npz's
         x, v = io.read_frame(out / f"frame_{k:06d}.vtu")
         assert np.array_equal(x, z["positions"][k]) and np.array_equal(v, z["velocities"][k])
-    assert not list(out.glob(".*.tmp")) and not list(out.glob(".*.f64"))
+    assert not list(out.glob(".*.tmp*")) and not list(out.glob(".*.f64"))
     return last
 
 

@@ -20,6 +20,7 @@ import numpy as np
 
 from ..errors import InputError
 from ..factorization import cholmod_available
+from ..io.common import write_text
 from .answer import answer_table, short_answer
 from .converged import warm_started
 from .dominance import MARGIN as DOMINANCE_MARGIN
@@ -249,7 +250,7 @@ def _run(scene, out, methods, problems, frames, repeats, jobs, scheduler, target
              "chebyshev_rho": options.get("chebyshev", {}).get("rho"),
              "phase_seconds": phases.seconds}
     write_sidecar(info, out / "accuracy.json")
-    (out / "steps.md").write_text(steps_table(steps) + "\n")
+    write_text(out / "steps.md", steps_table(steps) + "\n")
     kinds = [s.kind for s in steps]
     missed = sum(1 for r in recorded if r.converged is False)
     if missed:

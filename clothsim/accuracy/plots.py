@@ -13,6 +13,7 @@ from pathlib import Path
 import numpy as np
 
 from ..errors import InputError
+from ..io.common import atomic_path
 from .damping import single_spring_heights
 from .sweep import TRAJECTORY_LEVELS, cheapest, pareto_front
 from .trace import ACCURACY_LEVELS, EXPLICIT_METHODS, IterateTrace
@@ -48,9 +49,11 @@ def _pyplot():
 def _save(plt, fig, path) -> Path:
     """Lay out, write (110 dpi) and close a figure; returns its path."""
     fig.tight_layout()
-    fig.savefig(path, dpi=110)
+    path = Path(path)
+    with atomic_path(path) as tmp:   # never half a figure on disk
+        fig.savefig(tmp, dpi=110)
     plt.close(fig)
-    return Path(path)
+    return path
 
 
 def plot_solver_accuracy(traces: dict[str, IterateTrace], path, *, title: str = "") -> Path:

@@ -28,7 +28,6 @@ from __future__ import annotations
 import copy
 import hashlib
 import logging
-import os
 import warnings
 from dataclasses import dataclass
 from pathlib import Path
@@ -37,6 +36,7 @@ import numpy as np
 
 from ..errors import InputError
 from ..factorization import single_threaded
+from ..io.common import atomic_path
 from ..model import Model
 from ..simulation import Simulation
 from ..solvers import LocalGlobalSolver, StepProblem, objective_gradient
@@ -129,10 +129,8 @@ def save_problems(recorded, path, model: Model | None = None) -> Path:
             value = getattr(r.problem, name)
             if value is not None:
                 data[f"{i}/{name}"] = np.asarray(value)
-    tmp = path.with_name(path.name + ".tmp")
-    with tmp.open("wb") as fh:
+    with atomic_path(path) as tmp, tmp.open("wb") as fh:
         np.savez_compressed(fh, **data)
-    os.replace(tmp, path)
     return path
 
 

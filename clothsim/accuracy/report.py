@@ -8,13 +8,13 @@ from __future__ import annotations
 import csv
 import json
 import math
-import os
 from collections.abc import Sequence
 from dataclasses import asdict, dataclass
 from pathlib import Path
 
 import numpy as np
 
+from ..io.common import atomic_path, write_text
 from .steps_report import STEP_CLASSES, steps_table  # noqa: F401  (re-exported)
 from .study import KINDS, MEASURED, ConfigResult, StudyStep, quantiles
 from .timing import median_iqr
@@ -211,13 +211,11 @@ def write_csv(table: Sequence[Row], path) -> Path:
         previous complete CSV, never half of one.
     """
     path = Path(path)
-    tmp = path.with_name(path.name + ".tmp")
-    with tmp.open("w", newline="") as fh:
+    with atomic_path(path) as tmp, tmp.open("w", newline="") as fh:
         w = csv.DictWriter(fh, fieldnames=COLUMNS)
         w.writeheader()
         for row in table:
             w.writerow({k: ("" if v is None else v) for k, v in asdict(row).items()})
-    os.replace(tmp, path)
     return path
 
 
@@ -229,16 +227,15 @@ def write_sidecar(info: dict, path) -> Path:
     info : dict
         What to record (values that JSON cannot hold are written as strings).
     path : str or Path
-        The JSON file (overwritten).
+        The JSON file (overwritten atomically).
 
     Returns
     -------
     Path
         ``path``.
     """
-    path = Path(path)
-    path.write_text(json.dumps(info, indent=2, sort_keys=True, default=str) + "\n")
-    return path
+    return write_text(path, json.dumps(info, indent=2, sort_keys=True, default=str) + "\n")
+
 
 
 def fixed_budget_table(table: Sequence[Row], budgets: Sequence[int] = FIXED_BUDGETS) -> str:

@@ -157,17 +157,44 @@ def atomic_path(path):
     Yields
     ------
     pathlib.Path
-        The temporary file ``.<name>.<pid>.tmp`` in the same folder; write to it inside
-        the ``with`` block.
+        The temporary file ``.<name>.<pid>.tmp<suffix>`` in the same folder (it keeps the
+        suffix, so writers that choose a format by it choose the right one); write to it
+        inside the ``with`` block.
     """
     path = Path(path)
-    tmp = path.with_name(f".{path.name}.{os.getpid()}.tmp")
+    tmp = path.with_name(f".{path.name}.{os.getpid()}.tmp{path.suffix}")
     try:
         yield tmp
         os.replace(tmp, path)
+    except OSError as exc:   # the error names the file the caller asked for
+        if exc.filename is not None and Path(os.fsdecode(exc.filename)) == tmp:
+            exc.filename = str(path)
+        raise
     finally:
         if tmp.exists():
             tmp.unlink()
+
+
+def write_text(path, text: str) -> Path:
+    """Write ``text`` to ``path`` atomically (:func:`atomic_path`): a crash leaves the
+    previous complete file, never half of one.
+
+    Parameters
+    ----------
+    path : str or path-like
+        The file (overwritten).
+    text : str
+        Its content (UTF-8).
+
+    Returns
+    -------
+    pathlib.Path
+        ``path``.
+    """
+    path = Path(path)
+    with atomic_path(path) as tmp:
+        tmp.write_text(text, encoding="utf-8")
+    return path
 
 
 def is_number(token: str) -> bool:

@@ -8,7 +8,7 @@ from pathlib import Path
 import numpy as np
 
 from ..errors import InputError
-from .common import is_number, refuse_special
+from .common import atomic_path, is_number, refuse_special
 
 
 def _ascii_lines(path, what: str) -> list[str]:
@@ -38,7 +38,7 @@ def write_matrix(path, A) -> None:
     """
     import scipy.io
 
-    with open(path, "wb") as f:
+    with atomic_path(path) as tmp, open(tmp, "wb") as f:
         scipy.io.mmwrite(f, A, precision=17)
 
 
@@ -149,7 +149,8 @@ def write_vector(path, v) -> None:
         The values; flattened in C order, so an (n, 3) array gives the interleaved
         layout x0 y0 z0 x1 ... .
     """
-    np.savetxt(path, np.asarray(v, dtype=np.float64).ravel(), fmt="%.17g")
+    with atomic_path(path) as tmp:
+        np.savetxt(tmp, np.asarray(v, dtype=np.float64).ravel(), fmt="%.17g")
 
 
 def read_vector(path) -> np.ndarray:

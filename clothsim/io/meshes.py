@@ -15,7 +15,7 @@ from ..errors import InputError
 from ..mesh import Mesh, from_cells
 from ..mesh_checks import check_mesh
 from .cells import cell_blocks
-from .common import MeshioFailure, load_meshio, quietly
+from .common import MeshioFailure, atomic_path, load_meshio, quietly
 from .obj import read_obj, write_obj
 
 
@@ -163,7 +163,8 @@ def write_mesh(path, mesh: Mesh, positions=None, point_data=None) -> None:
         return
     meshio = load_meshio()
     try:
-        quietly(meshio.write, path,
-                meshio.Mesh(x, cell_blocks(mesh), point_data=dict(point_data or {})))
+        with atomic_path(path) as tmp:
+            quietly(meshio.write, tmp,
+                    meshio.Mesh(x, cell_blocks(mesh), point_data=dict(point_data or {})))
     except MeshioFailure as exc:
         raise InputError(f"{path}: cannot write mesh ({exc})") from None

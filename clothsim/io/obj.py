@@ -9,7 +9,7 @@ import numpy as np
 
 from ..errors import InputError
 from ..mesh import Mesh, from_cells
-from .common import one_line
+from .common import atomic_path, one_line
 
 
 def read_obj(path, *, field: str = "mesh") -> Mesh:
@@ -153,7 +153,7 @@ def write_obj(path, mesh: Mesh, positions: np.ndarray) -> None:
     positions : ndarray, shape (n, 3)
         Vertex positions [m].
     """
-    with open(path, "w", encoding="utf-8") as f:
+    with atomic_path(path) as tmp, open(tmp, "w", encoding="utf-8") as f:
         f.write("# written by clothsim\n")
         np.savetxt(f, positions, fmt="v %.17g %.17g %.17g")
         np.savetxt(f, mesh.triangles + 1, fmt="f %d %d %d")

@@ -30,6 +30,7 @@ from pathlib import Path
 import numpy as np
 
 from ..io.assignment import scene_dict
+from ..io.common import write_text
 from ..io.folders import claim_folder
 from ..scene import Scene
 from .conformance import to_toml
@@ -88,7 +89,7 @@ CASES = tuple(_cases())
 def _write_obj(path: Path, x: np.ndarray, faces) -> None:
     lines = [f"v {a:.17g} {b:.17g} {c:.17g}" for a, b, c in x]
     lines += ["f " + " ".join(str(v + 1) for v in f) for f in faces]
-    path.write_text("\n".join(lines) + "\n")
+    write_text(path, "\n".join(lines) + "\n")
 
 
 README = """# clothsim coursework profile
@@ -138,13 +139,13 @@ def write_coursework(out_dir, *, frames: int = 30, cases=None) -> list[str]:
         d.mkdir(exist_ok=True)
         _write_obj(d / "case.obj", x, faces)
         doc = {"obj": "case.obj", **spec, "b": [v + 1 for v in spec["b"]]}
-        (d / "case.json").write_text(json.dumps(doc, indent=1) + "\n")
+        write_text(d / "case.json", json.dumps(doc, indent=1) + "\n")
         scene_doc = scene_dict(d / "case.json", frames=frames)
         scene_doc["scene"].update(name=f"coursework-{name}", description=description)
         scene_doc["cloth"]["file"] = "case.json"
-        (d / "scene.toml").write_text(to_toml(scene_doc))
+        write_text(d / "scene.toml", to_toml(scene_doc))
         scene = Scene.from_dict(scene_doc, source=str(d / "scene.toml"), base_dir=d)
         export_port(scene, d, frames=frames, iterate_steps=0, force=True)  # beside case.*
         lines.append(f"- `{name}`: {description}")
-    (out / "README.md").write_text(README + "\n".join(lines) + "\n")
+    write_text(out / "README.md", README + "\n".join(lines) + "\n")
     return names

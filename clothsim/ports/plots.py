@@ -4,6 +4,8 @@ from __future__ import annotations
 
 import numpy as np
 
+from ..io.common import atomic_path
+
 
 def plot_deviation(comparison, path) -> None:
     """Write the max and RMS error per frame, with the tolerance, as an image (log scale).
@@ -37,4 +39,5 @@ def plot_deviation(comparison, path) -> None:
     ax.set_ylabel(f"{comparison.field} error [m]")
     ax.legend(fontsize=8)
     fig.tight_layout()
-    fig.savefig(path, dpi=100)
+    with atomic_path(path) as tmp:
+        fig.savefig(tmp, dpi=100)
