@@ -14,13 +14,14 @@ from __future__ import annotations
 import logging
 import math
 from collections.abc import Sequence
-from pathlib import Path
 
 import numpy as np
 
+from .. import __version__ as _version
 from ..errors import InputError
 from ..factorization import cholmod_available
 from ..io.common import write_text
+from ..io.folders import FolderLock, claim_folder, folder_kind
 from .answer import answer_table, short_answer
 from .converged import warm_started
 from .dominance import MARGIN as DOMINANCE_MARGIN
@@ -101,14 +102,15 @@ def run_accuracy(scene, out, *, methods: Sequence[str] = ITERATIVE_METHODS,
                  jobs: int = 1, scheduler: str | None = None, target: float | None = None,
                  budgets: Sequence[int] = BUDGETS, tolerances: Sequence[float] = TOLERANCES,
                  time_steps: bool = True, plots: bool = True, threads: int = 1,
-                 steps_file=None, quick: bool = False) -> str:
+                 steps_file=None, quick: bool = False, force: bool = False) -> str:
     """Run the accuracy study of ``scene`` into folder ``out``; return the printed report.
 
     Parameters
     ----------
     scene : clothsim.scene.Scene
     out : path
-        Output folder (created).
+        Output folder (created): missing, empty or an earlier accuracy study's
+        (:func:`clothsim.io.folders.claim_folder`); locked while the study runs.
     methods : sequence of str
         Solver names (see :data:`clothsim.solvers.SOLVERS`).
     problems : int
@@ -141,6 +143,8 @@ def run_accuracy(scene, out, *, methods: Sequence[str] = ITERATIVE_METHODS,
         100, tolerances 1e-3 and 1e-6 (at most 1000 iterations), 1 timing repeat, no
         trajectory errors, a time-step check of :data:`QUICK_TIME_STEP_FRAMES` frames at h
         and h/2 only.
+    force : bool
+        Write into ``out`` even when it holds files that are not an accuracy study's.
 
     Returns
     -------
@@ -159,15 +163,24 @@ def run_accuracy(scene, out, *, methods: Sequence[str] = ITERATIVE_METHODS,
         if m not in SOLVERS or m == "symplectic-euler":
             raise InputError(f"accuracy.methods: {m!r} is not an iterative solver; choose from "
                              f"{', '.join(s for s in SOLVERS if s != 'symplectic-euler')}")
+    if not methods:
+        raise InputError("accuracy.methods: no solver given; name one or more of "
+                         + ", ".join(ITERATIVE_METHODS))
+    if frames is not None and frames < 1:
+        raise InputError(f"accuracy.frames: must be >= 1 (a study needs a step), got {frames}")
     if quick:
         problems, repeats = min(problems, QUICK["problems"]), min(repeats, QUICK["repeats"])
         budgets, tolerances = QUICK["budgets"], QUICK["tolerances"]
-    out = Path(out)
+    out = claim_folder(out, "accuracy", force=force)  # before anything is written there
     out.mkdir(parents=True, exist_ok=True)
     commit = source_commit()  # of the code that runs (HEAD may move while it runs)
     cholmod_available()  # load CHOLMOD's BLAS and OpenMP first, so that their pools are limited
-    with _limited_threads(threads):  # one BLAS/OpenMP thread throughout: reproducible, and
-        # on a shared machine faster than idle worker threads
+    with FolderLock(out), _limited_threads(threads):  # one BLAS/OpenMP thread throughout:
+        # reproducible, and on a shared machine faster than idle worker threads
+        claim_folder(out, "accuracy", force=force)  # again, now that no other study can write
+        if folder_kind(out) != "accuracy":  # mark the folder as a study's from the start
+            write_sidecar({"clothsim": _version, "scene": scene.name, "status": "running"},
+                          out / "accuracy.json")
         return _run(scene, out, methods, problems, frames, repeats, jobs, scheduler, target,
                     budgets, tolerances, time_steps, plots, threads, steps_file, quick, commit)
 

@@ -123,7 +123,8 @@ def build_parser() -> argparse.ArgumentParser:
     acc.add_argument("--out", default=None,
                      help="output directory (default: accuracy-out)")
     acc.add_argument("--force", action="store_true",
-                     help="replace the default folder's study of another scene")
+                     help="write into DIR even when it holds files that are not a clothsim "
+                     "accuracy study, or replace the default folder's study of another scene")
     acc.add_argument("--methods", default=None,
                      help="comma-separated solvers (default: local-global,chebyshev,anderson,"
                           "lbfgs,newton)")
@@ -279,7 +280,7 @@ def _cmd_accuracy(args) -> int:
         scene, out, problems=args.problems, frames=args.frames, quick=args.quick,
         repeats=args.repeats, jobs=args.jobs, scheduler=args.scheduler, target=args.target,
         time_steps=not args.no_time_steps, plots=not args.no_plots, steps_file=args.steps,
-        **kw))
+        force=args.force, **kw))
     return 0
 
 

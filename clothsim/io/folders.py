@@ -3,10 +3,11 @@
 clothsim writes only into a folder it owns (:func:`claim_folder`): a missing or empty one, or
 one whose own record marks it as clothsim's output of the same kind: ``run.json`` with
 ``clothsim_run`` for a run (``clothsim run``), ``manifest.json`` with clothsim's ``layout``
-for an export (``clothsim export``). Anything else is refused with an
+for an export (``clothsim export``), ``accuracy.json`` with ``clothsim`` and ``scene`` for an
+accuracy study (``clothsim accuracy``). Anything else is refused with an
 :class:`~clothsim.errors.InputError` naming the folder and its first foreign file, unless
 ``force`` is given. :class:`FolderLock` is an exclusive :func:`fcntl.flock` on
-``<folder>/.clothsim.lock``, taken by runs and exports alike.
+``<folder>/.clothsim.lock``, taken by runs, exports and accuracy studies alike.
 """
 
 from __future__ import annotations
@@ -21,7 +22,9 @@ from ..errors import InputError
 LOCK_NAME = ".clothsim.lock"
 RUN_RECORD = "run.json"
 EXPORT_RECORD = "manifest.json"
-KINDS = {"run": "a clothsim run", "export": "a clothsim export"}
+ACCURACY_RECORD = "accuracy.json"
+KINDS = {"run": "a clothsim run", "export": "a clothsim export",
+         "accuracy": "a clothsim accuracy study"}
 
 
 def _record(path: Path) -> dict | None:
@@ -44,9 +47,10 @@ def folder_kind(folder) -> str | None:
 
     Returns
     -------
-    {"run", "export"} or None
+    {"run", "export", "accuracy"} or None
         ``"run"`` when ``run.json`` is a clothsim run record, ``"export"`` when
-        ``manifest.json`` is a clothsim export manifest, else None.
+        ``manifest.json`` is a clothsim export manifest, ``"accuracy"`` when
+        ``accuracy.json`` is an accuracy study's record, else None.
     """
     p = Path(folder)
     run = _record(p / RUN_RECORD)
@@ -55,6 +59,9 @@ def folder_kind(folder) -> str | None:
     manifest = _record(p / EXPORT_RECORD)
     if manifest is not None and str(manifest.get("layout", "")).startswith("x in R^{3n}"):
         return "export"
+    study = _record(p / ACCURACY_RECORD)
+    if study is not None and "clothsim" in study and "scene" in study:
+        return "accuracy"
     return None
 
 
@@ -77,7 +84,7 @@ def claim_folder(folder, kind: str, *, force: bool = False) -> Path:
     ----------
     folder : str or Path
         The output folder (need not exist).
-    kind : {"run", "export"}
+    kind : {"run", "export", "accuracy"}
         What will be written.
     force : bool
         Write into a folder clothsim does not own anyway (``--force``).

@@ -1,7 +1,9 @@
 """A study that never loses its work: blow-ups recorded, CSV kept, steps saved and re-run."""
 
 import csv
+import json
 import math
+import os
 import warnings
 
 import numpy as np
@@ -69,6 +71,33 @@ def test_a_crash_keeps_the_measured_errors(tmp_path, monkeypatch):
     rows = read(tmp_path / "accuracy.csv")
     assert len(rows) == 6 and all(math.isfinite(float(r["solver_error_max"])) for r in rows)
     assert (tmp_path / "problems.npz").exists()
+    monkeypatch.undo()
+    study(tmp_path)  # the crashed study's folder is still a study's: re-run in place
+    assert "status" not in json.loads((tmp_path / "accuracy.json").read_text())
+
+
+def test_a_folder_of_other_files_is_refused_unless_forced(tmp_path):
+    mine = tmp_path / "accuracy.csv"
+    mine.write_text("my own table\n")
+    with pytest.raises(InputError, match="is not a clothsim accuracy study's folder: it "
+                                         "holds 'accuracy.csv'"):
+        study(tmp_path)
+    assert mine.read_text() == "my own table\n" and sorted(os.listdir(tmp_path)) == [
+        "accuracy.csv"]
+    study(tmp_path, force=True)
+    assert len(read(mine)) == 6
+    (tmp_path / "notes.txt").write_text("x")    # a study's folder with a file beside it
+    study(tmp_path)
+    with pytest.raises(InputError, match="is not a folder"):
+        study(tmp_path / "notes.txt")
+
+
+def test_no_solver_or_no_frame_is_refused_by_name(tmp_path):
+    with pytest.raises(InputError, match="^accuracy.methods: no solver given"):
+        study(tmp_path / "a", methods=())
+    with pytest.raises(InputError, match="^accuracy.frames: must be >= 1"):
+        study(tmp_path / "b", frames=0)
+    assert not (tmp_path / "a").exists() and not (tmp_path / "b").exists()
 
 
 def test_saved_steps_are_re_measured_exactly(tmp_path):
