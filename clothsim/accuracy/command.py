@@ -17,7 +17,6 @@ from collections.abc import Sequence
 
 import numpy as np
 
-from .. import __version__ as _version
 from ..errors import InputError
 from ..factorization import cholmod_available
 from ..io.common import write_text
@@ -51,6 +50,7 @@ from .study import (
 from .sweep import TRAJECTORY_LEVELS
 from .timing import (
     _limited_threads,
+    installed_version,
     machine_info,
     one_off_costs,
     source_commit,
@@ -179,8 +179,8 @@ def run_accuracy(scene, out, *, methods: Sequence[str] = ITERATIVE_METHODS,
         # reproducible, and on a shared machine faster than idle worker threads
         claim_folder(out, "accuracy", force=force)  # again, now that no other study can write
         if folder_kind(out) != "accuracy":  # mark the folder as a study's from the start
-            write_sidecar({"clothsim": _version, "scene": scene.name, "status": "running"},
-                          out / "accuracy.json")
+            write_sidecar({"clothsim": installed_version(), "scene": scene.name,
+                           "status": "running"}, out / "accuracy.json")
         return _run(scene, out, methods, problems, frames, repeats, jobs, scheduler, target,
                     budgets, tolerances, time_steps, plots, threads, steps_file, quick, commit)
 

@@ -199,6 +199,22 @@ def source_commit() -> str:
     return head + ("+dirty" if dirty else "")
 
 
+def installed_version() -> str:
+    """clothsim's installed version ("unknown" when run from a source tree not installed).
+
+    Returns
+    -------
+    str
+        The package metadata's version.
+    """
+    from importlib.metadata import PackageNotFoundError, version
+
+    try:
+        return version("clothsim")
+    except PackageNotFoundError:  # pragma: no cover - running from a source tree
+        return "unknown"
+
+
 def machine_info(threads: int = 1) -> dict:
     """Machine, Python and library versions, and the thread settings of the measurement.
 
@@ -212,14 +228,9 @@ def machine_info(threads: int = 1) -> dict:
     dict
         JSON-able description (platform, versions, threadpools, CHOLMOD availability).
     """
-    from importlib.metadata import PackageNotFoundError, version
-
     import scipy
 
-    try:
-        clothsim_version = version("clothsim")
-    except PackageNotFoundError:  # pragma: no cover - running from a source tree
-        clothsim_version = "unknown"
+    clothsim_version = installed_version()
     info = {"machine": platform.machine(), "processor": platform.processor(),
             "platform": platform.platform(), "cpu_count": os.cpu_count(),
             "python": platform.python_version(), "numpy": np.__version__,
