@@ -179,10 +179,24 @@ def run_accuracy(scene, out, *, methods: Sequence[str] = ITERATIVE_METHODS,
         # reproducible, and on a shared machine faster than idle worker threads
         claim_folder(out, "accuracy", force=force)  # again, now that no other study can write
         if folder_kind(out) != "accuracy":  # mark the folder as a study's from the start
-            write_sidecar({"clothsim": installed_version(), "scene": scene.name,
-                           "status": "running"}, out / "accuracy.json")
+            _begin(out, scene)
         return _run(scene, out, methods, problems, frames, repeats, jobs, scheduler, target,
                     budgets, tolerances, time_steps, plots, threads, steps_file, quick, commit)
+
+
+#: what a study writes besides accuracy.json and problems.npz (removed when a new one begins)
+FIGURE = "fixed_budget.png"
+OUTPUTS = ("accuracy.csv", "steps.md", FIGURE)
+
+
+def _begin(out, scene) -> None:
+    """Mark ``out`` as a study in progress: accuracy.json says ``running`` (the study's own
+    record replaces it at the end) and an earlier study's other files are removed, so that
+    what the folder holds is, at every instant, one study's (maybe unfinished) work."""
+    write_sidecar({"clothsim": installed_version(), "scene": scene.name, "status": "running"},
+                  out / "accuracy.json")
+    for name in OUTPUTS:
+        (out / name).unlink(missing_ok=True)
 
 
 def _run(scene, out, methods, problems, frames, repeats, jobs, scheduler, target, budgets,
@@ -198,6 +212,7 @@ def _run(scene, out, methods, problems, frames, repeats, jobs, scheduler, target
         with phases.phase("recording", max(1, frames * scene.substeps), "step"):
             recorded = record_problems(sim, steps=max(1, frames * scene.substeps),
                                        count=problems)
+    _begin(out, scene)  # an earlier study's files go now that this one has its steps
     save_problems(recorded, out / "problems.npz", model)
     with phases.phase("references", len(recorded), "step"):
         steps = prepare_steps(model, recorded, jobs=jobs)
@@ -259,7 +274,7 @@ def _run(scene, out, methods, problems, frames, repeats, jobs, scheduler, target
                          f"error, in at most 1/{DOMINANCE_MARGIN:g} of its time, so no answer "
                          f"can choose it")
     info = machine_info(threads) | one_off_costs(model, steps, threads=threads)
-    info |= {"commit": commit, "scene": scene.name, "h": h, "frames": frames, "repeats": repeats,
+    info |= {"status": "complete", "commit": commit, "scene": scene.name, "h": h, "frames": frames, "repeats": repeats,
              "chebyshev_rho": options.get("chebyshev", {}).get("rho"),
              "phase_seconds": phases.seconds}
     write_sidecar(info, out / "accuracy.json")
@@ -286,7 +301,7 @@ def _run(scene, out, methods, problems, frames, repeats, jobs, scheduler, target
     if plots and any(s.kind == "unique" for s in steps):  # it plots the solver error
         from .plots import plot_fixed_budget
 
-        plot_fixed_budget(table, out / "fixed_budget.png", title=scene.name,
+        plot_fixed_budget(table, out / FIGURE, title=scene.name,
                           uncertainty=reference_uncertainty(steps))
     levels = (target,) if target is not None else ACCURACY_LEVELS
     classes = ", ".join(f"{kinds.count(k)} {k}" for k in KINDS)

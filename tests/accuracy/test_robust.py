@@ -72,8 +72,28 @@ def test_a_crash_keeps_the_measured_errors(tmp_path, monkeypatch):
     assert len(rows) == 6 and all(math.isfinite(float(r["solver_error_max"])) for r in rows)
     assert (tmp_path / "problems.npz").exists()
     monkeypatch.undo()
+    assert json.loads((tmp_path / "accuracy.json").read_text())["status"] == "running"
     study(tmp_path)  # the crashed study's folder is still a study's: re-run in place
-    assert "status" not in json.loads((tmp_path / "accuracy.json").read_text())
+    assert json.loads((tmp_path / "accuracy.json").read_text())["status"] == "complete"
+
+
+def test_a_new_study_removes_the_earlier_one_before_it_writes(tmp_path, monkeypatch):
+    import clothsim.accuracy.command as command
+
+    study(tmp_path, plots=True)
+    assert {"accuracy.csv", "steps.md"} <= set(os.listdir(tmp_path))
+
+    def crash(*args, **kwargs):
+        raise RuntimeError("killed while computing the references")
+
+    monkeypatch.setattr(command, "prepare_steps", crash)
+    with pytest.raises(RuntimeError):
+        study(tmp_path, problems=2)
+    # never the old table beside the new steps: the new study's record and steps only
+    assert sorted(p for p in os.listdir(tmp_path) if not p.startswith(".")) == [
+        "accuracy.json", "problems.npz"]
+    assert json.loads((tmp_path / "accuracy.json").read_text())["status"] == "running"
+    assert len(load_problems(tmp_path / "problems.npz")) == 2
 
 
 def test_a_folder_of_other_files_is_refused_unless_forced(tmp_path):
