@@ -25,6 +25,7 @@ from .answer import answer_table, short_answer
 from .converged import warm_started
 from .dominance import MARGIN as DOMINANCE_MARGIN
 from .limits import method_limits, worse_minimum_notes
+from .parallel import check_scheduler
 from .phases import Phases
 from .problems import load_problems, record_problems, save_problems
 from .report import (
@@ -163,6 +164,8 @@ def run_accuracy(scene, out, *, methods: Sequence[str] = ITERATIVE_METHODS,
         if m not in SOLVERS or m == "symplectic-euler":
             raise InputError(f"accuracy.methods: {m!r} is not an iterative solver; choose from "
                              f"{', '.join(s for s in SOLVERS if s != 'symplectic-euler')}")
+    if scheduler is not None:
+        check_scheduler(scheduler)  # before anything is computed or written
     if not methods:
         raise InputError("accuracy.methods: no solver given; name one or more of "
                          + ", ".join(ITERATIVE_METHODS))
@@ -274,7 +277,8 @@ def _run(scene, out, methods, problems, frames, repeats, jobs, scheduler, target
                          f"error, in at most 1/{DOMINANCE_MARGIN:g} of its time, so no answer "
                          f"can choose it")
     info = machine_info(threads) | one_off_costs(model, steps, threads=threads)
-    info |= {"status": "complete", "commit": commit, "scene": scene.name, "h": h, "frames": frames, "repeats": repeats,
+    info |= {"status": "complete", "commit": commit, "scene": scene.name, "h": h,
+             "frames": frames, "repeats": repeats,
              "chebyshev_rho": options.get("chebyshev", {}).get("rho"),
              "phase_seconds": phases.seconds}
     write_sidecar(info, out / "accuracy.json")

@@ -4,11 +4,45 @@
 worker processes, or on a Dask cluster through joblib's dask backend, and returns the
 results in the items' order. Every function it runs in the study is deterministic (one
 solve, one reference, one trajectory), so the results do not depend on ``jobs``.
+:func:`check_scheduler` tries a Dask scheduler's address before a study starts, so that a
+wrong one is a one-line error at once instead of a failure after the recording.
 """
 
 from __future__ import annotations
 
 from collections.abc import Callable, Iterable, Sequence
+
+from ..errors import InputError
+
+#: seconds a study waits for its Dask scheduler to answer before it gives up
+CONNECT_TIMEOUT = 10
+
+
+def check_scheduler(address: str) -> None:
+    """Connect to the Dask scheduler at ``address`` once, or say in one line why not.
+
+    Parameters
+    ----------
+    address : str
+        E.g. ``tcp://10.0.0.5:8786``.
+
+    Raises
+    ------
+    InputError
+        ``accuracy.scheduler: …`` when dask.distributed is not installed (the extra
+        ``cluster``) or the scheduler does not answer within :data:`CONNECT_TIMEOUT`.
+    """
+    try:
+        from dask.distributed import Client
+    except ImportError:
+        raise InputError("accuracy.scheduler: needs dask.distributed: pip install "
+                         "'clothsim[cluster]'") from None
+    try:
+        with Client(address, timeout=f"{CONNECT_TIMEOUT}s"):
+            pass
+    except (OSError, ValueError, TypeError) as exc:   # TimeoutError is an OSError
+        text = " ".join(str(exc).split()) or type(exc).__name__
+        raise InputError(f"accuracy.scheduler: cannot use {address!r}: {text}") from None
 
 
 def map_jobs(func: Callable, items: Iterable[Sequence], *, jobs: int = 1,

@@ -14,9 +14,11 @@ from clothsim.accuracy import (
     measure,
     prepare_steps,
     record_problems,
+    run_accuracy,
 )
 from clothsim.accuracy.answer import answer_table
 from clothsim.accuracy.report import COLUMNS, rows, write_csv
+from clothsim.errors import InputError
 from clothsim.scene import Scene
 from clothsim.simulation import State
 
@@ -234,6 +236,21 @@ def test_dask_scheduler_gives_the_same_errors_as_serial():
     for a, b in zip(serial, remote):
         np.testing.assert_array_equal(a.errors, b.errors)
         np.testing.assert_array_equal(a.iterations, b.iterations)
+
+
+def test_a_scheduler_that_cannot_be_used_is_one_line_before_anything_runs(tmp_path,
+                                                                          monkeypatch):
+    pytest.importorskip("dask.distributed",
+                        reason="dask.distributed is not installed (extra 'cluster')")
+    from clothsim.accuracy import parallel
+
+    monkeypatch.setattr(parallel, "CONNECT_TIMEOUT", 1)
+    for address, why in (("garbage", "missing port"), ("tcp://127.0.0.1:1", "Timed out")):
+        with pytest.raises(InputError, match=f"^accuracy.scheduler: cannot use "
+                                             f"'{address}': .*{why}"):
+            run_accuracy(Scene.from_dict(TINY), tmp_path / "out", scheduler=address,
+                         quick=True, plots=False)
+        assert not (tmp_path / "out").exists()
 
 
 def test_rho_per_step_matches_the_decay_of_the_local_global_error():
