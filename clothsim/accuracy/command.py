@@ -164,13 +164,13 @@ def run_accuracy(scene, out, *, methods: Sequence[str] = ITERATIVE_METHODS,
         if m not in SOLVERS or m == "symplectic-euler":
             raise InputError(f"accuracy.methods: {m!r} is not an iterative solver; choose from "
                              f"{', '.join(s for s in SOLVERS if s != 'symplectic-euler')}")
-    if scheduler is not None:
-        check_scheduler(scheduler)  # before anything is computed or written
     if not methods:
         raise InputError("accuracy.methods: no solver given; name one or more of "
                          + ", ".join(ITERATIVE_METHODS))
     if frames is not None and frames < 1:
         raise InputError(f"accuracy.frames: must be >= 1 (a study needs a step), got {frames}")
+    if scheduler is not None:
+        check_scheduler(scheduler)  # the slowest check, last; before anything is written
     if quick:
         problems, repeats = min(problems, QUICK["problems"]), min(repeats, QUICK["repeats"])
         budgets, tolerances = QUICK["budgets"], QUICK["tolerances"]
