@@ -8,7 +8,9 @@ interleaved in every repeat (order rotated), each repeat gives a ratio to the lo
 run of the same repeat, and the median ratio over ``REPEATS`` is printed, of wall time and
 (in brackets) of CPU time (``time.process_time``: less moved by other jobs on a shared
 machine); every thread pool is limited to one thread (threadpoolctl). Targets (issue 20):
-Chebyshev ≤ 1.15, Anderson and L-BFGS ≤ 2.
+Chebyshev ≤ 1.15, Anderson and L-BFGS ≤ 2. A last line gives each method's extra
+microseconds per iteration over local/global's at :data:`TINY`² too, where every array is
+tiny: the share of the extra that is the NumPy and Python calls' fixed cost.
 """
 
 from __future__ import annotations
@@ -27,6 +29,8 @@ from . import ROOT
 from .performance import falling_sheet
 
 SIZES = (21, 41)
+TINY = 5
+"""A cloth so small that an iteration's cost is its calls' fixed cost, not arithmetic."""
 ITERATIONS = 100
 REPEATS = 21
 METHODS = ("local-global", "chebyshev", "anderson", "lbfgs")
@@ -109,7 +113,13 @@ def main() -> list[dict]:
                 wall = res["ratios"][m]
                 verdicts.append(f"  {n}x{n} {m} <= {target:g}: "
                                 f"{'met' if wall <= target else 'missed'} ({wall:.2f})")
-    lines += ["targets (issue 20), on the wall-time ratio:", *verdicts]
+        tiny = measure(TINY)   # every array tiny: what is left is the calls' fixed cost
+    extra = "; ".join(f"{r['n']}x{r['n']}: " + ", ".join(
+        f"{m} +{1e6 * (r['ratios'][m] - 1.0) * r['local-global_s']:.0f}" for m in TARGETS)
+        for r in (tiny, *results))
+    line = f"extra us/iteration over local/global ({TINY}x{TINY}: fixed per-call cost) -- {extra}"
+    print(line)
+    lines += [line, "targets (issue 20), on the wall-time ratio:", *verdicts]
     for v in verdicts:
         print(v)
     OUT.write_text("Printed by `.venv/bin/python -m benchmarks iteration_cost`:\n\n```text\n"
