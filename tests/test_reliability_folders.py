@@ -2,6 +2,8 @@
 folder; anything else is refused naming the folder and the first foreign file, --force
 writes anyway; export takes the same lock as run."""
 
+import re
+
 import numpy as np
 import pytest
 
@@ -101,6 +103,20 @@ def test_export_into_a_running_runs_folder_is_refused_even_with_force(tiny, tmp_
         with pytest.raises(InputError, match="another clothsim run"):
             run_scene(tiny, run, preview=False)
     assert (run / "trajectory.npz").read_bytes() == traj
+
+
+@pytest.mark.parametrize("kind, said", [("export", "another clothsim export (pid "),
+                                        ("accuracy", "another clothsim accuracy study (pid ")])
+def test_a_refused_lock_names_what_holds_it(tiny, tmp_path, kind, said):
+    import os
+
+    folder = tmp_path / "f"
+    folder.mkdir()
+    with FolderLock(folder, kind):
+        with pytest.raises(InputError, match=re.escape(f"{folder}: {said}{os.getpid()})")):
+            run_scene(tiny, folder, preview=False, force=True)
+    with pytest.raises(ValueError, match="kind"):
+        FolderLock(folder, "study")
 
 
 def tiny_scene(path):

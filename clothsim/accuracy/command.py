@@ -178,8 +178,9 @@ def run_accuracy(scene, out, *, methods: Sequence[str] = ITERATIVE_METHODS,
     out.mkdir(parents=True, exist_ok=True)
     commit = source_commit()  # of the code that runs (HEAD may move while it runs)
     cholmod_available()  # load CHOLMOD's BLAS and OpenMP first, so that their pools are limited
-    with FolderLock(out), _limited_threads(threads):  # one BLAS/OpenMP thread throughout:
-        # reproducible, and on a shared machine faster than idle worker threads
+    # one BLAS/OpenMP thread throughout: reproducible, and on a shared machine faster than
+    # idle worker threads
+    with FolderLock(out, "accuracy"), _limited_threads(threads):
         claim_folder(out, "accuracy", force=force)  # again, now that no other study can write
         if folder_kind(out) != "accuracy":  # mark the folder as a study's from the start
             _begin(out, scene)

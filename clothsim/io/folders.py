@@ -132,20 +132,27 @@ class FolderLock:
     ----------
     folder : Path
         The output folder (exists).
+    kind : {"run", "export", "accuracy"}, default "run"
+        What this process writes there (written into the lock file beside its id, so that
+        a process refused the lock is told what holds it).
 
     Raises
     ------
     InputError
-        From :meth:`acquire`, when another process holds the lock: names the folder and
-        that process's id.
+        From :meth:`acquire`, when another process holds the lock: names the folder, what
+        that process writes and its id.
     """
 
-    def __init__(self, folder):
+    def __init__(self, folder, kind: str = "run"):
+        if kind not in KINDS:
+            raise ValueError(f"kind: must be one of {', '.join(KINDS)}, got {kind!r}")
         self.path = Path(folder) / LOCK_NAME
+        self.kind = kind
         self._fd: int | None = None
 
     def acquire(self) -> FolderLock:
-        """Take the lock (without waiting) and write this process's id into the lock file.
+        """Take the lock (without waiting) and write this process's id and kind into the
+        lock file.
 
         Returns
         -------
@@ -156,13 +163,15 @@ class FolderLock:
         try:
             fcntl.flock(fd, fcntl.LOCK_EX | fcntl.LOCK_NB)
         except OSError:
-            holder = os.pread(fd, 64, 0).decode("ascii", "replace").strip() or "unknown"
+            words = os.pread(fd, 64, 0).decode("ascii", "replace").split()
             os.close(fd)
-            raise InputError(f"{self.path.parent}: another clothsim run (pid {holder}) is "
-                             "writing into this folder; wait for it or choose another "
-                             "--out") from None
+            holder = words[0] if words else "unknown"
+            what = KINDS.get(words[1], "a clothsim run") if len(words) > 1 else "a clothsim run"
+            raise InputError(f"{self.path.parent}: another {what.split(' ', 1)[1]} (pid "
+                             f"{holder}) is writing into this folder; wait for it or choose "
+                             "another --out") from None
         os.ftruncate(fd, 0)
-        os.pwrite(fd, f"{os.getpid()}\n".encode("ascii"), 0)
+        os.pwrite(fd, f"{os.getpid()} {self.kind}\n".encode("ascii"), 0)
         self._fd = fd
         return self
 

@@ -250,7 +250,7 @@ def export_port(source, out_dir, *, frames: int = 60, iterate_steps: int = 3,
     sim = as_simulation(source)
     out = claim_folder(out_dir, "export", force=force)
     out.mkdir(parents=True, exist_ok=True)
-    with FolderLock(out):
+    with FolderLock(out, "export"):
         claim_folder(out, "export", force=force)
         # the folder is an export folder before any other file is written
         (out / "manifest.json").write_text(json.dumps({"layout": LAYOUT, "status": "writing"}))
