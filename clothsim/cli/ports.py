@@ -88,6 +88,9 @@ def _add_port_commands(sub) -> None:
                          "effect each, with reference data and iterates")
     con.add_argument("--out", metavar="DIR", default="conformance",
                      help="output directory (conformance)")
+    con.add_argument("--force", action="store_true",
+                     help="write into DIR even when it holds files that are not a clothsim "
+                     "conformance set")
     con.add_argument("--profile", choices=("general", "coursework"), default="general",
                      help="general: one effect per case (default); coursework: cases the "
                      "mass-spring assignment's program runs unchanged (one k, penalty pins "
@@ -220,7 +223,7 @@ def _cmd_conformance(args) -> int:
     else:
         from ..ports.conformance import write_conformance as write
 
-    names = write(args.out)
+    names = write(args.out, force=args.force)
     print(f"{len(names)} {args.profile} conformance cases written to {args.out} "
           f"(read {args.out}/README.md)")
     return 0

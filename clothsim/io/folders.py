@@ -4,7 +4,8 @@ clothsim writes only into a folder it owns (:func:`claim_folder`): a missing or 
 one whose own record marks it as clothsim's output of the same kind: ``run.json`` with
 ``clothsim_run`` for a run (``clothsim run``), ``manifest.json`` with clothsim's ``layout``
 for an export (``clothsim export``), ``accuracy.json`` with ``clothsim`` and ``scene`` for an
-accuracy study (``clothsim accuracy``). Anything else is refused with an
+accuracy study (``clothsim accuracy``), a ``README.md`` headed as a conformance set's for
+one (``clothsim conformance``, either profile). Anything else is refused with an
 :class:`~clothsim.errors.InputError` naming the folder and its first foreign file, unless
 ``force`` is given. :class:`FolderLock` is an exclusive :func:`fcntl.flock` on
 ``<folder>/.clothsim.lock``, taken by runs, exports and accuracy studies alike.
@@ -23,8 +24,11 @@ LOCK_NAME = ".clothsim.lock"
 RUN_RECORD = "run.json"
 EXPORT_RECORD = "manifest.json"
 ACCURACY_RECORD = "accuracy.json"
+CONFORMANCE_RECORD = "README.md"
+#: first lines of a conformance set's README.md (``clothsim conformance``, both profiles)
+CONFORMANCE_HEADINGS = ("# clothsim conformance set", "# clothsim coursework profile")
 KINDS = {"run": "a clothsim run", "export": "a clothsim export",
-         "accuracy": "a clothsim accuracy study"}
+         "accuracy": "a clothsim accuracy study", "conformance": "a clothsim conformance set"}
 
 
 def _record(path: Path) -> dict | None:
@@ -47,10 +51,11 @@ def folder_kind(folder) -> str | None:
 
     Returns
     -------
-    {"run", "export", "accuracy"} or None
+    {"run", "export", "accuracy", "conformance"} or None
         ``"run"`` when ``run.json`` is a clothsim run record, ``"export"`` when
         ``manifest.json`` is a clothsim export manifest, ``"accuracy"`` when
-        ``accuracy.json`` is an accuracy study's record, else None.
+        ``accuracy.json`` is an accuracy study's record, ``"conformance"`` when
+        ``README.md`` is a conformance set's, else None.
     """
     p = Path(folder)
     run = _record(p / RUN_RECORD)
@@ -62,7 +67,20 @@ def folder_kind(folder) -> str | None:
     study = _record(p / ACCURACY_RECORD)
     if study is not None and "clothsim" in study and "scene" in study:
         return "accuracy"
+    if _first_line(p / CONFORMANCE_RECORD) in CONFORMANCE_HEADINGS:
+        return "conformance"
     return None
+
+
+def _first_line(path: Path) -> str | None:
+    """The first line of a small text file (None when missing or unreadable)."""
+    try:
+        if not path.is_file():
+            return None
+        with open(path, "rb") as fh:
+            return fh.readline(200).decode("utf-8", "replace").rstrip("\r\n")
+    except OSError:
+        return None
 
 
 def _foreign_entries(p: Path) -> list[str]:
@@ -84,7 +102,7 @@ def claim_folder(folder, kind: str, *, force: bool = False) -> Path:
     ----------
     folder : str or Path
         The output folder (need not exist).
-    kind : {"run", "export", "accuracy"}
+    kind : {"run", "export", "accuracy", "conformance"}
         What will be written.
     force : bool
         Write into a folder clothsim does not own anyway (``--force``).
@@ -132,7 +150,7 @@ class FolderLock:
     ----------
     folder : Path
         The output folder (exists).
-    kind : {"run", "export", "accuracy"}, default "run"
+    kind : {"run", "export", "accuracy", "conformance"}, default "run"
         What this process writes there (written into the lock file beside its id, so that
         a process refused the lock is told what holds it).
 

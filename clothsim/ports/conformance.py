@@ -14,6 +14,8 @@ from pathlib import Path
 
 import numpy as np
 
+from ..io.common import atomic_path, write_text
+from ..io.folders import FolderLock, claim_folder
 from ..scene import Scene
 from ..simulation import State
 from .export import export_port
@@ -164,7 +166,7 @@ Cases:
 
 
 def write_conformance(out_dir, *, frames: int = 20, iterate_steps: int = 2,
-                      cases=None) -> list[str]:
+                      cases=None, force: bool = False) -> list[str]:
     """Write the conformance set into ``out_dir``; returns the case names written.
 
     Parameters
@@ -176,15 +178,23 @@ def write_conformance(out_dir, *, frames: int = 20, iterate_steps: int = 2,
         Steps whose iterates are written.
     cases : sequence of str, optional
         A subset of :data:`CASES`.
+    force : bool
+        Write into ``out_dir`` even when it holds files that are not a conformance set's
+        (:func:`clothsim.io.folders.claim_folder`).
 
     Returns
     -------
     list of str
         The case names written, one folder each.
     """
-    out = Path(out_dir)
+    out = claim_folder(out_dir, "conformance", force=force)
     out.mkdir(parents=True, exist_ok=True)
-    names = list(CASES) if cases is None else list(cases)
+    with FolderLock(out, "conformance"):
+        return _write_cases(out, frames, iterate_steps,
+                            list(CASES) if cases is None else list(cases))
+
+
+def _write_cases(out: Path, frames: int, iterate_steps: int, names: list[str]) -> list[str]:
     lines = []
     for name in names:
         doc = CASES[name]
@@ -192,10 +202,10 @@ def write_conformance(out_dir, *, frames: int = 20, iterate_steps: int = 2,
         scene = Scene.from_dict(doc, source=str(d / "scene.toml"), base_dir=d)
         export_port(lambda n=name, s=scene: case_simulation(n, s), d, frames=frames,
                     iterate_steps=iterate_steps)  # an export folder: then the scene beside it
-        (d / "scene.toml").write_text(to_toml(doc))
+        write_text(d / "scene.toml", to_toml(doc))
         if name == "springs-stretch":
-            np.savetxt(d / "initial-state.txt", np.load(d / "trajectory.npz")["positions"][0],
-                       fmt="%.17g")
+            with atomic_path(d / "initial-state.txt") as tmp:
+                np.savetxt(tmp, np.load(d / "trajectory.npz")["positions"][0], fmt="%.17g")
         lines.append(f"- `{name}`: {doc['scene']['description']}")
-    (out / "README.md").write_text(README + "\n".join(lines) + "\n")
+    write_text(out / "README.md", README + "\n".join(lines) + "\n")
     return names

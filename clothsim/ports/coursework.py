@@ -31,7 +31,7 @@ import numpy as np
 
 from ..io.assignment import scene_dict
 from ..io.common import write_text
-from ..io.folders import claim_folder
+from ..io.folders import FolderLock, claim_folder
 from ..scene import Scene
 from .conformance import to_toml
 from .export import export_port
@@ -112,7 +112,8 @@ Cases:
 """
 
 
-def write_coursework(out_dir, *, frames: int = 30, cases=None) -> list[str]:
+def write_coursework(out_dir, *, frames: int = 30, cases=None,
+                     force: bool = False) -> list[str]:
     """Write the coursework profile into ``out_dir``; returns the case names written.
 
     Parameters
@@ -122,16 +123,23 @@ def write_coursework(out_dir, *, frames: int = 30, cases=None) -> list[str]:
         Steps of each expected trajectory.
     cases : sequence of str, optional
         A subset of :data:`CASES`.
+    force : bool
+        Write into ``out_dir`` even when it holds files that are not a conformance set's
+        (:func:`clothsim.io.folders.claim_folder`).
 
     Returns
     -------
     list of str
         The case names written, one folder each.
     """
-    out = Path(out_dir)
+    out = claim_folder(out_dir, "conformance", force=force)
     out.mkdir(parents=True, exist_ok=True)
+    with FolderLock(out, "conformance"):
+        return _write_cases(out, frames, list(CASES) if cases is None else list(cases))
+
+
+def _write_cases(out: Path, frames: int, names: list[str]) -> list[str]:
     table = _cases()
-    names = list(CASES) if cases is None else list(cases)
     lines = []
     for name in names:
         (x, faces), spec, description = table[name]

@@ -58,6 +58,24 @@ def test_subset(tmp_path):
     assert not (tmp_path / "plane").exists()
 
 
+def test_a_folder_of_other_files_is_refused_unless_forced(tmp_path):
+    from clothsim.errors import InputError
+    from clothsim.ports.coursework import write_coursework
+
+    out = tmp_path / "set"
+    out.mkdir()
+    (out / "README.md").write_text("my notes\n")
+    with pytest.raises(InputError, match="is not a clothsim conformance set's folder: it "
+                                         "holds 'README.md'"):
+        write_conformance(out, cases=["wind"], frames=2)
+    assert (out / "README.md").read_text() == "my notes\n" and len(list(out.iterdir())) == 1
+    assert write_conformance(out, cases=["wind"], frames=2, force=True) == ["wind"]
+    # now a conformance set: written into again, by either profile, without --force
+    assert write_conformance(out, cases=["plane"], frames=2) == ["plane"]
+    assert write_coursework(out, cases=["spring"], frames=2) == ["spring"]
+    assert (out / "README.md").read_text().startswith("# clothsim coursework profile")
+
+
 def test_contact_case_failure_names_the_projection(conformance):
     from clothsim.ports.check import check_steps
 
