@@ -8,7 +8,8 @@ accuracy study (``clothsim accuracy``), a ``README.md`` headed as a conformance 
 one (``clothsim conformance``, either profile). Anything else is refused with an
 :class:`~clothsim.errors.InputError` naming the folder and its first foreign file, unless
 ``force`` is given. :class:`FolderLock` is an exclusive :func:`fcntl.flock` on
-``<folder>/.clothsim.lock``, taken by runs, exports and accuracy studies alike.
+``<folder>/.clothsim.lock``, taken by runs, exports, accuracy studies and conformance sets
+alike.
 """
 
 from __future__ import annotations
