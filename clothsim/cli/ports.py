@@ -86,8 +86,9 @@ def _add_port_commands(sub) -> None:
 
     con = sub.add_parser("conformance", help="write the conformance set: tiny scenes, one "
                          "effect each, with reference data and iterates")
-    con.add_argument("--out", metavar="DIR", default="conformance",
-                     help="output directory (conformance)")
+    con.add_argument("--out", metavar="DIR", default=None,
+                     help="output directory (default: conformance, or coursework with "
+                     "--profile coursework)")
     con.add_argument("--force", action="store_true",
                      help="write into DIR even when it holds files that are not a clothsim "
                      "conformance set")
@@ -223,7 +224,9 @@ def _cmd_conformance(args) -> int:
     else:
         from ..ports.conformance import write_conformance as write
 
-    names = write(args.out, force=args.force)
-    print(f"{len(names)} {args.profile} conformance cases written to {args.out} "
-          f"(read {args.out}/README.md)")
+    out = args.out if args.out is not None else (
+        "coursework" if args.profile == "coursework" else "conformance")
+    names = write(out, force=args.force)
+    print(f"{len(names)} {args.profile} conformance cases written to {out} "
+          f"(read {out}/README.md)")
     return 0

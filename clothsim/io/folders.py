@@ -4,12 +4,12 @@ clothsim writes only into a folder it owns (:func:`claim_folder`): a missing or 
 one whose own record marks it as clothsim's output of the same kind: ``run.json`` with
 ``clothsim_run`` for a run (``clothsim run``), ``manifest.json`` with clothsim's ``layout``
 for an export (``clothsim export``), ``accuracy.json`` with ``clothsim`` and ``scene`` for an
-accuracy study (``clothsim accuracy``), a ``README.md`` headed as a conformance set's for
-one (``clothsim conformance``, either profile). Anything else is refused with an
+accuracy study (``clothsim accuracy``), a ``README.md`` headed as a conformance set's or a
+coursework profile's for those (``clothsim conformance``, ``--profile coursework``): one
+folder, one profile. Anything else is refused with an
 :class:`~clothsim.errors.InputError` naming the folder and its first foreign file, unless
 ``force`` is given. :class:`FolderLock` is an exclusive :func:`fcntl.flock` on
-``<folder>/.clothsim.lock``, taken by runs, exports, accuracy studies and conformance sets
-alike.
+``<folder>/.clothsim.lock``, taken by every kind alike.
 """
 
 from __future__ import annotations
@@ -26,10 +26,12 @@ RUN_RECORD = "run.json"
 EXPORT_RECORD = "manifest.json"
 ACCURACY_RECORD = "accuracy.json"
 CONFORMANCE_RECORD = "README.md"
-#: first lines of a conformance set's README.md (``clothsim conformance``, both profiles)
-CONFORMANCE_HEADINGS = ("# clothsim conformance set", "# clothsim coursework profile")
+#: first line of the README.md of each profile of ``clothsim conformance``
+CONFORMANCE_HEADINGS = {"# clothsim conformance set": "conformance",
+                        "# clothsim coursework profile": "coursework"}
 KINDS = {"run": "a clothsim run", "export": "a clothsim export",
-         "accuracy": "a clothsim accuracy study", "conformance": "a clothsim conformance set"}
+         "accuracy": "a clothsim accuracy study", "conformance": "a clothsim conformance set",
+         "coursework": "a clothsim coursework profile"}
 
 
 def _record(path: Path) -> dict | None:
@@ -52,11 +54,11 @@ def folder_kind(folder) -> str | None:
 
     Returns
     -------
-    {"run", "export", "accuracy", "conformance"} or None
+    {"run", "export", "accuracy", "conformance", "coursework"} or None
         ``"run"`` when ``run.json`` is a clothsim run record, ``"export"`` when
         ``manifest.json`` is a clothsim export manifest, ``"accuracy"`` when
-        ``accuracy.json`` is an accuracy study's record, ``"conformance"`` when
-        ``README.md`` is a conformance set's, else None.
+        ``accuracy.json`` is an accuracy study's record, ``"conformance"`` or
+        ``"coursework"`` when ``README.md`` is that profile's, else None.
     """
     p = Path(folder)
     run = _record(p / RUN_RECORD)
@@ -68,9 +70,7 @@ def folder_kind(folder) -> str | None:
     study = _record(p / ACCURACY_RECORD)
     if study is not None and "clothsim" in study and "scene" in study:
         return "accuracy"
-    if _first_line(p / CONFORMANCE_RECORD) in CONFORMANCE_HEADINGS:
-        return "conformance"
-    return None
+    return CONFORMANCE_HEADINGS.get(_first_line(p / CONFORMANCE_RECORD))
 
 
 def _first_line(path: Path) -> str | None:
@@ -103,7 +103,7 @@ def claim_folder(folder, kind: str, *, force: bool = False) -> Path:
     ----------
     folder : str or Path
         The output folder (need not exist).
-    kind : {"run", "export", "accuracy", "conformance"}
+    kind : {"run", "export", "accuracy", "conformance", "coursework"}
         What will be written.
     force : bool
         Write into a folder clothsim does not own anyway (``--force``).
@@ -151,7 +151,7 @@ class FolderLock:
     ----------
     folder : Path
         The output folder (exists).
-    kind : {"run", "export", "accuracy", "conformance"}, default "run"
+    kind : {"run", "export", "accuracy", "conformance", "coursework"}, default "run"
         What this process writes there (written into the lock file beside its id, so that
         a process refused the lock is told what holds it).
 

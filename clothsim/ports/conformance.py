@@ -179,8 +179,8 @@ def write_conformance(out_dir, *, frames: int = 20, iterate_steps: int = 2,
     cases : sequence of str, optional
         A subset of :data:`CASES`.
     force : bool
-        Write into ``out_dir`` even when it holds files that are not a conformance set's
-        (:func:`clothsim.io.folders.claim_folder`).
+        Write into ``out_dir`` even when it holds files that are not a conformance set's,
+        e.g. the coursework profile (:func:`clothsim.io.folders.claim_folder`).
 
     Returns
     -------

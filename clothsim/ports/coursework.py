@@ -124,17 +124,17 @@ def write_coursework(out_dir, *, frames: int = 30, cases=None,
     cases : sequence of str, optional
         A subset of :data:`CASES`.
     force : bool
-        Write into ``out_dir`` even when it holds files that are not a conformance set's
-        (:func:`clothsim.io.folders.claim_folder`).
+        Write into ``out_dir`` even when it holds files that are not a coursework
+        profile's, e.g. the general conformance set (:func:`clothsim.io.folders.claim_folder`).
 
     Returns
     -------
     list of str
         The case names written, one folder each.
     """
-    out = claim_folder(out_dir, "conformance", force=force)
+    out = claim_folder(out_dir, "coursework", force=force)
     out.mkdir(parents=True, exist_ok=True)
-    with FolderLock(out, "conformance"):
+    with FolderLock(out, "coursework"):
         return _write_cases(out, frames, list(CASES) if cases is None else list(cases))
 
 

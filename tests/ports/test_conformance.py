@@ -70,10 +70,16 @@ def test_a_folder_of_other_files_is_refused_unless_forced(tmp_path):
         write_conformance(out, cases=["wind"], frames=2)
     assert (out / "README.md").read_text() == "my notes\n" and len(list(out.iterdir())) == 1
     assert write_conformance(out, cases=["wind"], frames=2, force=True) == ["wind"]
-    # now a conformance set: written into again, by either profile, without --force
+    # now a conformance set: written into again without --force; one folder, one profile
     assert write_conformance(out, cases=["plane"], frames=2) == ["plane"]
-    assert write_coursework(out, cases=["spring"], frames=2) == ["spring"]
-    assert (out / "README.md").read_text().startswith("# clothsim coursework profile")
+    with pytest.raises(InputError, match="holds a clothsim conformance set, not a clothsim "
+                                         "coursework profile"):
+        write_coursework(out, cases=["spring"], frames=2)
+    assert not (out / "spring").exists()
+    assert write_coursework(tmp_path / "cw", cases=["spring"], frames=2) == ["spring"]
+    assert write_coursework(tmp_path / "cw", cases=["chain"], frames=2) == ["chain"]
+    with pytest.raises(InputError, match="holds a clothsim coursework profile"):
+        write_conformance(tmp_path / "cw", cases=["wind"], frames=2)
 
 
 def test_contact_case_failure_names_the_projection(conformance):
