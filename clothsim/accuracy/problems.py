@@ -183,11 +183,12 @@ def load_problems(path, model: Model | None = None,
         if sizes:
             raise InputError(f"{where} holds step problems of {sizes[0]} vertices; this "
                              f"scene's cloth has {n} (record them anew: drop --steps)")
-        saved = str(data["model_digest"]) if "model_digest" in data else None
-        if saved is not None and saved != step_digest(model):
+        saved, mine = (str(data["model_digest"]) if "model_digest" in data else None,
+                       step_digest(model))
+        if saved is not None and saved != mine:
             raise InputError(f"{where} was recorded on another cloth (masses or springs "
-                             f"differ: model digest {saved}, this scene's "
-                             f"{step_digest(model)}); record them anew: drop --steps")
+                             f"differ: model digest {saved}, this scene's {mine}); record "
+                             f"them anew: drop --steps")
     if h is not None:
         other = sorted({r.problem.h for r in out if r.problem.h != h})
         if other:

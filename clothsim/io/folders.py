@@ -26,9 +26,11 @@ RUN_RECORD = "run.json"
 EXPORT_RECORD = "manifest.json"
 ACCURACY_RECORD = "accuracy.json"
 CONFORMANCE_RECORD = "README.md"
-#: first line of the README.md of each profile of ``clothsim conformance``
-CONFORMANCE_HEADINGS = {"# clothsim conformance set": "conformance",
-                        "# clothsim coursework profile": "coursework"}
+#: first line of the README.md of each profile of ``clothsim conformance`` (the writers in
+#: clothsim.ports begin their README with it, so ownership follows the heading they write)
+CONFORMANCE_HEADING = "# clothsim conformance set"
+COURSEWORK_HEADING = "# clothsim coursework profile"
+CONFORMANCE_HEADINGS = {CONFORMANCE_HEADING: "conformance", COURSEWORK_HEADING: "coursework"}
 KINDS = {"run": "a clothsim run", "export": "a clothsim export",
          "accuracy": "a clothsim accuracy study", "conformance": "a clothsim conformance set",
          "coursework": "a clothsim coursework profile"}

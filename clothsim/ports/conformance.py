@@ -15,7 +15,7 @@ from pathlib import Path
 import numpy as np
 
 from ..io.common import atomic_path, write_text
-from ..io.folders import FolderLock, claim_folder
+from ..io.folders import CONFORMANCE_HEADING, FolderLock, claim_folder
 from ..scene import Scene
 from ..simulation import State
 from .export import export_port
@@ -134,7 +134,7 @@ def case_simulation(name: str, scene: Scene):
     return sim
 
 
-README = """# clothsim conformance set
+README = CONFORMANCE_HEADING + """
 
 Each folder isolates one effect on a 5 × 5 sheet (25 vertices, h = 1/30 s, 10 local/global
 iterations per step, y = x_n + h v_n). Start with `springs-stretch` (springs only), then

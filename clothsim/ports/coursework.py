@@ -31,7 +31,7 @@ import numpy as np
 
 from ..io.assignment import scene_dict
 from ..io.common import write_text
-from ..io.folders import FolderLock, claim_folder
+from ..io.folders import COURSEWORK_HEADING, FolderLock, claim_folder
 from ..scene import Scene
 from .conformance import to_toml
 from .export import export_port
@@ -92,7 +92,7 @@ def _write_obj(path: Path, x: np.ndarray, faces) -> None:
     write_text(path, "\n".join(lines) + "\n")
 
 
-README = """# clothsim coursework profile
+README = COURSEWORK_HEADING + """
 
 Cases of the mass-spring assignment that every solution can run without edits: one
 stiffness k for all springs, pins held by a penalty w = 1e10 N/m, -9.8 N on every vertex,
