@@ -27,6 +27,8 @@ from .common import MeshioFailure, atomic_path, load_meshio, one_line, quietly
 logger = logging.getLogger(__name__)
 
 PVD_NAME = "trajectory.pvd"
+#: File name of the obstacle surfaces in a run folder (beside ``trajectory.pvd``).
+OBSTACLES_NAME = "obstacles.vtu"
 FRAME_COMPRESSIONS = ("auto", "zlib", "none")
 #: Vertices up to which "auto" compresses frames. meshio's zlib (level 6, one core) costs
 #: about 4 µs of CPU per vertex and frame and shrinks the file to about a third, while the
