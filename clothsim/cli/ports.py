@@ -7,7 +7,7 @@ import math
 from pathlib import Path
 
 from ..scene.schema import MAX_FRAMES, MAX_VERTICES
-from .common import _fail, add_set_option, count, other_output
+from .common import _fail, add_set_option, count, other_output, stopped
 
 
 def _add_port_commands(sub) -> None:
@@ -133,8 +133,11 @@ def _cmd_export(args) -> int:
         if other:
             return _fail(other, 2)
     frames = scene.frames if args.frames is None else args.frames
-    manifest = export_port(scene, out, frames=frames, iterate_steps=args.iterate_steps,
-                           force=args.force)
+    try:
+        manifest = export_port(scene, out, frames=frames, iterate_steps=args.iterate_steps,
+                               force=args.force)
+    except (KeyboardInterrupt, OSError) as exc:
+        return stopped(exc, out)
     print(f"{scene.name}: {len(manifest['files'])} files for n = {manifest['vertex_count']}, "
           f"s = {manifest['spring_count']}, h = {manifest['h']:.6g} s, {frames} frames, "
           f"κ(M + h²L) = {manifest['condition_number']:.4g} written to {out}")
@@ -226,7 +229,10 @@ def _cmd_conformance(args) -> int:
 
     out = args.out if args.out is not None else (
         "coursework" if args.profile == "coursework" else "conformance")
-    names = write(out, force=args.force)
+    try:
+        names = write(out, force=args.force)
+    except (KeyboardInterrupt, OSError) as exc:
+        return stopped(exc, out)
     print(f"{len(names)} {args.profile} conformance cases written to {out} "
           f"(read {out}/README.md)")
     return 0

@@ -166,7 +166,8 @@ WORDS = {"run": {"writing": "running", "complete": "completed"},
          "accuracy": {"writing": "running"}}
 #: the line a conformance README carries below its heading while it is not complete
 STATUS_PREFIX = "status: "
-_REMEDY = {"run": "finish it with clothsim run --resume, or run it again",
+#: how to complete a folder of each kind that is not complete
+REMEDY = {"run": "finish it with clothsim run --resume, or run it again",
            "export": "write it again with clothsim export",
            "accuracy": "run the study again with clothsim accuracy",
            "conformance": "write the set again with clothsim conformance",
@@ -282,7 +283,7 @@ def require_complete(path) -> None:
     why = _MEANING[state.status] + (f": {state.error}" if state.error else "")
     raise InputError(f"{folder}: {KINDS[state.kind]} whose {state.record} says "
                      f"{state.word!r}, not complete ({why}); refusing to read it: "
-                     f"{_REMEDY[state.kind]}")
+                     f"{REMEDY[state.kind]}")
 
 
 __all__ = ["FolderLock", "FolderState", "LOCK_NAME", "STATUSES", "claim_folder",
