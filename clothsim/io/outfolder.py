@@ -145,8 +145,8 @@ class OutputFolder:
                     with self.guard():
                         self.end(status, error_line(exc))
                 except OSError as again:  # e.g. still no space: the first error is the news
-                    log.warning("could not mark %s %s: %s", self.path, status,
-                                again.strerror or again)
+                    log.info("could not mark %s %s: %s", self.path, status,  # (and the CLI
+                             again.strerror or again)                        # names the status)
         finally:
             if self._lock is not None:
                 self._lock.release()

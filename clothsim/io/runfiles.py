@@ -12,6 +12,7 @@ from __future__ import annotations
 
 import json
 import math
+import os
 import platform
 import zipfile
 from pathlib import Path
@@ -98,7 +99,7 @@ class TrajectoryStore:
         self.folder = Path(folder)
         self.n = int(vertex_count)
         self.paths = {name: self.folder / f".{name}.f64" for name in self.NAMES}
-        self._files = {name: open(p, "wb") for name, p in self.paths.items()}
+        self._files = {name: _create(p) for name, p in self.paths.items()}
         self.count = 0
 
     @property
@@ -118,8 +119,12 @@ class TrajectoryStore:
             a = np.ascontiguousarray(a, dtype="<f8")
             if a.shape != (self.n, 3):
                 raise InputError(f"{name}: expected shape ({self.n}, 3), got {a.shape}")
-            self._files[name].write(a.tobytes())
-            self._files[name].flush()
+            try:
+                self._files[name].write(a.tobytes())
+                self._files[name].flush()
+            except OSError as exc:  # a full disk's error names no file
+                exc.filename = exc.filename or str(self.paths[name])
+                raise
         self.count += 1
 
     def view(self, name: str, count: int | None = None) -> np.ndarray:
@@ -190,6 +195,14 @@ class TrajectoryStore:
         if remove:
             for p in self.paths.values():
                 p.unlink(missing_ok=True)
+
+
+def _create(path: Path):
+    """A new file opened for writing: an earlier one (or a link) at ``path`` is removed
+    first, and the file is created exclusively, never through a link."""
+    path.unlink(missing_ok=True)
+    fd = os.open(path, os.O_WRONLY | os.O_CREAT | os.O_EXCL | os.O_NOFOLLOW, 0o644)
+    return os.fdopen(fd, "wb")
 
 
 def package_versions() -> dict[str, str | None]:
