@@ -196,7 +196,8 @@ def _run_in(folder: RunFolder, scene, model, sim, frames: int, progress, resume:
         "resumed_from": start if resuming else None,
     }
     get_state = getattr(sim.solver, "get_state", lambda: {})
-    read_back = folder.begin(info, model, fps, pinned=lambda t: pinned_mask(sim.effects, n, t),
+    read_back = folder.begin(info, model, fps, frames=frames,
+                             pinned=lambda t: pinned_mask(sim.effects, n, t),
                              compression=scene.data["output"]["frame_compression"],
                              start=start)
     if resuming:

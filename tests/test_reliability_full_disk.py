@@ -9,7 +9,7 @@ import numpy as np
 import pytest
 
 from clothsim.cli import main
-from clothsim.io import outfolder
+from clothsim.io import diskspace
 from clothsim.io.folders import folder_state
 from tests.test_reliability_folders import TINY
 
@@ -31,7 +31,7 @@ def small_disk(tmp_path, monkeypatch):
                           capture_output=True)
     if done.returncode:
         pytest.skip("cannot mount a small tmpfs here (needs root)")
-    monkeypatch.setattr(outfolder, "free_bytes", lambda path: None)
+    monkeypatch.setattr(diskspace, "free_bytes", lambda path: None)
     try:
         yield disk
     finally:
@@ -81,3 +81,13 @@ def test_an_error_without_a_file_name_is_given_the_file(tiny, tmp_path, capsys, 
     line = _one_line_naming_a_file(capsys.readouterr().err, out)
     assert f"({out / 'springs.txt'})" in line and "marked failed" in line
     assert folder_state(out).status == "failed"
+
+
+def test_a_run_the_small_disk_cannot_hold_is_refused_up_front(tiny, small_disk, capsys,
+                                                              monkeypatch):
+    monkeypatch.undo()  # the real free space of the 160 kB disk
+    out = small_disk / "out"
+    assert main(["run", tiny, "--out", str(out), "--no-preview"]) == 2
+    err = capsys.readouterr().err.strip()
+    assert len(err.splitlines()) == 1 and "are free on its disk" in err and "--frames" in err
+    assert list(out.iterdir()) == []

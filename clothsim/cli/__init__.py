@@ -27,7 +27,11 @@ far stay readable; run.json says ``interrupted``); ``run`` stopped by a blow-up:
 
 Warnings (ill-conditioning, missed tolerances, …) go through :mod:`logging`: each kind is
 logged once when it first occurs (with ``-v``) and summarised at the end of the command as
-one line with its count. Progress bars are shown only when stderr is a terminal.
+one line with its count. Progress bars are shown only when stderr is a terminal; off a
+terminal ``run`` prints a progress line every few seconds instead
+(:class:`clothsim.cli.logs.ProgressLines`). Before it writes, ``run`` estimates the disk the
+run will use: above 1 GB it says so with a warning, and a run the disk cannot hold is
+refused (exit 2) naming ``--frames`` and how many frames fit.
 """
 
 
@@ -56,7 +60,13 @@ from .common import (
     other_output,
     stopped,
 )
-from .logs import _configure_logging, _no_progress_bars_off_terminal, _warnings_to_log
+from .logs import (
+    ProgressLines,
+    _configure_logging,
+    _isatty,
+    _no_progress_bars_off_terminal,
+    _warnings_to_log,
+)
 from .ports import (
     _add_port_commands,
     _cmd_check,
@@ -229,11 +239,14 @@ def _cmd_run(args) -> int:
         tqdm = None
     bar = None if tqdm is None else tqdm(total=frames, unit="frame", desc=scene.name,
                                          disable=None, leave=False)
+    lines = None if _isatty(sys.stderr) else ProgressLines(scene.name)  # make, nohup, a pipe
 
     def progress(k, total):
         if bar is not None:
             bar.n = k
             bar.refresh()
+        if lines is not None:
+            lines(k, total)
 
     try:
         result = run_scene(scene, out, frames=frames, progress=progress,

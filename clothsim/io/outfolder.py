@@ -22,11 +22,9 @@ Readers (``compare``, ``check``, ``diff-model``, ``--resume``) honour the status
 from __future__ import annotations
 
 import logging
-import shutil
 from contextlib import contextmanager, nullcontext
 from pathlib import Path
 
-from ..errors import InputError
 from .common import atomic_path
 from .folders import (
     CONFORMANCE_HEADINGS,
@@ -57,25 +55,6 @@ def error_line(exc: BaseException) -> str:
         device: 'out/frame_000003.vtu'"``.
     """
     return f"{type(exc).__name__}: {' '.join(str(exc).split())}".rstrip(": ")
-
-
-def gigabytes(count: float) -> str:
-    """A byte count for a message: ``"4.4 GB"``, ``"49 MB"``, ``"12 kB"``.
-
-    Parameters
-    ----------
-    count : float
-        Bytes.
-
-    Returns
-    -------
-    str
-    """
-    for unit, size in (("GB", 1e9), ("MB", 1e6), ("kB", 1e3)):
-        if count >= size:
-            value = count / size
-            return f"{value:.2g} {unit}" if value < 10 else f"{value:.0f} {unit}"
-    return f"{count:.0f} B"
 
 
 class OutputFolder:
@@ -218,46 +197,5 @@ class OutputFolder:
         with atomic_path(self.path / name) as tmp:
             yield tmp
 
-    def check_space(self, needed: float, what: str, options: str) -> None:
-        """Refuse, before anything is written, when the disk holds less than ``needed``.
 
-        Parameters
-        ----------
-        needed : float
-            Bytes the writer will need at most.
-        what : str
-            What needs them, e.g. ``"90 frames of 49 MB, trajectory.npz 1.1 GB"``.
-        options : str
-            How to need less, e.g. ``"--frames N"``.
-
-        Raises
-        ------
-        InputError
-            Naming the folder, the bytes needed and free, and ``options``.
-        """
-        free = free_bytes(self.path)
-        if free is not None and needed > free:
-            raise InputError(f"{self.path}: needs about {gigabytes(needed)} ({what}) but "
-                             f"{gigabytes(free)} are free on its disk; {options}")
-
-
-def free_bytes(path) -> int | None:
-    """Bytes free for an unprivileged writer on the disk holding ``path`` (None when it
-    cannot be known).
-
-    Parameters
-    ----------
-    path : str or Path
-        A folder that exists.
-
-    Returns
-    -------
-    int or None
-    """
-    try:
-        return shutil.disk_usage(path).free
-    except OSError:
-        return None
-
-
-__all__ = ["OutputFolder", "error_line", "free_bytes", "gigabytes"]
+__all__ = ["OutputFolder", "error_line"]

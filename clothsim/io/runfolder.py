@@ -13,7 +13,6 @@ runner computes frames and hands them over; it never touches a file itself.
 from __future__ import annotations
 
 import logging
-import re
 import time as _time
 from datetime import UTC, datetime
 from pathlib import Path
@@ -21,70 +20,18 @@ from pathlib import Path
 import numpy as np
 
 from ..errors import InputError
+from .diskspace import check_run_plan, file_bytes, run_plan
 from .folders import RUN_RECORD
 from .frames import OBSTACLES_NAME, PVD_NAME, FrameWriter, read_frame
 from .outfolder import OutputFolder
+from .resume import FRAME_PATTERN, changed_input, completed_frames, recorded_through, resume_point
 from .runfiles import TrajectoryStore, model_arrays, read_json
 
 log = logging.getLogger(__name__)
 
-FRAME_PATTERN = re.compile(r"frame_(\d{6})\.vtu")
 RESULT_FILES = (PVD_NAME, "trajectory.npz", "preview.gif", "final.png", RUN_RECORD)
 #: Files of an earlier run that a fresh run removes (besides its frame files).
 STALE_FILES = RESULT_FILES + (OBSTACLES_NAME,)
-
-
-def completed_frames(out_dir) -> int | None:
-    """Index of the last frame k such that frames 0..k all exist in ``out_dir`` (None: none).
-
-    The ``frame_%06d.vtu`` files on disk count (each is written atomically, so each one
-    present is complete), whether or not ``trajectory.pvd`` is readable.
-
-    Parameters
-    ----------
-    out_dir : str or Path
-        A run folder.
-
-    Returns
-    -------
-    int or None"""
-    indices = {int(m.group(1)) for p in Path(out_dir).glob("frame_*.vtu")
-               if (m := FRAME_PATTERN.fullmatch(p.name))}
-    k = -1
-    while k + 1 in indices:
-        k += 1
-    return None if k < 0 else k
-
-
-def changed_input(recorded: dict, now: dict) -> str | None:
-    """The first input file whose content differs from what a run recorded.
-
-    Parameters
-    ----------
-    recorded : dict of str to str
-        ``run.json``'s ``inputs`` (path to sha256).
-    now : dict of str to str
-        :func:`clothsim.scene.inputs.input_hashes` of the scene about to resume.
-
-    Returns
-    -------
-    str or None
-        ``"<path>: ..."`` naming the file and what changed, or None when every file is as
-        recorded.
-    """
-    for path in sorted(set(recorded) | set(now)):
-        before, after = recorded.get(path), now.get(path)
-        if before == after:
-            continue
-        if after is None:
-            what = ("is missing now" if not Path(path).exists()
-                    else "is no longer read by the scene")
-        elif before is None:
-            what = "is read by the scene now but was not when the run started"
-        else:
-            what = "changed since the run started (its content hash differs)"
-        return f"{path}: {what}"
-    return None
 
 
 class RunFolder(OutputFolder):
@@ -163,50 +110,11 @@ class RunFolder(OutputFolder):
             The folder holds another scene's run, an input file changed since the run
             started (named), or frames no run record describes.
         """
-        out, previous = self.path, self.previous
-        last = completed_frames(out)
-        if last is None:
+        k = resume_point(self.path, self.previous, shash, frames, inputs)
+        if k is None:
             return None
-        if previous is None or "clothsim_run" not in previous:
-            raise InputError(f"{out}: frame files but no readable run.json; cannot check they "
-                             "are this scene's, so cannot resume (run without --resume into "
-                             "another folder)")
-        recorded = previous.get("inputs")
-        if inputs is not None and isinstance(recorded, dict):
-            changed = changed_input(recorded, inputs)
-            if changed:
-                raise InputError(f"{out}: cannot resume: input file {changed}; the frames on "
-                                 "disk are of the old input (run without --resume to start "
-                                 "afresh)")
-        if "scene_hash" not in previous:
-            raise InputError(f"{out}: its run.json has no scene hash (an older clothsim wrote "
-                             "it), so it cannot be checked to be this scene; cannot resume")
-        if previous["scene_hash"] != shash:
-            raise InputError(f"{out}: holds a run of a different scene (scene hash "
-                             f"{previous['scene_hash']} here, {shash} now); cannot resume")
-        k = 0
-        while k < min(last, frames):  # the frames must read back; stop before a bad one
-            try:
-                read_frame(out / f"frame_{k + 1:06d}.vtu")
-            except InputError as exc:
-                log.warning("resuming before %s", exc)
-                break
-            k += 1
-        log.info("%s: resuming a run whose run.json says %r", out, self.earlier.word)
-        return self._recorded_through(k)
-
-    def _recorded_through(self, start: int) -> int:
-        """The last frame k <= start with records for frames 1..k in run.json: after
-        SIGKILL, a full disk or ``--frames`` down then up, frames on disk may lack one."""
-        recorded = {r.get("frame") for r in self.previous.get("frames", [])
-                    if isinstance(r, dict)}
-        k = 0
-        while k < start and k + 1 in recorded:
-            k += 1
-        if k < start:
-            log.info("frames %d..%d have no record in run.json; recomputing them", k + 1,
-                     start)
-        return k
+        log.info("%s: resuming a run whose run.json says %r", self.path, self.earlier.word)
+        return recorded_through(self.previous, k)
 
     def clear_earlier_run(self) -> None:
         """A fresh run replaces an earlier one: remove its frames and result files.
@@ -229,7 +137,8 @@ class RunFolder(OutputFolder):
         if stale:
             log.info("removed %d files of an earlier run in %s", len(stale), out)
 
-    def begin(self, info: dict, model, fps: float, *, pinned=None, compression: str = "auto",
+    def begin(self, info: dict, model, fps: float, *, frames: int | None = None, pinned=None,
+              compression: str = "auto",
               start: int | None = None) -> tuple[np.ndarray, np.ndarray] | None:
         """Open the frame writer and the trajectory store; resume from frame ``start``
         (frames 0..start read back) or, without one, start afresh (an earlier run removed,
@@ -243,6 +152,10 @@ class RunFolder(OutputFolder):
             The simulated model (its mesh and springs go into every frame).
         fps : float
             Frames per second; frame k is at time k / fps [s].
+        frames : int, optional
+            The last frame the run will write: the disk it needs is estimated
+            (:meth:`plan`), warned about when large and refused when the disk does not hold
+            it (:func:`clothsim.io.diskspace.check_run_plan`).
         pinned : callable, optional
             ``pinned(t)``: the pinned vertices at time t, written into each frame.
         compression : {"auto", "zlib", "none"}
@@ -256,12 +169,14 @@ class RunFolder(OutputFolder):
             Frame ``start`` as read back when resuming, else None.
         """
         self.info, self._model, self._fps = info, model, fps
-        if start is None:
-            self.clear_earlier_run()
-        self.store = TrajectoryStore(self.path, model.vertex_count)
         self.writer = FrameWriter(self.path, model.mesh, springs=model.springs,
                                   pinned=pinned, compression=compression)
         self.info["frame_compression"] = self.writer.compression_reason
+        if frames is not None:
+            self._plan(frames, start)  # before an earlier run goes: it may be refused
+        if start is None:
+            self.clear_earlier_run()
+        self.store = TrajectoryStore(self.path, model.vertex_count)
         if start is None:
             self.mark("writing")  # the folder is a run folder before any frame exists
             return None
@@ -273,6 +188,39 @@ class RunFolder(OutputFolder):
                         if isinstance(r, dict) and 1 <= r.get("frame", 0) <= start]
         self.done = start
         return x, v
+
+    def plan(self, frames: int, start: int | None = None) -> dict:
+        """The disk the run will use [bytes], estimated before anything is written
+        (:func:`clothsim.io.diskspace.run_plan`).
+
+        Parameters
+        ----------
+        frames : int
+            The last frame the run writes.
+        start : int, optional
+            The resume point (frames 0..start are on disk already).
+
+        Returns
+        -------
+        dict
+            ``frame``, ``frames``, ``trajectory``, ``end`` and ``peak`` [bytes].
+        """
+        model_bytes = sum(a.nbytes for a in model_arrays(self._model).values())
+        return run_plan(self.writer.estimated_bytes(), self._model.vertex_count, frames, start,
+                        model_bytes)
+
+    def _plan(self, frames: int, start: int | None) -> None:
+        """Warn about a large run, refuse one the disk cannot hold; run.json records the
+        estimate as ``disk_estimate``."""
+        plan = self.plan(frames, start)
+        self.info["disk_estimate"] = plan
+        reclaim = self._earlier_bytes() if start is None else 0  # a fresh run removes them
+        check_run_plan(self.path, plan, frames, reclaim, self.writer.compression)
+
+    def _earlier_bytes(self) -> int:
+        """Bytes of an earlier run's files here."""
+        paths = [p for p in self.path.glob("frame_*.vtu") if FRAME_PATTERN.fullmatch(p.name)]
+        return file_bytes(paths + [self.path / name for name in STALE_FILES])
 
     def add_static(self, name: str) -> None:
         """List the file ``name`` (written into the folder) beside every frame of

@@ -13,7 +13,7 @@ import hashlib
 from pathlib import Path
 
 from ..errors import InputError
-from ..io.runfolder import changed_input  # noqa: F401 - re-exported (its old home)
+from ..io.resume import changed_input  # noqa: F401 - re-exported (its old home)
 
 
 def _paths(value, out: set) -> None:
