@@ -8,8 +8,12 @@ accuracy study (``clothsim accuracy``), a ``README.md`` headed as a conformance 
 coursework profile's for those (``clothsim conformance``, ``--profile coursework``): one
 folder, one profile. Anything else is refused with an
 :class:`~clothsim.errors.InputError` naming the folder and its first foreign file, unless
-``force`` is given. :class:`FolderLock` is an exclusive :func:`fcntl.flock` on
-``<folder>/.clothsim.lock``, taken by every kind alike.
+``force`` is given. :class:`FolderLock` (:mod:`clothsim.io.lock`) is an exclusive
+:func:`fcntl.flock` on ``<folder>/.clothsim.lock``, taken by every kind alike.
+
+Each record also holds the folder's status (:data:`STATUSES`), written by
+:meth:`clothsim.io.outfolder.OutputFolder.mark` and read by :func:`folder_state`;
+:func:`require_complete` is what readers call before they read a folder.
 """
 
 from __future__ import annotations

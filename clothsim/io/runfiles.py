@@ -2,8 +2,8 @@
 
 :class:`TrajectoryStore` appends positions and velocities frame by frame to two raw float64
 files (a run never holds its trajectory in memory) and assembles ``trajectory.npz`` from
-them in chunks. The folder lock (:class:`FolderLock`) and the ownership checks are in
-:mod:`clothsim.io.folders`.
+them in chunks. The folder that holds them, its lock and its status are
+:class:`clothsim.io.runfolder.RunFolder`'s.
 :func:`write_json` writes ``run.json`` atomically (strict JSON: non-finite floats become
 strings); :func:`read_json` reads it.
 """

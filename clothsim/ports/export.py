@@ -249,26 +249,25 @@ def export_port(source, out_dir, *, frames: int = 60, iterate_steps: int = 3,
     """
     sim = as_simulation(source)
     with OutputFolder(out_dir, "export", force=force) as folder:
-        _clear_earlier_export(folder)
-        # the folder is an export folder being written before any other file is written
+        stale = _earlier_export(folder)
+        # the folder is an export folder being written before any file is removed or written
         folder.mark("writing", {"layout": LAYOUT})
+        for p in stale:  # no file of another scene's export stays beside this one's
+            p.unlink(missing_ok=True)
         manifest = _export_locked(source, sim, folder, frames, iterate_steps)
         manifest["status"] = "complete"
         folder.mark("complete", manifest)
         return manifest
 
 
-def _clear_earlier_export(folder: OutputFolder) -> None:
-    """Remove the files an earlier export there listed in its manifest (and its iterates),
-    so that no file of another scene's export stays beside this one's."""
+def _earlier_export(folder: OutputFolder) -> list[Path]:
+    """The files an earlier export there listed in its manifest, and its iterates."""
     if folder.earlier.kind != "export":
-        return
+        return []
     listed = (read_json(folder.path / "manifest.json") or {}).get("files", {})
     names = [n for n in listed if isinstance(n, str) and "/" not in n and n != "manifest.json"]
     stale = [folder.path / n for n in names] + sorted(folder.path.glob("iterates/step_*.npz"))
-    for p in stale:
-        if p.is_file() and not p.is_symlink():
-            p.unlink()
+    return [p for p in stale if p.is_file() and not p.is_symlink()]
 
 
 def _export_locked(source, sim, folder: OutputFolder, frames: int, iterate_steps: int) -> dict:
