@@ -8,14 +8,10 @@ import pytest
 from clothsim.cli import main
 from clothsim.errors import InputError
 from clothsim.io.lock import LOCK_NAME, FolderLock
+from tests import test_reliability_folders as folders
 from tests.test_reliability_folders import TINY
 
-
-@pytest.fixture
-def tiny(tmp_path):
-    p = tmp_path / "tiny.toml"
-    p.write_text(TINY)
-    return str(p)
+tiny = folders.tiny  # the fixture: a 3 x 3 scene file
 
 
 def _plant(folder, how, target):

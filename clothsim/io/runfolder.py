@@ -86,29 +86,18 @@ class RunFolder(OutputFolder):
                 self.store.close()
 
     def resume_point(self, shash: str, frames: int, inputs: dict | None = None) -> int | None:
-        """The frame ``--resume`` continues from: the last k ≤ ``frames`` such that frames
-        0..k are on disk, read back, and have a record in run.json.
+        """The frame ``--resume`` continues from: :func:`clothsim.io.resume.resume_point`
+        of this folder and its run.json, cut to the frames run.json holds records of.
 
         Parameters
         ----------
-        shash : str
-            :func:`clothsim.runner.scene_hash` of the scene to resume.
-        frames : int
-            Frames requested: the point is never beyond it.
-        inputs : dict, optional
-            :func:`clothsim.scene.inputs.input_hashes` of the scene now, compared with those
-            run.json recorded at the start.
+        shash, frames, inputs
+            As for :func:`clothsim.io.resume.resume_point`.
 
         Returns
         -------
         int or None
             None when no frame is on disk.
-
-        Raises
-        ------
-        InputError
-            The folder holds another scene's run, an input file changed since the run
-            started (named), or frames no run record describes.
         """
         k = resume_point(self.path, self.previous, shash, frames, inputs)
         if k is None:
