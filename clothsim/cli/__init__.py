@@ -279,12 +279,9 @@ def _cmd_accuracy(args) -> int:
     scene = load_scene(args.scene, args.set)
     out = args.out if args.out is not None else "accuracy-out"
     if args.out is None and not args.force:
-        import json
+        from ..io.folders import folder_record
 
-        try:
-            previous = json.loads((Path(out) / "accuracy.json").read_text()).get("scene")
-        except (OSError, ValueError, AttributeError):
-            previous = None
+        previous = (folder_record(out, "accuracy") or {}).get("scene")
         if previous is not None and previous != scene.name:
             return _fail(f"{out} holds the accuracy study of {previous!r}, not of "
                          f"{scene.name!r}: choose --out DIR to keep both, or --force to "

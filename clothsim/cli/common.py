@@ -213,11 +213,10 @@ def other_output(out: Path, scene, record: str = "run.json") -> str | None:
     """
     import json
 
-    try:
-        previous = json.loads((out / record).read_text())
-    except (OSError, ValueError):
-        return None
-    if not isinstance(previous, dict) or not previous.get("source"):
+    from ..io.folders import folder_record
+
+    previous = folder_record(out, "run" if record == "run.json" else "export")
+    if previous is None or not previous.get("source"):
         return None
     mine = json.loads(json.dumps(scene.to_dict(), default=str))
     theirs = previous.get("scene")

@@ -180,6 +180,23 @@ _MEANING = {"writing": "still being written, or its writer was killed",
             "interrupted": "its writer was interrupted", "failed": "its writer failed"}
 
 
+def folder_record(folder, kind: str) -> dict | None:
+    """The JSON record of ``kind`` in ``folder`` (``run.json``, ``manifest.json``,
+    ``accuracy.json``), whatever it says.
+
+    Parameters
+    ----------
+    folder : str or Path
+    kind : {"run", "export", "accuracy"}
+
+    Returns
+    -------
+    dict or None
+        None when it is missing, unreadable or not a JSON object.
+    """
+    return _record(Path(folder) / RECORDS[kind])
+
+
 def status_word(kind: str, status: str) -> str:
     """The word ``kind``'s record stores for ``status`` (e.g. run.json's ``"completed"``).
 
@@ -291,4 +308,4 @@ def require_complete(path) -> None:
 
 
 __all__ = ["FolderLock", "FolderState", "LOCK_NAME", "STATUSES", "claim_folder",
-           "folder_kind", "folder_state", "require_complete", "status_word"]
+           "folder_kind", "folder_record", "folder_state", "require_complete", "status_word"]
