@@ -292,23 +292,29 @@ class Simulation:
             return self.solver
         solver = make_solver(self.solver.name, self.step_model(state), **self._solver_options)
         if hasattr(solver, "expected_solves"):   # its factor serves this one step
-            solver.expected_solves = solver.iterations
+            solver.expected_solves, solver.expected_final = solver.iterations, True
         return solver
 
-    def expect_steps(self, steps: int | None) -> None:
+    def expect_steps(self, steps: int | None, *, final: bool = True) -> None:
         """Tell the solver how many steps follow, so that its next factorization's mode
-        (:func:`clothsim.factorization.choose_cholmod_mode`) weighs the solves ahead:
-        ``steps`` × iterations (at most, with a tolerance). :meth:`run` and
-        :func:`clothsim.run_scene` call it; solvers without a factorization ignore it.
+        (:func:`clothsim.factor_mode.choose_cholmod_mode`) weighs the solves ahead:
+        ``steps`` × iterations (at most, with a tolerance). :func:`clothsim.run_scene`
+        passes the whole run (``final``); :meth:`run` passes its steps as a lower bound,
+        since more may follow. Solvers without a factorization ignore it.
 
         Parameters
         ----------
         steps : int or None
             Steps of length h still to come; None: unknown.
+        final : bool, default True
+            Whether ``steps`` is the whole run. When False, the mode is chosen for at least
+            that many, and a factor whose solves are the slower ones is refactored in the
+            other mode once it has served the break-even count.
         """
         if hasattr(self.solver, "expected_solves"):
             self.solver.expected_solves = (None if steps is None
                                            else max(int(steps), 1) * self.solver.iterations)
+            self.solver.expected_final = bool(final) and steps is not None
 
     def step(self) -> StepRecord:
         """Advance one time step h.
@@ -352,6 +358,9 @@ class Simulation:
     def run(self, steps: int, callback=None) -> list[StepRecord]:
         """Take several steps.
 
+        More steps may follow (another :meth:`run`, :meth:`step`): the solver's factor is
+        chosen for at least these steps, not for these alone (:meth:`expect_steps`).
+
         Parameters
         ----------
         steps : int
@@ -365,7 +374,7 @@ class Simulation:
             One record per step.
         """
         records = []
-        self.expect_steps(steps)
+        self.expect_steps(steps, final=False)
         for _ in range(int(steps)):
             rec = self.step()
             records.append(rec)
