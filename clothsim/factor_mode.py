@@ -18,12 +18,13 @@ vertices (:data:`MODE_COSTS`, measured) and picks the cheaper over a horizon:
   other mode, factored from the start, would have cost less. The solver refactors in the
   other mode once its factor has served that many (:class:`ModeChoice`).
 
-By the cost model, a run therefore never costs more than the other mode would have by
-more than one factorization in that other mode, whatever number of steps follows, and from
-the break-even on every solve uses the factor with the faster solves (the ski-rental rule:
-renting until the rent paid equals the price of buying is within a factor 2 of the best
-choice in hindsight, and no rule that cannot see the future does better). Everything is
-decided from counts, never from timings, so a run repeats bit for bit.
+By the cost model, whatever number of steps follows, a run therefore costs at most one
+factorization (in the mode with the faster solves, plus the step in which the break-even
+passes) more than the better of the two modes factored once would have, and from the
+break-even on every solve uses the faster factor (the ski-rental rule: rent until the rent
+paid reaches the price of buying; no rule that cannot see the future guarantees less than
+such a bound). Everything is decided from counts, never from timings, so a run repeats bit
+for bit.
 """
 
 from __future__ import annotations
@@ -44,8 +45,8 @@ from .factorization import CHOLMOD_MODES
 #: and flop counts of the factor, so the model predicts from n. The supernodal factor is
 #: ordered by AMD alone: on the cloth grids it factors about 1.5× faster than CHOLMOD's
 #: default (which also tries METIS) at 513² and 1025², and its solves are as fast.
-MODE_COSTS = {"simplicial": ((1.463e-07, 1.425), (3.927e-08, 1.178)),
-              "supernodal": ((1.220e-06, 1.147), (6.738e-08, 1.134))}
+MODE_COSTS = {"simplicial": ((1.369e-08, 1.671), (1.474e-08, 1.279)),
+              "supernodal": ((6.916e-07, 1.214), (2.715e-08, 1.245))}
 #: Solves a factor is assumed to serve at least when the run's count is not known (an API
 #: user stepping a simulation): 600, the scene defaults' run (60 frames × 1 substep × 10
 #: iterations).
@@ -112,15 +113,15 @@ def break_even(n: int, mode: str, costs: dict | None = None) -> int | None:
     Returns
     -------
     int or None
-        The smallest solve count N with F_other + N s_other < F_mode + N s_mode; 0 when the
-        other mode is cheaper for every count; None when it never is (its solves are not
-        faster).
+        When the other mode's solves are the faster ones, the smallest solve count N with
+        F_other + N s_other < F_mode + N s_mode (0 when it is cheaper for every count);
+        None otherwise (a switch to it would never pay back).
     """
     pred = predicted_costs(n, costs)
     other = "simplicial" if mode == "supernodal" else "supernodal"
     (f, s), (f_o, s_o) = pred[mode], pred[other]
     if s_o >= s:
-        return None if f_o >= f else 0
+        return None
     return max(0, math.floor((f_o - f) / (s - s_o)) + 1)
 
 

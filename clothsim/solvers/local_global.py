@@ -161,7 +161,7 @@ class LocalGlobalSolver(Solver):
         return sysf
 
     def _choose_mode(self, free: int) -> ModeChoice:
-        """CHOLMOD's mode for a factorization over ``free`` unknowns (see :attr:`expected_final`)."""
+        """CHOLMOD's mode for a factorization over ``free`` unknowns (:attr:`expected_final`)."""
         if self._switch_to is not None:
             served = self.solve_count - self._factored_at
             return ModeChoice(self._switch_to, switched_reason(free, self._switch_to, served))
