@@ -251,6 +251,13 @@ class BoundEffects(tuple):
     __slots__ = ()
 
     def _refuse(self, *args, **kwargs):
+        """Refuse a change: every method by which a list changes is this one.
+
+        Raises
+        ------
+        InputError
+            Always, naming ``Simulation.effects`` and what to do instead.
+        """
         raise InputError("Simulation.effects: fixed when the simulation is built (its hooks and "
                          "pins are set up from them, so a later change would be ignored); pass "
                          "every effect to Simulation(..., effects=[...]) or build a new "
