@@ -416,51 +416,43 @@ def split_solution(folder: Path, *, start_from_unext: bool = False,
     return files
 
 
-def make_check(build: Path, files: list[Path], include: Path, case: Path, *extra: str):
-    """The documented coursework line: make ... check PROGRAM=assignment_driver SOLUTION=..."""
-    clothsim = f"{shlex.quote(sys.executable)} -m clothsim"
-    argv = ["make", "-C", str(CPP), f"BUILD={build}", "check", "PROGRAM=assignment_driver",
-            f"MODEL={case}", f"SCENE={case / 'scene.toml'}",
-            "SOLUTION=" + " ".join(str(f) for f in files), f"SOLUTION_INCLUDE={include}",
-            f"CLOTHSIM={clothsim}", *extra]
-    return subprocess.run(argv, cwd=REPO, env=dict(os.environ, PYTHONPATH=str(REPO)),
-                          capture_output=True, text=True)
-
-
-@pytest.fixture(scope="module")
-def coursework_net(tmp_path_factory) -> Path:
-    from clothsim.ports.coursework import write_coursework
-
-    out = tmp_path_factory.mktemp("coursework")
-    write_coursework(out, frames=5, cases=["net"])
-    return out / "net"
-
-
-def test_a_three_file_solution_starting_from_unext_passes_and_a_changed_one_is_rebuilt(
-        programs, coursework_net, tmp_path):
-    """A solution in three files with its own include folder builds and passes, though it
-    starts its iterations from Unext (an empty Unext would abort it). The same files then
-    changed to a wrong local step, dated before the first build: make builds them afresh in
-    a folder of their own and the check fails; the first build's PASS is never reprinted."""
+def test_a_three_file_solution_checked_as_the_howto_says_and_a_changed_one_rebuilt(programs,
+                                                                                   tmp_path):
+    """docs/howto/check-a-cpp-solution.md as written, on a solution in three files with its
+    own include folder that starts its iterations from Unext (an empty Unext aborts it):
+    PASS. The same files then changed to a wrong local step and dated before that build:
+    make builds them afresh in a folder of their own and the check fails; the first
+    build's PASS is never reprinted."""
+    text = (REPO / "docs" / "howto" / "check-a-cpp-solution.md").read_text(encoding="utf-8")
+    block = text.split("```sh\n", 1)[1].split("```", 1)[0].splitlines()
     build = tmp_path / "b"
-    solution = tmp_path / "student"
-    files = split_solution(solution, start_from_unext=True)
-    done = make_check(build, files, solution / "include", coursework_net)
+    files = split_solution(tmp_path / "student", start_from_unext=True)
+    clothsim = f"{shlex.quote(sys.executable)} -m clothsim"
+    env = dict(os.environ, PYTHONPATH=str(REPO))
+
+    def run_line(line: str) -> subprocess.CompletedProcess:
+        argv = shlex.split(line.replace("$PWD", str(tmp_path))
+                           .replace("/tmp/clothsim-cpp", str(build)))
+        if argv[0] == ".venv/bin/clothsim":
+            return subprocess.run([sys.executable, "-m", "clothsim", *argv[1:]], cwd=tmp_path,
+                                  env=env, capture_output=True, text=True)
+        assert argv[:4] == ["make", "check", "-C", "examples/ports/cpp"], line
+        return subprocess.run(argv + [f"CLOTHSIM={clothsim}"], cwd=REPO, env=env,
+                              capture_output=True, text=True)
+
+    assert [run_line(line).returncode for line in block[:-1]] == [0] * (len(block) - 1)
+    done = run_line(block[-1])
     assert done.returncode == 0, (done.stdout[-2000:], done.stderr[-2000:])
-    assert "PASS: 5 steps agree" in done.stdout, done.stdout
-    first = driver_path(build, "SOLUTION=" + " ".join(map(str, files)),
-                        f"SOLUTION_INCLUDE={solution / 'include'}")
-    assert first.is_file() and first.parent.parent == build
-    # the student's corrected-then-broken files, older than the first build
-    split_solution(solution, start_from_unext=True, fault="unnormalized")
+    assert "PASS: 30 steps agree" in done.stdout, done.stdout
+    assert len(list(build.glob("assignment-*/assignment_driver"))) == 1
+    # the student's files changed (a local step that forgets to normalize), dated 2000-01-01
+    split_solution(tmp_path / "student", start_from_unext=True, fault="unnormalized")
     for f in files:
-        os.utime(f, (946684800, 946684800))      # 2000-01-01
-    done = make_check(build, files, solution / "include", coursework_net)
+        os.utime(f, (946684800, 946684800))
+    done = run_line(block[-1])
     assert done.returncode != 0 and "PASS" not in done.stdout, done.stdout
     assert "FAIL at step 0 -> 1" in done.stdout, done.stdout
-    second = driver_path(build, "SOLUTION=" + " ".join(map(str, files)),
-                         f"SOLUTION_INCLUDE={solution / 'include'}")
-    assert second != first and second.is_file() and first.is_file()
+    assert len(list(build.glob("assignment-*/assignment_driver"))) == 2
 
 
 def test_a_missing_solution_file_is_a_one_line_make_error(tmp_path):
