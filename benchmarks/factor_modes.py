@@ -14,7 +14,6 @@ load. Writes ``docs/data/factor-modes.md`` (docs/performance.md includes it).
 from __future__ import annotations
 
 import argparse
-import subprocess
 import time
 import warnings
 from pathlib import Path
@@ -22,6 +21,7 @@ from pathlib import Path
 from threadpoolctl import threadpool_limits
 
 from .performance import falling_sheet
+from .scale_ladder import commit
 
 ROOT = Path(__file__).resolve().parents[1]
 OUT = ROOT / "docs" / "data" / "factor-modes.md"
@@ -52,14 +52,6 @@ def measure(n: int, long: int) -> dict:
     out.update(long=dict(cpu), long_mode=auto.factorization.split(":")[0],
                factor_count=auto.factor_count, reason=auto.factorization)
     return out
-
-
-def commit() -> str:
-    try:
-        return subprocess.run(["git", "rev-parse", "--short", "HEAD"], capture_output=True,
-                              text=True, cwd=ROOT, check=True).stdout.strip()
-    except (OSError, subprocess.CalledProcessError):
-        return "unknown"
 
 
 def table(sizes: list[int], long: int) -> list[str]:
