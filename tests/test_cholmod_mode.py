@@ -224,3 +224,16 @@ def test_a_refactorization_of_the_same_pattern_reuses_the_analysis():
     solver.invalidate()                                # after invalidate: analyzed afresh
     solver.system(p2)
     assert solver.analysis_count == 2
+
+
+@pytest.mark.parametrize("costs", [None, TOY, LATE])
+def test_a_short_api_run_either_picks_the_long_runs_mode_or_switches_to_it(costs):
+    """Simulation.run(3) (30 solves, not final) at every size: the mode the model picks for
+    a long run, or a pick whose break-even switches to it; as a final count (clothsim run),
+    30 solves keep the short run's pick (issue 33's regression was that pick, kept)."""
+    for side in (9, 33, 65, 129, 193, 257, 385, 513, 769, 1025, 2049):
+        n = side * side
+        long = choose_cholmod_mode(n, "auto", 10 ** 7, costs).mode
+        short = choose_cholmod_mode(n, "auto", 30, costs, final=False)
+        assert short.mode == long or short.switch_to == long, side
+        assert choose_cholmod_mode(n, "auto", 30, costs).switch_after is None
