@@ -18,6 +18,7 @@ from ..errors import InputError
 from ..simulation import State
 from .compare import EPS32, RTOL64, cloth_size, condition_number
 from .judge import judge, pin_role, pinned_moved
+from .precision import Printed
 from .rounding import float32_deviation, float32_tolerance
 from .verdicts import PASSING, CheckReport, StepCheck
 
@@ -98,7 +99,7 @@ def system_condition_number(sim) -> float:
 
 def check_steps(simulation, positions, velocities=None, *, precision: str = "float64",
                 tolerance: float | None = None, optimality: float = 1e-6,
-                steps: int | None = None) -> CheckReport:
+                steps: int | None = None, expected_steps: int | None = None) -> CheckReport:
     """Check every step k → k + 1 of a port's trajectory against clothsim's step.
 
     Parameters
@@ -120,18 +121,28 @@ def check_steps(simulation, positions, velocities=None, *, precision: str = "flo
         of ‖∇g‖, ε₃₂-based for float32).
     steps : int, optional
         Check only the first this many steps.
+    expected_steps : int, optional
+        The steps a whole output holds (``clothsim check`` passes the scene's frames unless
+        ``--steps`` is given): a port that wrote fewer fails, naming both counts (the
+        steps it did write are still judged). Default: any number.
 
     Returns
     -------
     CheckReport
     """
     sim = as_simulation(simulation)
+    if expected_steps is not None and expected_steps < 0:
+        raise InputError(f"expected_steps: must be >= 0, got {expected_steps}")
     xs, vs, notes = _frames(sim, positions, velocities, steps)
     if precision not in ("float32", "float64"):
         raise InputError(f"precision: must be 'float32' or 'float64', got {precision!r}")
     h = sim.h
     tol64 = tolerance if tolerance is not None else step_tolerance(sim, xs[0])
     count = len(xs) - 1 if steps is None else min(int(steps), len(xs) - 1)
+    printed = Printed(xs[:count + 1], None if velocities is None else vs[:count + 1], h,
+                      tol64) if tolerance is None else None
+    if printed is not None and printed.note:
+        notes.append(printed.note)
     projected = [e.kind for e in sim.effects if overrides(e, "correct_positions")]
     iterations = sim.solver.iterations
     out, searches = [], 0
@@ -152,11 +163,11 @@ def check_steps(simulation, positions, velocities=None, *, precision: str = "flo
         def bound32(model=model, problem=problem):
             return float32_tolerance(model, problem, iterations, tol64)
 
-        tol = tol64
-        if precision == "float32" and tolerance is None and err[worst] > tol64:
-            tol = bound32()
+        tol = tol_k = tol64 if printed is None else float(printed.tolerances[k])
+        if precision == "float32" and tolerance is None and err[worst] > tol_k:
+            tol = max(tol_k, bound32())
         moved = pinned_moved(problem, x_port, tol if precision == "float64"
-                             else max(tol64, 4 * EPS32 * float(np.abs(x_port).max())))
+                             else max(tol_k, 4 * EPS32 * float(np.abs(x_port).max())))
         if moved is not None:
             v, dist = moved
             step = StepCheck(k, "pinned vertex moved", float(err[worst]), v, role=pin_role(
@@ -172,17 +183,19 @@ def check_steps(simulation, positions, velocities=None, *, precision: str = "flo
                                      note=f"|v_clothsim - v_port| = {verr.max():.3e} m/s")
         else:
             step = judge(sim, model, problem, k, x_cs, x_port, err, tol, optimality, precision,
-                         search=searches < MAX_SEARCHES)
+                         search=searches < MAX_SEARCHES, unit=printed and printed.unit)
             searches += 1
-            if (precision == "float64" and tolerance is None and not step.passed
-                    and _float32_data(x_port)):
-                b32 = bound32()
+            if (precision == "float64" and printed is not None and not step.passed
+                    and printed.float32):
+                b32 = max(tol_k, bound32())
                 if err[worst] <= b32 and not step.settings:
                     step.status = "float32 rounding"
                     step.note = (f"the error is within float32 rounding of this step "
-                                 f"({b32:.3e} m, measured by running clothsim's step in "
-                                 f"float32): if the port computes in float32, check with "
-                                 f"precision float32")
+                                 f"({b32:.3e} m): the port's numbers are float32 values; "
+                                 f"check with --precision float32")
+                else:
+                    step.note += ("; the port's numbers are float32 values: check with "
+                                  "--precision float32")
             if projected:
                 step.note += (f"; positions are corrected after the solve by "
                               f"{', '.join(projected)}, so optimality for g alone is only "
@@ -190,7 +203,8 @@ def check_steps(simulation, positions, velocities=None, *, precision: str = "flo
         if not step.role:
             step.role = pin_role(problem, step.vertex)
         out.append(step)
-    return CheckReport(out, float(tol64), precision, notes)
+    return CheckReport(out, float(tol64), precision, notes, expected_steps=expected_steps,
+                       printed=printed.text if printed is not None else "")
 
 
 def float32_report(scenes=("hanging", "jacobson-net", "jacobson-flag", "drop-on-square")) -> None:
@@ -217,15 +231,6 @@ def float32_report(scenes=("hanging", "jacobson-net", "jacobson-flag", "drop-on-
         kappa = system_condition_number(sim) * EPS32 * float(np.abs(x).max())
         print(f"{name:16} {sim.model.vertex_count:5d} {K:4d} {dev:10.2e} {tol:10.2e} "
               f"{kappa:11.2e}")
-
-
-def _float32_data(x: np.ndarray) -> bool:
-    """True when (nearly) every coordinate is a float32 number: data a float32 port wrote.
-
-    A float64 port's answer is not; its differences are not float32 rounding however small
-    (a pin of another stiffness moves a vertex by as little as rounding would).
-    """
-    return float(np.mean(x.astype(np.float32).astype(np.float64) == x)) > 0.99
 
 
 def _frames(sim, positions, velocities, steps):

@@ -158,7 +158,7 @@ def _settings_text(start, k) -> str:
 
 
 def judge(sim, model, problem, k, x_cs, x_port, err, tol, optimality, precision,
-          search: bool = True) -> StepCheck:
+          search: bool = True, unit: float | None = None) -> StepCheck:
     """Classify a step whose answers differ by more than ``tol`` somewhere.
 
     Parameters
@@ -181,6 +181,10 @@ def judge(sim, model, problem, k, x_cs, x_port, err, tol, optimality, precision,
     precision : {"float64", "float32"}
     search : bool, default True
         Search clothsim's iterations for the port's settings (:func:`match_settings`).
+    unit : float, optional
+        Relative rounding of the port's numbers when they are printed coarser than its
+        precision (:class:`clothsim.ports.precision.Printed`): the gradient's rounding
+        floor scales with it.
 
     Returns
     -------
@@ -193,8 +197,8 @@ def judge(sim, model, problem, k, x_cs, x_port, err, tol, optimality, precision,
     rp = float(np.linalg.norm(grad_p)) / g0
     rc = float(np.linalg.norm(grad_c)) / g0
     floor = gradient_noise_floor(model, problem, x_port) / g0
-    if precision == "float32":
-        floor *= EPS32 / float(np.finfo(np.float64).eps)
+    eps64 = float(np.finfo(np.float64).eps)
+    floor *= max(unit or 0.0, EPS32 if precision == "float32" else eps64) / eps64
     opt = max(optimality, 10 * floor)
     worst = int(np.argmax(err))
     settings = ""

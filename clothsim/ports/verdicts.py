@@ -118,16 +118,29 @@ class CheckReport:
         The port's floating-point precision.
     notes : list of str
         Remarks on the whole check.
+    expected_steps : int or None
+        The steps the port's output had to hold (the scene's frames); when it holds fewer,
+        the check fails naming both counts.
+    printed : str
+        How the port's numbers are printed, when that widened the tolerance (e.g. "printed
+        with 6 significant digits"), else "".
     """
 
     steps: list[StepCheck]
     tolerance: float
     precision: str
     notes: list[str] = field(default_factory=list)
+    expected_steps: int | None = None
+    printed: str = ""
+
+    @property
+    def short(self) -> bool:
+        """True when the port's output holds fewer steps than :attr:`expected_steps`."""
+        return self.expected_steps is not None and len(self.steps) < self.expected_steps
 
     @property
     def passed(self) -> bool:
-        return all(s.passed for s in self.steps)
+        return all(s.passed for s in self.steps) and not self.short
 
     @property
     def first_failure(self) -> StepCheck | None:
@@ -164,11 +177,19 @@ class CheckReport:
         if nu:
             extra += (f"; {len(nu)} non-unique step(s) (two certified minima of g): "
                       f"{_steps_text(nu)}")
+        if self.printed:
+            extra += f"; the output is {self.printed}: judged at that precision"
         failing = [s for s in self.steps if not s.passed]
+        head = ""
+        if self.short:
+            head = (f"FAIL: the port's output has {n + 1} frames ({n} steps), the scene "
+                    f"asks for {self.expected_steps} (--steps N checks only the first N); "
+                    f"of the {n} steps written, ")
         if not failing:
-            return (f"PASS: {n} steps agree within {tol:.3e} m ({self.precision}), "
+            return (f"{head or 'PASS: '}{n} steps agree within {tol:.3e} m ({self.precision}), "
                     f"max error {worst:.3e} m{extra}")
         counts = Counter(s.status for s in failing)
         tally = ", ".join(f"{c} {status}" for status, c in counts.most_common())
         word = "UNDECIDED" if set(counts) == {"start-dependent"} else "FAIL"
-        return f"{word} at {failing[0].line()}; {len(failing)} of {n} steps fail: {tally}{extra}"
+        return (f"{head + 'the first fails' if head else word} at {failing[0].line()}; "
+                f"{len(failing)} of {n} steps fail: {tally}{extra}")
