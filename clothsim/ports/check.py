@@ -17,9 +17,9 @@ from ..effects.base import overrides
 from ..errors import InputError
 from ..simulation import State
 from .compare import EPS32, RTOL64, cloth_size, condition_number
-from .judge import judge, pin_role, pinned_moved
+from .judge import judge, pin_role, pinned_moved, refine
 from .precision import Printed
-from .rounding import float32_deviation, float32_tolerance
+from .rounding import MARGIN, converged_float32_floor, float32_deviation, float32_tolerance
 from .verdicts import PASSING, CheckReport, StepCheck
 
 #: Failing steps whose settings are searched for along clothsim's iterations (the rest
@@ -54,8 +54,10 @@ def as_simulation(source):
 def step_tolerance(sim, x: np.ndarray, precision: str = "float64") -> float:
     """Allowed per-vertex distance of one step [m] (docs/ports.md derives it).
 
-    float64: 1e-9 of the cloth size. float32: the next step's measured float32 bound
-    (:func:`clothsim.ports.rounding.float32_tolerance`), at least the float64 tolerance.
+    float64: 1e-9 of the cloth size. float32: the next step's float32 bound
+    (:func:`clothsim.ports.rounding.float32_tolerance`), at least the float64 tolerance:
+    measured on its local/global iterations, or for a Newton scene the converged floor at
+    the step's minimizer.
 
     Parameters
     ----------
@@ -75,8 +77,11 @@ def step_tolerance(sim, x: np.ndarray, precision: str = "float64") -> float:
         raise InputError(f"precision: must be 'float32' or 'float64', got {precision!r}")
     tol = RTOL64 * cloth_size(x)
     if precision == "float32":
-        problem = sim.problem(sim.state)
-        tol = float32_tolerance(sim.step_model(), problem, sim.solver.iterations, tol)
+        problem, model = sim.problem(sim.state), sim.step_model()
+        iterated = sim.solver.name != "newton"
+        x_min = None if iterated else refine(model, problem, problem.initial_guess())
+        tol = float32_tolerance(model, problem, sim.solver.iterations, tol, x=x_min,
+                                iterated=iterated)
     return tol
 
 
@@ -145,6 +150,7 @@ def check_steps(simulation, positions, velocities=None, *, precision: str = "flo
         notes.append(printed.note)
     projected = [e.kind for e in sim.effects if overrides(e, "correct_positions")]
     iterations = sim.solver.iterations
+    iterated = sim.solver.name != "newton"   # a converged method: the converged floor only
     out, searches = [], 0
     t = sim.state.time  # accumulated as the simulation does (time-dependent effects)
     for k in range(count):
@@ -160,8 +166,9 @@ def check_steps(simulation, positions, velocities=None, *, precision: str = "flo
         err = np.where(np.isfinite(err), err, np.inf)
         worst = int(np.argmax(err))
 
-        def bound32(model=model, problem=problem):
-            return float32_tolerance(model, problem, iterations, tol64)
+        def bound32(model=model, problem=problem, x_cs=x_cs):
+            return float32_tolerance(model, problem, iterations, tol64, x=x_cs,
+                                     iterated=iterated)
 
         tol = tol_k = tol64 if printed is None else float(printed.tolerances[k])
         if precision == "float32" and tolerance is None and err[worst] > tol_k:
@@ -208,7 +215,8 @@ def check_steps(simulation, positions, velocities=None, *, precision: str = "flo
 
 
 def float32_report(scenes=("hanging", "jacobson-net", "jacobson-flag", "drop-on-square")) -> None:
-    """Print, per scene, the first step's float32 deviation, tolerance and the κ bound.
+    """Print, per scene, the first step's float32 deviation, tolerance, the κ bound and the
+    tolerance of a converged step (``MARGIN`` × the converged float32 floor).
 
     The numbers of docs/ports.md ("float32 ports") are this function's output.
 
@@ -220,7 +228,7 @@ def float32_report(scenes=("hanging", "jacobson-net", "jacobson-flag", "drop-on-
     from ..scene import load_scene
 
     print(f"{'scene':16} {'n':>5} {'K':>4} {'deviation':>10} {'tolerance':>10} "
-          f"{'kappa bound':>11}")
+          f"{'kappa bound':>11} {'converged':>10}")
     for name in scenes:
         sim = as_simulation(load_scene(name))
         x = sim.state.positions
@@ -229,8 +237,10 @@ def float32_report(scenes=("hanging", "jacobson-net", "jacobson-flag", "drop-on-
         dev = float32_deviation(sim.step_model(), problem, K)
         tol = float32_tolerance(sim.step_model(), problem, K, RTOL64 * cloth_size(x))
         kappa = system_condition_number(sim) * EPS32 * float(np.abs(x).max())
+        x_min = refine(sim.step_model(), problem, problem.initial_guess())
+        floor = MARGIN * converged_float32_floor(sim.step_model(), problem, x_min)
         print(f"{name:16} {sim.model.vertex_count:5d} {K:4d} {dev:10.2e} {tol:10.2e} "
-              f"{kappa:11.2e}")
+              f"{kappa:11.2e} {floor:10.2e}")
 
 
 def _frames(sim, positions, velocities, steps):
