@@ -18,6 +18,11 @@ Verdicts that fail:
     Neither answer is a minimizer (a fixed iteration count stops short): the answer depends
     on where the iteration starts and how many iterations it takes, so the step cannot be
     judged. Not the port's error: match the settings named in the note.
+``ill-conditioned``
+    The port's answer meets the optimality criterion but is farther than the tolerance
+    from the minimizer, along a direction where g is nearly flat: the criterion cannot
+    place it (:mod:`clothsim.ports.flat` gives the evidence and what would decide).
+    Undecided, like ``start-dependent``.
 ``not converged``
     The port's answer is heading for clothsim's minimizer but is not there yet.
 ``not a minimizer``
@@ -39,6 +44,9 @@ from dataclasses import dataclass, field
 import numpy as np
 
 PASSING = ("agrees", "non-unique")
+#: Failing verdicts that are not the port's error: a check whose failing steps all have one
+#: of these is UNDECIDED, not FAIL.
+UNDECIDED = ("start-dependent", "ill-conditioned")
 
 
 @dataclass
@@ -155,7 +163,7 @@ class CheckReport:
 
         A PASS whose largest error is above the tolerance says which steps passed by
         optimality and why. UNDECIDED: every failing step is start-dependent (the settings
-        differ; not the port's error).
+        differ) or ill-conditioned (g too flat for the criterion): not the port's error.
 
         Returns
         -------
@@ -190,6 +198,6 @@ class CheckReport:
                     f"max error {worst:.3e} m{extra}")
         counts = Counter(s.status for s in failing)
         tally = ", ".join(f"{c} {status}" for status, c in counts.most_common())
-        word = "UNDECIDED" if set(counts) == {"start-dependent"} else "FAIL"
+        word = "UNDECIDED" if set(counts) <= set(UNDECIDED) else "FAIL"
         return (f"{head + 'the first fails' if head else word} at {failing[0].line()}; "
                 f"{len(failing)} of {n} steps fail: {tally}{extra}")
