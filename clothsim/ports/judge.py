@@ -295,7 +295,8 @@ def _optimal(model, problem, x_cs, x_port, tol, verdict, worst, gradient) -> Ste
         return verdict("not converged", worst, f"its relative gradient {rp:.1e} is within the "
                        f"rounding floor of the gradient at this precision ({opt:.1e}), which "
                        f"therefore cannot judge it; it is {off:.3e} m from the minimizer, "
-                       f"beyond the tolerance: raise its iterations or tighten its tolerance")
+                       f"beyond the tolerance {tol:.3e} m: raise its iterations or tighten its "
+                       f"tolerance")
     if not is_minimum(model, problem, xp):
         return verdict("not a minimizer", worst, "the port's answer leads to a saddle point of "
                        "g (an indefinite Hessian), not a minimum")

@@ -179,19 +179,64 @@ def converged_float32_floor(model, problem, x: np.ndarray) -> float:
     """
     x32 = x.astype(np.float32).astype(np.float64)
     dg = float32_gradient(model, problem, x32) - objective_gradient(model, problem, x32)
+    dx = _hessian_solve(model, problem, x)(dg)
+    ulp = float(np.spacing(np.float32(np.abs(x).max())))
+    return float(np.linalg.norm(dx, axis=1).max()) + np.sqrt(3.0) / 2 * ulp
+
+
+def float32_newton_stagnation(model, problem, x: np.ndarray, iterations: int = 20) -> float:
+    """Where Newton's method run in float32 from the minimizer ``x`` stagnates [m].
+
+    x ← fl₃₂(x − ∇²g(x*)⁻¹ ∇g₃₂(x)), from x* rounded to float32: the gradient in float32
+    (:func:`float32_gradient`), the small Newton step solved in float64 (its own rounding
+    is relative to its size). The largest distance from x* over the iterations is what a
+    converged float32 Newton can be off; :func:`converged_float32_floor` predicts it
+    without iterating (docs/ports.md compares the two).
+
+    Parameters
+    ----------
+    model : Model
+    problem : StepProblem
+    x : ndarray, shape (n, 3)
+        The minimizer of g [m].
+    iterations : int, default 20
+
+    Returns
+    -------
+    float
+        max over the iterations of max_v |x_v − x*_v| [m].
+    """
+    solve = _hessian_solve(model, problem, x)
+    it = x.astype(np.float32)
+    worst = float(np.linalg.norm(it - x, axis=1).max())
+    for _ in range(iterations):
+        step = solve(float32_gradient(model, problem, it.astype(np.float64)))
+        it = (it.astype(np.float64) - step).astype(np.float32)
+        worst = max(worst, float(np.linalg.norm(it - x, axis=1).max()))
+    return worst
+
+
+def _hessian_solve(model, problem, x: np.ndarray):
+    """v ↦ ∇²g(x)⁻¹ v over the free vertices (0 on the pinned), for (n, 3) arrays."""
     free = np.flatnonzero(problem.free_mask(model.vertex_count))
     dofs = (3 * free[:, None] + np.arange(3)).ravel()
     solver = NewtonSolver(model)
-    dx = np.zeros(3 * model.vertex_count)
+    factor = None
     for definite in (False, True):  # the exact Hessian; its projection if it is indefinite
         H = solver.hessian(problem, x, definite=definite).tocsc()[dofs][:, dofs]
         try:
-            dx[dofs] = Factor(H, check_conditioning=False).solve(dg.reshape(-1)[dofs])
+            factor = Factor(H, check_conditioning=False)
             break
         except FactorizationError:
             continue
-    ulp = float(np.spacing(np.float32(np.abs(x).max())))
-    return float(np.linalg.norm(dx.reshape(-1, 3), axis=1).max()) + np.sqrt(3.0) / 2 * ulp
+
+    def solve(v: np.ndarray) -> np.ndarray:
+        out = np.zeros(3 * model.vertex_count)
+        if factor is not None:
+            out[dofs] = factor.solve(np.asarray(v, np.float64).reshape(-1)[dofs])
+        return out.reshape(-1, 3)
+
+    return solve
 
 
 def float32_tolerance(model, problem, iterations: int, floor64: float,

@@ -7,6 +7,8 @@ so a float32 solver stopping 2e-5 m short fails; an output cut short fails namin
 frame counts.
 """
 
+from pathlib import Path
+
 import numpy as np
 import pytest
 
@@ -15,7 +17,13 @@ from clothsim.cli import main
 from clothsim.ports.check import check_steps, step_tolerance
 from clothsim.ports.formats import write_trajectory
 from clothsim.ports.precision import float32_valued, significant_digits
-from clothsim.ports.rounding import converged_float32_floor, float32_deviation
+from clothsim.ports.rounding import (
+    converged_float32_floor,
+    float32_deviation,
+    float32_newton_stagnation,
+)
+
+ENGINE = Path(__file__).resolve().parents[2] / "examples" / "engines" / "newton-springs"
 
 
 def run(factory, steps):
@@ -160,3 +168,26 @@ def test_converged_trajectory_in_float32_passes_and_one_2e5_short_fails():
     report = check_steps(newton_sheet, np.stack(xs_p), np.stack(vs_p), precision="float32")
     assert {s.status for s in report.steps} == {"not converged"}, report.summary()
     assert all(1.5e-5 < s.error < 3e-5 for s in report.steps), report.summary()
+
+
+def test_converged_floor_bounds_where_a_float32_newton_stagnates():
+    sim = newton_sheet()
+    p, m = sim.problem(), sim.step_model()
+    sim.step()
+    x = sim.state.positions
+    assert float32_newton_stagnation(m, p, x) <= converged_float32_floor(m, p, x)
+
+
+@pytest.mark.parametrize("iterations, passes", [(200, False), (1000, True)])
+def test_newtons_vbd_runs_are_judged_without_newton(iterations, passes):
+    """newton's VBD, recorded by examples/engines/newton_vbd.py --save: 200 iterations stop
+    4e-6 to 2e-5 m short of the minimizer and fail, 1000 reach 1.4e-7 m and pass."""
+    scene = cs.load_scene(ENGINE / "scene.toml")
+    with np.load(ENGINE / f"vbd-{iterations}.npz") as run32:
+        xs, vs = run32["positions"].astype(np.float64), run32["velocities"].astype(np.float64)
+    report = check_steps(scene, xs, vs, precision="float32", steps=3)
+    assert report.passed == passes, report.summary()
+    assert max(s.tolerance for s in report.steps) < 1e-6
+    if not passes:
+        assert {s.status for s in report.steps} == {"not converged"}, report.summary()
+        assert min(s.error for s in report.steps) > 4 * max(s.tolerance for s in report.steps)
