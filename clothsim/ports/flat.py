@@ -4,9 +4,11 @@ A port's answer x_p whose relative gradient ‖∇g(x_p)‖ / ‖∇g(x_0)‖ is
 meets the criterion a converged solver is held to. Yet when ∇²g is nearly singular along
 some direction u (a flat sheet near buckling, a light cloth on stiff springs: λ_min ≪
 λ_max), the gradient says little about the position: ‖x_p − x*‖ ≈ ‖∇g(x_p)‖ / λ_min can be
-centimetres at a relative gradient of 1e-7. Such a step is not the port's error, nor
-proven right: it is undecided, and :func:`flat_evidence` says what is known and what
-would decide it:
+centimetres at a relative gradient of 1e-7. In general ‖x_p − x*‖ ≲ ‖∇g(x_p)‖ / λ_min, so an
+answer within the criterion yet beyond the tolerance is always one the criterion cannot
+place: a step ill-conditioned for that criterion at that tolerance. It is not the port's
+error, nor proven right: it is undecided, and :func:`flat_evidence` says what is known and
+what would decide it:
 
 - the distance of x_p from the minimizer x* (Newton's method from x_p reaches it), and the
   objective gap g(x_p) − g(x*), beside the step's whole decrease g(x_0) − g(x*);
@@ -29,9 +31,8 @@ from ..solvers.newton import NewtonSolver
 
 #: Below this many free degrees of freedom the spectrum is computed densely.
 DENSE = 1500
-#: g is flat along the difference x_p − x* when its curvature there is below this fraction
-#: of ∇²g's largest eigenvalue: there a relative gradient of 1e-6 (the default
-#: optimality) no longer bounds the distance to a tolerance of 1e-9 of the cloth size.
+#: ∇²g counts as nearly singular along the difference x_p − x* when its curvature there is
+#: below this fraction of its largest eigenvalue (the note says so; the verdict is the same).
 FLAT = 1e-6
 
 
@@ -58,8 +59,7 @@ def extreme_eigenpairs(H: sp.spmatrix):
     return float(lo[0]), vec[:, 0], float(hi)
 
 
-def flat_evidence(model, problem, x_port, x_min, g0: float, rp: float,
-                  tol: float) -> tuple[bool, str]:
+def flat_evidence(model, problem, x_port, x_min, g0: float, rp: float, tol: float) -> str:
     """What is known about a port's answer that meets ``optimality`` off the minimizer.
 
     Parameters
@@ -78,12 +78,10 @@ def flat_evidence(model, problem, x_port, x_min, g0: float, rp: float,
 
     Returns
     -------
-    flat : bool
-        g is flat along x_p − x* (curvature below :data:`FLAT` λ_max): the step is
-        ill-conditioned, not the port's error.
-    note : str
-        Distance, objective gap, curvature; when flat, the flat direction and what would
-        decide.
+    str
+        One note: distance, objective gap, the curvature along the difference beside
+        λ_min and λ_max (nearly singular below :data:`FLAT` λ_max), the flat direction and
+        what would decide.
     """
     d = x_port - x_min
     off = np.linalg.norm(d, axis=1)
@@ -98,24 +96,23 @@ def flat_evidence(model, problem, x_port, x_min, g0: float, rp: float,
     free = np.flatnonzero(problem.free_mask(model.vertex_count))
     dofs = (3 * free[:, None] + np.arange(3)).ravel()
     H = NewtonSolver(model).hessian(problem, x_min).tocsc()[dofs][:, dofs]
-    pairs = extreme_eigenpairs(H)
     dv = d.reshape(-1)[dofs]
     rayleigh = float(dv @ (H @ dv) / (dv @ dv))
+    pairs = extreme_eigenpairs(H)
+    decide = (f"To decide: --optimality below {rp:.1e} judges this stopping rule too loose")
     if pairs is None:
-        return False, note + f"; curvature of g along the difference {rayleigh:.2e} kg"
+        return (note + f"; curvature of g along the difference {rayleigh:.2e} kg (the "
+                f"Hessian's spectrum not found). {decide}")
     lo, u, hi = pairs
-    if rayleigh > FLAT * hi:
-        return False, (note + f"; g is not flat there: curvature along the difference "
-                       f"{rayleigh:.2e} kg, λ_max = {hi:.2e} kg: tighten the port's tolerance")
     share = float(abs(u @ dv) / np.linalg.norm(dv))
     uv = np.zeros((model.vertex_count, 3))
     uv[free] = u.reshape(-1, 3)
     top = int(np.argmax(np.linalg.norm(uv, axis=1)))
     need = max(lo, 0.0) * tol / g0
-    return True, (note + f"; ∇²g is nearly singular: curvature along the difference "
-            f"{rayleigh:.2e} kg, λ_min = {lo:.2e} kg, λ_max = {hi:.2e} kg; the flat "
-            f"direction (the eigenvector of λ_min, largest at vertex {top}) holds "
-            f"{share:.0%} of the difference. To decide: a port converged to a relative "
-            f"gradient below {need:.1e} is within the tolerance {tol:.1e} m of the "
-            f"minimizer, and --optimality below {rp:.1e} judges this stopping rule too "
-            f"loose")
+    shape = ("∇²g is nearly singular there" if rayleigh <= FLAT * hi else
+             "g is flatter there than the criterion resolves at this tolerance")
+    return (note + f"; {shape}: curvature along the difference {rayleigh:.2e} kg, λ_min = "
+            f"{lo:.2e} kg, λ_max = {hi:.2e} kg; the flat direction (the eigenvector of "
+            f"λ_min, largest at vertex {top}) holds {share:.0%} of the difference. {decide}, "
+            f"and a port converged to a relative gradient below {need:.1e} is within the "
+            f"tolerance {tol:.1e} m of the minimizer")

@@ -290,8 +290,8 @@ def _optimal(model, problem, x_cs, x_port, tol, verdict, worst, gradient) -> Ste
                            "stopping rule)")
         rp, stated, opt, g0 = gradient
         if rp <= stated:
-            flat, note = flat_evidence(model, problem, x_port, xp, g0, rp, tol)
-            return verdict("ill-conditioned" if flat else "not converged", worst, note)
+            return verdict("ill-conditioned", worst,
+                           flat_evidence(model, problem, x_port, xp, g0, rp, tol))
         return verdict("not converged", worst, f"its relative gradient {rp:.1e} is within the "
                        f"rounding floor of the gradient at this precision ({opt:.1e}), which "
                        f"therefore cannot judge it; it is {off:.3e} m from the minimizer, "

@@ -20,8 +20,8 @@ Verdicts that fail:
     judged. Not the port's error: match the settings named in the note.
 ``ill-conditioned``
     The port's answer meets the optimality criterion but is farther than the tolerance
-    from the minimizer, along a direction where g is nearly flat: the criterion cannot
-    place it (:mod:`clothsim.ports.flat` gives the evidence and what would decide).
+    from the minimizer: g is too flat there for the criterion to place it
+    (:mod:`clothsim.ports.flat` gives the evidence and what would decide).
     Undecided, like ``start-dependent``.
 ``not converged``
     The port's answer is heading for clothsim's minimizer but is not there yet.

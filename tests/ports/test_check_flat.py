@@ -3,8 +3,8 @@
 The case: a flat 1 m sheet, 10 g on springs of 1e8 N/m, stretched by an outward push (h =
 0.01 s): ∇²g spans 8e-5 kg (the vertex masses: rigid motions of the sheet) to 8e4 kg, so a
 converged Newton that stops at a relative gradient of 5e-7 may sit 0.1 m from the minimizer
-along the flat direction. That is undecided, with the evidence, not a FAIL; the same
-stopping rule on the same sheet at 100 kg, where g is not flat, is "not converged".
+along the flat direction. That is undecided, with the evidence, not a FAIL, and so is the
+same stopping rule on the sheet at 100 kg, less flat; a stricter --optimality fails both.
 """
 
 import numpy as np
@@ -68,6 +68,7 @@ def test_converged_newton_off_along_a_flat_direction_is_undecided_with_the_evide
     step = report.steps[0]
     assert step.status == "ill-conditioned", step.line()
     assert report.summary().startswith("UNDECIDED at step 0 -> 1: ill-conditioned")
+    assert "∇²g is nearly singular there" in step.note
     assert 0.05 < step.error < 0.5
     for evidence in ("meets the optimality criterion", "from the minimizer",
                      "g exceeds its minimum by", "λ_min", "the flat direction (the eigenvector "
@@ -78,12 +79,18 @@ def test_converged_newton_off_along_a_flat_direction_is_undecided_with_the_evide
     assert strict.summary().startswith("FAIL") and strict.steps[0].status == "not converged"
 
 
-def test_the_same_stopping_rule_where_g_is_not_flat_is_not_converged():
+def test_the_same_stopping_rule_where_g_is_less_flat_is_undecided_and_said_so():
+    """At 100 kg the sheet's ∇²g spans 0.8 to 8e4 kg: not singular, yet a relative gradient
+    of 5e-7 still leaves the answer 1e-5 m off, beyond the 1.4e-9 m tolerance. Meeting the
+    stated criterion is never a FAIL; the note says how flat g is there."""
     xs, vs, rp, ratio = along_flattest(heavy_sheet, outward(heavy_sheet), 5e-7)
     assert ratio > FLAT and rp < 1e-6
     step = check_steps(heavy_sheet, xs, vs).steps[0]
     assert step.error > step.tolerance
-    assert step.status == "not converged" and "g is not flat there" in step.note, step.line()
+    assert step.status == "ill-conditioned", step.line()
+    assert "flatter there than the criterion resolves" in step.note, step.note
+    strict = check_steps(heavy_sheet, xs, vs, optimality=rp / 10).steps[0]
+    assert strict.status == "not converged", strict.line()
 
 
 def test_a_converged_answer_on_the_flat_sheet_agrees():
