@@ -197,17 +197,8 @@ def check_steps(simulation, positions, velocities=None, *, precision: str = "flo
             step = judge(sim, model, problem, k, x_cs, x_port, err, tol, optimality, precision,
                          search=searches < MAX_SEARCHES, unit=printed and printed.unit)
             searches += 1
-            if (precision == "float64" and printed is not None and not step.passed
-                    and printed.float32):
-                b32 = max(tol_k, bound32())
-                if err[worst] <= b32 and not step.settings:
-                    step.status = "float32 rounding"
-                    step.note = (f"the error is within float32 rounding of this step "
-                                 f"({b32:.3e} m): the port's numbers are float32 values; "
-                                 f"check with --precision float32")
-                else:
-                    step.note += ("; the port's numbers are float32 values: check with "
-                                  "--precision float32")
+            if precision == "float64" and printed is not None and not step.passed:
+                printed.hint32(step, float(err[worst]), lambda b=bound32, t=tol_k: max(t, b()))
             if projected:
                 step.note += (f"; positions are corrected after the solve by "
                               f"{', '.join(projected)}, so optimality for g alone is only "

@@ -222,3 +222,34 @@ class Printed:
             if printed.max() > tolerance:
                 self.tolerances = np.maximum(self.tolerances, printed)
                 self.text, self.unit = describe(self.digits), unit(self.digits)
+
+    def hint32(self, step, error: float, bound) -> None:
+        """Name float32 arithmetic on a step that fails when checked as float64, in place.
+
+        float32 values (:attr:`float32`) whose error is within the step's float32 bound get
+        the status "float32 rounding" and the flag to use; beyond it, the same flag in the
+        note. Numbers of fewer than 9 digits cannot be told from float64 ones: within the
+        bound they get the status with an "if the port computes in float32" hint.
+
+        Parameters
+        ----------
+        step : StepCheck
+            A failing step of a float64 check (changed in place).
+        error : float
+            Its largest error [m].
+        bound : callable
+            () -> the step's float32 tolerance [m] (computed only when needed).
+        """
+        if not (self.float32 or self.digits < 9):
+            return
+        b32 = bound()
+        if error <= b32 and not step.settings:
+            step.status = "float32 rounding"
+            step.note = (f"the error is within float32 rounding of this step ({b32:.3e} m): "
+                         + ("the port's numbers are float32 values; check with --precision "
+                            "float32" if self.float32 else
+                            f"the numbers carry {self.digits} digits, too few to tell float32 "
+                            f"from float64: if the port computes in float32, check with "
+                            f"--precision float32"))
+        elif self.float32:
+            step.note += "; the port's numbers are float32 values: check with --precision float32"

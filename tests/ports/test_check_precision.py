@@ -191,3 +191,26 @@ def test_newtons_vbd_runs_are_judged_without_newton(iterations, passes):
     if not passes:
         assert {s.status for s in report.steps} == {"not converged"}, report.summary()
         assert min(s.error for s in report.steps) > 4 * max(s.tolerance for s in report.steps)
+
+
+def test_float32_printed_with_fewer_than_9_digits_gets_a_conditional_hint():
+    """A float32 run (clothsim's own step in float32) printed with 8 digits: float32 and
+    float64 cannot be told apart, so the hint is conditional; with 6 digits the printing
+    covers the float32 rounding and the step agrees."""
+    from clothsim.ports.rounding import _Step
+
+    sim = hanging()
+    xs, vs = [sim.state.positions.copy()], [sim.state.velocities.copy()]
+    for k in range(3):
+        state = cs.State(xs[-1], vs[-1], k * sim.h, k)
+        p, m = sim.problem(state), sim.step_model(state)
+        x = _Step(m, p, np.float32).iterate(p.initial_guess(), sim.solver.iterations)
+        x = x.astype(np.float32).astype(np.float64)
+        vs.append(((x - xs[-1]) / sim.h).astype(np.float32).astype(np.float64))
+        xs.append(x)
+    xs, vs = np.stack(xs), np.stack(vs)
+    first = check_steps(hanging, printed(xs, 8), printed(vs, 8)).first_failure
+    assert first.status == "float32 rounding", first.line()
+    assert "if the port computes in float32, check with --precision float32" in first.note
+    assert check_steps(hanging, printed(xs, 8), printed(vs, 8), precision="float32").passed
+    assert check_steps(hanging, printed(xs, 6), printed(vs, 6)).passed
