@@ -23,17 +23,9 @@ from clothsim.ports.rounding import (
     float32_newton_stagnation,
 )
 
+from .test_check import run
+
 ENGINE = Path(__file__).resolve().parents[2] / "examples" / "engines" / "newton-springs"
-
-
-def run(factory, steps):
-    sim = factory()
-    xs, vs = [sim.state.positions.copy()], [sim.state.velocities.copy()]
-    for _ in range(steps):
-        sim.step()
-        xs.append(sim.state.positions.copy())
-        vs.append(sim.state.velocities.copy())
-    return np.stack(xs), np.stack(vs)
 
 
 def printed(a, digits):
