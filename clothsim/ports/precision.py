@@ -241,7 +241,7 @@ class Printed:
             () -> the step's float32 tolerance [m] (computed only when needed).
         """
         if not (self.float32 or self.digits < 9):
-            return
+            return None
         b32 = bound()
         if error <= b32 and not step.settings:
             step.status = "float32 rounding"
