@@ -41,7 +41,7 @@ FULL = 15
 COARSEST = 5
 #: Distinct values needed before their digits count as the printed precision: a handful of
 #: short numbers (a velocity of 0.01, a grid of 0.25 spacing) are exact, not rounded.
-DISTINCT = 100
+DISTINCT = 30
 
 
 def _sample(x) -> np.ndarray:
