@@ -206,3 +206,17 @@ def test_float32_printed_with_fewer_than_9_digits_gets_a_conditional_hint():
     assert "if the port computes in float32, check with --precision float32" in first.note
     assert check_steps(hanging, printed(xs, 8), printed(vs, 8), precision="float32").passed
     assert check_steps(hanging, printed(xs, 6), printed(vs, 6)).passed
+
+
+def test_cli_judges_text_frames_printed_with_g(tmp_path, capsys):
+    scene = cs.load_scene("hanging")
+    xs, vs = run(lambda: scene.build_simulation(scene.build_model()), 3)
+    port = tmp_path / "port"
+    port.mkdir()
+    for name, frames in (("positions", xs), ("velocities", vs)):   # C++'s std::cout default
+        np.savetxt(port / f"{name}.txt", frames.reshape(len(frames), -1), fmt="%g")
+    assert main(["check", "hanging", str(port), "--steps", "3"]) == 0
+    out = capsys.readouterr().out
+    assert out.startswith("PASS: 3 steps agree") and "printed with 6 significant digits" in out
+    # an explicit --tolerance is taken as given: the printing then fails the check
+    assert main(["check", "hanging", str(port), "--steps", "3", "--tolerance", "1e-9"]) == 1
