@@ -28,6 +28,8 @@ from __future__ import annotations
 
 import numpy as np
 
+from .compare import cloth_size
+
 #: Values examined at most (evenly spaced over the data): the precision of printed numbers
 #: shows in any few thousand of them.
 SAMPLE = 20000
@@ -39,6 +41,9 @@ FULL = 15
 #: Fewer digits than this are too coarse to judge a step at (5e-5 of |x|): the check
 #: keeps its tolerance and says so, rather than pass anything.
 COARSEST = 5
+#: A printed precision whose step tolerance exceeds this fraction of the cloth's size is
+#: too coarse to judge a step (6 digits at |x| = 1000 m round a 1 m cloth by centimetres).
+COARSE = 1e-3
 #: Distinct values needed before their digits count as the printed precision: a handful of
 #: short numbers (a velocity of 0.01, a grid of 0.25 spacing) are exact, not rounded.
 DISTINCT = 30
@@ -204,7 +209,9 @@ class Printed:
         Relative rounding of the numbers when :attr:`text` is set (the gradient's rounding
         floor scales with it), else None.
     note : str
-        Below :data:`COARSEST` digits: why the tolerance was not widened.
+        Why the tolerance was not widened when the printing is too coarse to judge a step
+        (below :data:`COARSEST` digits, or a tolerance above :data:`COARSE` of the cloth's
+        size), else "".
     """
 
     def __init__(self, positions, velocities, h: float, tolerance: float):
@@ -214,12 +221,18 @@ class Printed:
         self.float32 = float32_valued(positions, xd)
         self.tolerances = np.full(len(positions) - 1, float(tolerance))
         self.text, self.unit, self.note = "", None, ""
+        coarse = (f"the output is {describe(self.digits)}: too coarse to judge a step; "
+                  f"print 17 digits (float64) or 9 (float32)")
         if self.digits < COARSEST:
-            self.note = (f"the output is {describe(self.digits)}: too coarse to judge a "
-                         f"step; print 17 digits (float64) or 9 (float32)")
+            self.note = coarse
         elif self.digits < FULL:
             printed = printed_tolerances(positions, velocities, h, xd, vd)
-            if printed.max() > tolerance:
+            size = cloth_size(np.asarray(positions)[0])
+            if printed.max() > COARSE * size:
+                self.note = coarse.replace(": too coarse", f": rounding by up to "
+                                           f"{printed.max():.1e} m on a {size:.3g} m cloth, "
+                                           f"too coarse")
+            elif printed.max() > tolerance:
                 self.tolerances = np.maximum(self.tolerances, printed)
                 self.text, self.unit = describe(self.digits), unit(self.digits)
 

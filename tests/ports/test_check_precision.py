@@ -94,6 +94,19 @@ def test_numbers_too_coarse_to_judge_are_not_passed():
     assert any("too coarse to judge" in n for n in report.notes), report.notes
 
 
+def test_printing_that_rounds_by_more_than_a_thousandth_of_the_cloth_is_too_coarse():
+    def far():   # a 1 m cloth 1 km from the origin: 6 digits round it by millimetres
+        model, effects = cs.gallery.hanging_cloth(9, center=(1e3, 1.0, 0.0))
+        return cs.Simulation(model, h=1 / 30, effects=effects)
+
+    xs, vs = run(far, 3)
+    report = check_steps(far, printed(xs, 6), printed(vs, 6))
+    assert not report.passed, report.summary()
+    assert any("too coarse to judge a step" in n and "on a 1.41 m cloth" in n
+               for n in report.notes), report.notes
+    assert check_steps(far, printed(xs, 9), printed(vs, 9)).passed
+
+
 def test_float32_values_checked_as_float64_name_the_flag():
     xs, vs = run(hanging, 3)
     for x32, v32 in [(xs.astype(np.float32).astype(np.float64),
