@@ -73,7 +73,8 @@ def _add_port_commands(sub) -> None:
     chk.add_argument("--tolerance", type=float, default=None,
                      help="allowed per-vertex distance [m] (default from --precision)")
     chk.add_argument("--steps", type=count(0, MAX_FRAMES), default=None,
-                     help="check only the first N steps")
+                     help="check only the first N steps (default: all the scene's frames; "
+                     "an output with fewer fails)")
     chk.add_argument("--optimality", type=float, default=1e-6,
                      help="largest relative gradient |grad g(x)| / |grad g(x0)| of a port's "
                      "answer counted as a minimizer (1e-6)")
@@ -195,7 +196,8 @@ def _cmd_check(args) -> int:
     x = read_trajectory(args.port)
     v = read_velocities(args.port)
     report = check_steps(scene, x, v, precision=args.precision, tolerance=args.tolerance,
-                         steps=args.steps, optimality=args.optimality)
+                         steps=args.steps, optimality=args.optimality,
+                         expected_steps=None if args.steps is not None else scene.frames)
     if args.verbose_steps:
         for step in report.steps:
             print(step.line())
