@@ -26,8 +26,9 @@ from ..simulation import Simulation
 from ..springs import FAMILIES, Springs, grid_springs, mesh_springs, springs_from_pairs
 from .checks import Invalid, integer, locate
 from .effects import constructor_params
+from .overrides import rename_error
 from .pins import declared_pins
-from .scale import lost_mass, overflow_problem, scene_key
+from .scale import check_extent, force_problem, lost_mass, overflow_problem, scene_key
 from .schema import MAX_SUBSTEPS
 from .tables import read_index_list, read_spring_table, read_triangles, read_values, read_vertices
 from .validate import validate, validate_solver
@@ -136,7 +137,7 @@ class Scene:
         return copy.deepcopy(self.data)
 
     def _error(self, path: str, detail: str) -> SceneError:
-        return SceneError(self.source, path, detail)
+        return rename_error(SceneError(self.source, path, detail), self.overrides)
 
     # -- building
     def _files_mesh(self):
@@ -204,7 +205,7 @@ class Scene:
                 mesh = self._files_mesh()
             springs = mesh_springs(mesh, structural=sp.get("structural"),
                                    bending=sp.get("bending"))
-        _check_extent(mesh.vertices, shape)
+        check_extent(mesh.vertices, shape)
         table = self._spring_table(mesh.vertex_count)
         if table is not None and len(table.pairs):
             x = mesh.vertices
@@ -256,8 +257,11 @@ class Scene:
         SceneError
             On an effect that cannot be built (naming its key).
         """
+        return [e for _, e in self._checked_effects(model)]
+
+    def _checked_effects(self, model=None) -> list[tuple[str, object]]:
         try:
-            return [e for _, e in self._effects(model)]
+            return self._effects(model)
         except Invalid as exc:
             raise self._error(exc.path, exc.detail) from None
 
@@ -322,14 +326,16 @@ class Scene:
         self._check_stiffness(model, h)
         if (problem := overflow_problem(model, h)) is not None:  # no silent freeze
             raise self._error(scene_key(problem[0], self.data), problem[1])
-        effects = self.build_effects(model)
+        pairs = self._checked_effects(model)
         try:
-            sim = Simulation(model, h=h, effects=effects, solver=solver["method"],
+            sim = Simulation(model, h=h, effects=[e for _, e in pairs], solver=solver["method"],
                              iterations=solver["iterations"], tolerance=solver["tolerance"],
                              backend=solver["backend"],
                              initial_guess=solver["initial_guess"])
         except InputError as exc:
             raise self._locate(exc, model, h) from None
+        if (problem := force_problem(pairs, model, h)) is not None:  # no silent freeze
+            raise self._error(*problem)
         if solver["cholmod_mode"] != "auto":
             if not hasattr(sim.solver, "cholmod_mode"):
                 raise self._error("solver.cholmod_mode", f"applies to the local/global family "
@@ -378,19 +384,6 @@ class Scene:
         if rest and fld.startswith("effects."):
             return self._error("effects", rest)
         return self._error("", msg)
-
-
-def _check_extent(x: np.ndarray, shape: str) -> None:
-    """A cloth whose size is below the rounding of its coordinates is meaningless."""
-    if len(x) < 2:
-        return
-    scale = float(np.max(np.abs(x)))
-    extent = float(np.max(np.ptp(x, axis=0)))
-    if extent <= 1e3 * EPS * scale:
-        key = {"grid": "cloth.center", "polygon": "cloth.center", "mesh": "cloth.mesh",
-               "files": "cloth.vertices"}.get(shape, "cloth")
-        raise Invalid(key, f"the cloth's extent {extent:.3g} m is below the rounding of its "
-                           f"coordinates near {scale:.3g} m; move it nearer the origin")
 
 
 __all__ = ["Scene"]

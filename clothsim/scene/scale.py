@@ -1,4 +1,4 @@
-"""Magnitudes that overflow float64 in a step: refused when the scene is built.
+"""Magnitudes that overflow float64 in a step, or vanish in its rounding: refused on build.
 
 The solvers form squared norms of positions, spring vectors and gradients (the residual
 and the energy): with coordinates or rest lengths near 1e200 (beyond the 1e100 m the scene
@@ -11,10 +11,14 @@ from __future__ import annotations
 
 import numpy as np
 
+from .checks import Invalid
 from .effects import MAX_LENGTH  # [m]: the scene keys' limit on lengths, 1e100
 
 #: Largest energy scale k (L + r)² · s [J] (and m |x|² / h²) the step may meet.
 MAX_ENERGY = 1e300
+#: Largest h² |f_i| √n [kg·m] of an external force: ∇g's squared norm stays below 1e300.
+MAX_GRADIENT = 1e150
+EPS = float(np.finfo(np.float64).eps)
 
 
 def overflow_problem(model, h: float) -> tuple[str, str] | None:
@@ -90,7 +94,90 @@ def scene_key(what: str, data: dict) -> str:
     return "springs.table" if "table" in springs else "springs"
 
 
-__all__ = ["overflow_problem", "scene_key", "MAX_ENERGY"]
+
+
+def _peak_forces(effect, n: int):
+    """The largest force [N] per vertex ``effect`` applies at any time, (n, 3), or None."""
+    if effect.kind == "impulse":
+        f = np.zeros((n, 3))
+        f[effect.vertices] = effect.vertex_force
+        return f
+    if effect.kind in ("gravity", "force"):
+        return effect._force
+    return None
+
+
+_FORCE_KEY = {"gravity": "acceleration", "impulse": "force", "pin": "velocity"}
+
+
+def force_problem(effects, model, h: float) -> tuple[str, str] | None:
+    """The first bound effect whose force or motion overflows float64 in a step of ``h``.
+
+    A step's gradient ∇g = M (x − y) + h² (∇E(x) − f_ext) sums squares of h² f_i, and
+    moves a vertex by h² f_i / m_i: with ``f`` the largest force an effect applies, either
+    h² |f_i| √n > :data:`MAX_GRADIENT` (1e150 kg·m, so that ‖∇g‖² stays below 1e300) or
+    h² |f_i| / m_i > :data:`~clothsim.scene.effects.MAX_LENGTH` (1e100 m, the limit of
+    every length in a scene) is refused. A pin's ``velocity`` v moves its targets by h |v|
+    per step, held to the same 1e100 m. Without this the step's residual overflowed, the
+    solver did 0 iterations and the cloth never moved.
+
+    Parameters
+    ----------
+    effects : list of (str, Effect)
+        Each bound effect with its scene key (e.g. ``"effects[0]"``).
+    model : Model
+        Masses [kg] and the vertex count n.
+    h : float
+        Time step [s].
+
+    Returns
+    -------
+    (str, str) or None
+        ``(key, message)``, e.g. ``("effects[0].acceleration", "…")``; None when safe.
+    """
+    n, m = model.vertex_count, np.asarray(model.vertex_mass, np.float64)
+    for path, e in effects:
+        name = "file" if getattr(e, "file", None) else "per_vertex"
+        key = f"{path}.{_FORCE_KEY.get(e.kind, name)}"
+        velocity = getattr(e, "velocity", None) if e.kind == "pin" else None
+        if velocity is not None and h * float(np.abs(velocity).max()) > MAX_LENGTH:
+            return key, (f"{float(np.abs(velocity).max()):.3g} m/s moves the pins by "
+                         f"{h * float(np.abs(velocity).max()):.3g} m in one step of h = "
+                         f"{h:.3g} s, beyond the {MAX_LENGTH:.0e} m every length of a scene "
+                         f"is limited to (the step's squares would overflow float64)")
+        f = _peak_forces(e, n)
+        if f is None or not len(f):
+            continue
+        with np.errstate(over="ignore", invalid="ignore", divide="ignore"):
+            size = np.abs(f).max(axis=1)
+            gradient = h * h * size * np.sqrt(n)
+            move = np.where(m > 0, h * h * size / np.where(m > 0, m, 1.0), 0.0)
+        i = int(np.argmax(gradient))
+        if not gradient[i] <= MAX_GRADIENT:
+            return key, (f"a force of {size[i]:.3g} N on vertex {i} (mass {m[i]:.3g} kg) gives "
+                         f"h²|f|·√n = {gradient[i]:.3g} kg·m with h = {h:.3g} s, n = {n}: "
+                         f"beyond {MAX_GRADIENT:.0e}, the step's gradient would overflow "
+                         f"float64")
+        i = int(np.argmax(move))
+        if not move[i] <= MAX_LENGTH:
+            return key, (f"a force of {size[i]:.3g} N on vertex {i} (mass {m[i]:.3g} kg) moves "
+                         f"it h²|f|/m = {move[i]:.3g} m in one step of h = {h:.3g} s, beyond "
+                         f"the {MAX_LENGTH:.0e} m every length of a scene is limited to (the "
+                         f"step's squares would overflow float64)")
+    return None
+
+
+def check_extent(x: np.ndarray, shape: str) -> None:
+    """A cloth whose size is below the rounding of its coordinates is meaningless."""
+    if len(x) < 2:
+        return
+    scale = float(np.max(np.abs(x)))
+    extent = float(np.max(np.ptp(x, axis=0)))
+    if extent <= 1e3 * EPS * scale:
+        key = {"grid": "cloth.center", "polygon": "cloth.center", "mesh": "cloth.mesh",
+               "files": "cloth.vertices"}.get(shape, "cloth")
+        raise Invalid(key, f"the cloth's extent {extent:.3g} m is below the rounding of its "
+                           f"coordinates near {scale:.3g} m; move it nearer the origin")
 
 
 def lost_mass(model, h: float):
@@ -122,3 +209,7 @@ def lost_mass(model, h: float):
         return None
     at = np.flatnonzero((sv[:, 0] == v) | (sv[:, 1] == v))
     return v, int(at[np.argmax(k[at])]), float(ratio[v])
+
+
+__all__ = ["overflow_problem", "scene_key", "force_problem", "check_extent", "lost_mass",
+           "MAX_ENERGY", "MAX_GRADIENT"]
