@@ -101,6 +101,14 @@ class Pin(Effect):
         uniq, counts = np.unique(self.vertices, return_counts=True)
         if np.any(counts > 1):
             raise InputError(f"pin.vertices: vertex {uniq[counts > 1][0]} is listed twice")
+        if self.method == "penalty":  # mass 0 means exactly pinned: a spring would let it move
+            massless = self.vertices[model.vertex_mass[self.vertices] == 0]
+            if len(massless):
+                raise InputError(f"pin.method: vertex {massless[0]} has mass 0, which pins it "
+                                 f"exactly at its initial position, but this penalty pin "
+                                 f"would let it move by its spring's stretch; use method "
+                                 f"'constraint' (cloth.pin_method for the pins a cloth's files "
+                                 f"declare) or give the vertex a mass", field="pin.method")
         self._rest = model.mesh.vertices[self.vertices].copy()
         self._empty = PinSet()
 

@@ -109,7 +109,9 @@ KEYS: tuple[Key, ...] = (
     Key("cloth", "vertex_mass", "number, array or file", NONE, "kg",
         "Mass of every vertex (one number > 0, or one per vertex, or a text file of n "
         "numbers, each ≥ 0). A vertex of mass 0 is pinned exactly at its initial position "
-        "(as engines read an inverse mass of 0). Replaces `mass`; give one of the two.",
+        "(as engines read an inverse mass of 0): a penalty pin on it, an obstacle it starts "
+        "inside, or an impulse on massless vertices only is refused. Replaces `mass`; give "
+        "one of the two.",
         _ALL_BUT_JACOBSON),
     Key("cloth", "mass_lumping", "string", "uniform", "",
         "`\"uniform\"`: every vertex the same. `\"area\"`: proportional to a third of the "
