@@ -11,6 +11,7 @@ from __future__ import annotations
 
 import numpy as np
 
+from ..springs import FAMILIES
 from .checks import Invalid
 from .effects import MAX_LENGTH  # [m]: the scene keys' limit on lengths, 1e100
 
@@ -40,7 +41,7 @@ def overflow_problem(model, h: float) -> tuple[str, str] | None:
     x = np.asarray(model.mesh.vertices, np.float64)
     s = model.springs
     r = np.asarray(s.spring_rest_length, np.float64)
-    k = np.asarray(s.spring_stiffness, np.float64)
+    k = np.asarray(s.spring_stiffness, np.float64) + np.asarray(s.spring_damping) / h  # k + c/h
     m = np.asarray(model.vertex_mass, np.float64)
     xmax = float(np.abs(x).max()) if x.size else 0.0
     if xmax > MAX_LENGTH:
@@ -168,9 +169,22 @@ def force_problem(effects, model, h: float) -> tuple[str, str] | None:
 
 
 def check_extent(x: np.ndarray, shape: str) -> None:
-    """A cloth whose size is below the rounding of its coordinates is meaningless."""
+    """Refuse a cloth whose size is below the rounding of its coordinates (meaningless).
+
+    Parameters
+    ----------
+    x : ndarray, shape (n, 3)
+        Vertex positions [m].
+    shape : str
+        ``cloth.shape``, which names the key to blame.
+
+    Raises
+    ------
+    Invalid
+        At ``cloth.center``, ``cloth.mesh`` or ``cloth.vertices``.
+    """
     if len(x) < 2:
-        return
+        return None
     scale = float(np.max(np.abs(x)))
     extent = float(np.max(np.ptp(x, axis=0)))
     if extent <= 1e3 * EPS * scale:
@@ -178,6 +192,45 @@ def check_extent(x: np.ndarray, shape: str) -> None:
                "files": "cloth.vertices"}.get(shape, "cloth")
         raise Invalid(key, f"the cloth's extent {extent:.3g} m is below the rounding of its "
                            f"coordinates near {scale:.3g} m; move it nearer the origin")
+
+
+def stiffness_problem(model, h: float, data: dict, table_springs: int):
+    """Springs so stiff that M + h²L cannot be factored in float64: (key, message) or None.
+
+    When a vertex's mass is at or below the rounding of h² L_ii (m_i ≤ ε h² L_ii), M is lost
+    in M + h²L, which is then as singular as L (free translations): the factorization fails
+    or its answer is noise. A damped spring counts with k + c/h (its step's stiffness). The
+    key of the stiffest spring at the worst vertex is named.
+
+    Parameters
+    ----------
+    model : Model
+    h : float
+        Time step [s].
+    data : dict
+        The resolved scene (its cloth shape names the key).
+    table_springs : int
+        How many of the model's springs (the last ones) come from ``springs.table``.
+
+    Returns
+    -------
+    (str, str) or None
+    """
+    found = lost_mass(model, h)
+    if found is None:
+        return None
+
+    v, i, ratio = found
+    m, c = model.vertex_mass, model.springs.spring_damping
+    k = model.springs.spring_stiffness + c / h
+    key = ("cloth.file" if data["cloth"]["shape"] == "jacobson"
+           else "springs.table" if i >= model.spring_count - table_springs
+           else f"springs.{FAMILIES[model.springs.spring_family[i]]}")
+    what = f"stiffness{' + damping/h' if c[i] else ''} {float(k[i]):.3g} N/m"
+    return key, (f"{what} is too large for h = {h:.3g} s and vertex {v}'s mass "
+                 f"{float(m[v]):.3g} kg: h²L_ii/m_i = {ratio:.3g} is beyond 1/ε = "
+                 f"{1 / EPS:.3g}, so the mass is lost in M + h²L, which cannot be factored "
+                 f"in float64")
 
 
 def lost_mass(model, h: float):
@@ -189,7 +242,8 @@ def lost_mass(model, h: float):
     Parameters
     ----------
     model : Model
-        Springs (stiffness [N/m]) and masses [kg]; massless vertices are pinned and skipped.
+        Springs (stiffness [N/m], damping [N·s/m]: a damped spring's step has k + c/h) and
+        masses [kg]; massless vertices are pinned and skipped.
     h : float
         Time step [s].
 
@@ -198,7 +252,8 @@ def lost_mass(model, h: float):
     (int, int, float) or None
         The vertex, its stiffest spring and h² L_ii / m_i, when that ratio reaches 1/ε.
     """
-    sv, k = model.springs.spring_vertices, model.springs.spring_stiffness
+    sv = model.springs.spring_vertices
+    k = model.springs.spring_stiffness + model.springs.spring_damping / h  # damped: k + c/h
     if not len(k):
         return None
     n, m = model.vertex_count, model.vertex_mass
@@ -212,4 +267,5 @@ def lost_mass(model, h: float):
 
 
 __all__ = ["overflow_problem", "scene_key", "force_problem", "check_extent", "lost_mass",
+           "stiffness_problem",
            "MAX_ENERGY", "MAX_GRADIENT"]

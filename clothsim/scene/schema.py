@@ -215,14 +215,15 @@ KEYS: tuple[Key, ...] = (
 # clothsim.scene.effects: "vec3"/"point" 3 numbers (a point within ±1e100 m), "number",
 # "nonneg" (>= 0), "positive" (> 0), "time" (>= 0), "length" (> 0, <= 1e100), "string",
 # "strings", "count" (an iteration count), "vertices" (indices or a file), "region", "base",
-# "file" (a file name, resolved against the scene's folder).
+# "file" (a file name, resolved against the scene's folder), "cells" ([row, column] pairs of a
+# grid cloth, negative from the end).
 EFFECT_KEYS: dict[str, dict[str, tuple[str, str]]] = {
     "gravity": {"acceleration": ("vec3", "m/s²")},
     "force": {"per_vertex": ("vec3", "N"), "vertices": ("vertices", ""), "file": ("file", ""),
               "index_base": ("base", "")},
     "pin": {"vertices": ("vertices", ""), "region": ("region", "m"), "method": ("string", ""),
             "stiffness": ("positive", "N/m"), "release": ("time", "s"),
-            "velocity": ("vec3", "m/s"), "index_base": ("base", "")},
+            "velocity": ("vec3", "m/s"), "index_base": ("base", ""), "grid": ("cells", "")},
     "plane": {"point": ("point", "m"), "normal": ("vec3", ""), "friction": ("nonneg", ""),
               "thickness": ("nonneg", "m")},
     "sphere": {"center": ("point", "m"), "radius": ("length", "m"), "friction": ("nonneg", "")},
@@ -239,8 +240,9 @@ _TYPE_WORDS = {"vec3": "[3] numbers", "point": "[3] numbers", "number": "number"
                "nonneg": "number ≥ 0", "positive": "number > 0", "time": "number ≥ 0",
                "length": "number > 0", "string": "string", "strings": "array of strings",
                "count": "integer ≥ 1", "vertices": "array of integers, or a file",
-               "region": "table `{min, max}`", "base": "0 or 1 (with a file)",
-               "file": "string (file)"}
+               "region": "table `{min, max}`, or an array of them", "base": "0 or 1 (with a file)",
+               "file": "string (file)",
+               "cells": "array of `[row, column]` (grid cloths; −1 is the last)"}
 
 
 def keys(table: str, shape: str | None = None) -> tuple[str, ...]:
