@@ -102,6 +102,11 @@ def probe_scheduler(host: str, port: int, timeout: float = CONNECT_TIMEOUT) -> d
     raise _NotDask("its first message is not a Dask handshake")
 
 
+def _refusal(address: str, text: str) -> InputError:
+    return InputError(f"accuracy.scheduler: cannot use {address!r}: "
+                      + (" ".join(str(text).split()) or "no reason given"))
+
+
 def check_scheduler(address: str) -> None:
     """Connect to the Dask scheduler at ``address`` once, or say in one line why not.
 
@@ -128,24 +133,20 @@ def check_scheduler(address: str) -> None:
         raise InputError("accuracy.scheduler: needs dask.distributed: pip install "
                          "'clothsim[cluster]'") from None
 
-    def fail(text: str) -> InputError:
-        return InputError(f"accuracy.scheduler: cannot use {address!r}: "
-                          + (" ".join(str(text).split()) or "no reason given"))
-
     try:
         scheme, location = parse_address(address)
         if scheme == "tcp":
             probe_scheduler(*parse_host_port(location), timeout=CONNECT_TIMEOUT)
     except _NotDask as exc:
-        raise fail(f"not a Dask scheduler: {exc}") from None
+        raise _refusal(address, f"not a Dask scheduler: {exc}") from None
     except (OSError, ValueError, TypeError) as exc:   # refused, unreachable, malformed
-        raise fail(f"{exc.strerror or exc}" if isinstance(exc, OSError) and exc.strerror
-                   else str(exc) or type(exc).__name__) from None
+        why = exc.strerror if isinstance(exc, OSError) and exc.strerror else str(exc)
+        raise _refusal(address, why or type(exc).__name__) from None
     try:
         with Client(address, timeout=f"{CONNECT_TIMEOUT}s"):
             pass
     except (OSError, ValueError, TypeError, MemoryError) as exc:   # TimeoutError: OSError
-        raise fail(str(exc) or type(exc).__name__) from None
+        raise _refusal(address, str(exc) or type(exc).__name__) from None
 
 
 def map_jobs(func: Callable, items: Iterable[Sequence], *, jobs: int = 1,
