@@ -279,6 +279,7 @@ def _count(strategy, case, key, examples: int) -> tuple[Counter, list[str], Coun
             wrong.append(line)
         elif kind == "refused":
             keys[key(value, line)] += 1
+            counts["naming the --set"] += line.startswith("--set ")
 
     run()
     return counts, wrong, keys
@@ -354,11 +355,12 @@ def main() -> None:
     lines = [f"commit {commit()}: hypothesis (derandomized), {EXAMPLES} cases per generator, "
              f"each through `clothsim validate` (and `run` for a refusal)"]
     for name, (counts, wrong, keys) in results.items():
-        total = sum(counts.values())
+        total = counts["accepted"] + counts["refused"] + counts["wrong"]
         lines.append(f"{name}: {total} cases; {counts['accepted']} accepted (exit 0); "
                      f"{counts['refused']} refused in one line naming "
-                     f"{'the --set or ' if name == '--set' else ''}the file and a key "
-                     f"(exit 2; `run` refused them identically and wrote nothing); "
+                     + (f"the --set ({counts['naming the --set']} of them; the file is valid) "
+                        f"and the key " if name == "--set" else "the file and a key ")
+                     + f"(exit 2; `run` refused them identically and wrote nothing); "
                      f"{counts['wrong']} otherwise; {len([k for k in keys if k])} distinct keys "
                      f"named" + (f" ({keys['']} refusals name only the --set: a malformed "
                                  f"KEY=VALUE)" if name == "--set" else ""))
