@@ -153,18 +153,18 @@ def force_problem(effects, model, h: float) -> tuple[str, str] | None:
             size = np.abs(f).max(axis=1)
             gradient = h * h * size * np.sqrt(n)
             move = np.where(m > 0, h * h * size / np.where(m > 0, m, 1.0), 0.0)
-        i = int(np.argmax(gradient))
-        if not gradient[i] <= MAX_GRADIENT:
-            return key, (f"a force of {size[i]:.3g} N on vertex {i} (mass {m[i]:.3g} kg) gives "
-                         f"h²|f|·√n = {gradient[i]:.3g} kg·m with h = {h:.3g} s, n = {n}: "
-                         f"beyond {MAX_GRADIENT:.0e}, the step's gradient would overflow "
-                         f"float64")
-        i = int(np.argmax(move))
-        if not move[i] <= MAX_LENGTH:
-            return key, (f"a force of {size[i]:.3g} N on vertex {i} (mass {m[i]:.3g} kg) moves "
-                         f"it h²|f|/m = {move[i]:.3g} m in one step of h = {h:.3g} s, beyond "
-                         f"the {MAX_LENGTH:.0e} m every length of a scene is limited to (the "
-                         f"step's squares would overflow float64)")
+        for value, bound, says in (
+                (gradient, MAX_GRADIENT, f"gives h²|f|·√n = {{v:.3g}} kg·m with h = {h:.3g} s, "
+                                         f"n = {n}: beyond {MAX_GRADIENT:.0e}, the step's "
+                                         f"gradient would overflow float64"),
+                (move, MAX_LENGTH, f"moves it h²|f|/m = {{v:.3g}} m in one step of h = "
+                                   f"{h:.3g} s, beyond the {MAX_LENGTH:.0e} m every length of "
+                                   f"a scene is limited to (the step's squares would overflow "
+                                   f"float64)")):
+            i = int(np.argmax(value))
+            if not value[i] <= bound:
+                return key, (f"a force of {size[i]:.3g} N on vertex {i} (mass {m[i]:.3g} kg) "
+                             + says.format(v=value[i]))
     return None
 
 
