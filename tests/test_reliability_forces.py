@@ -1,6 +1,6 @@
 """Forces too large for float64 (issue 34, item 4): never a silently frozen cloth.
 
-Gravity, an impulse, a force (per vertex or from a file) or a pin's velocity of 1e160 …
+Gravity, an impulse, a force (per vertex or from a file), a wind or a pin's velocity of 1e160 …
 1e300 made the step's gradient overflow: the run finished with exit 0, status completed,
 0 iterations, residual inf, and the cloth never moved. A scene is now refused when it is
 built, naming the key (clothsim.scene.scale.force_problem: h²|f|·√n ≤ 1e150 kg·m and
@@ -40,7 +40,8 @@ PIN = {"kind": "pin", "vertices": [12, 15]}
     ({"kind": "impulse", "center": [0.0, 0.0, 0.0], "radius": 2.0, "force": [0.0, "S", 0.0]},
      "effects[0].force"),
     ({"kind": "pin", "vertices": [0], "velocity": [0.0, "S", 0.0]}, "effects[0].velocity"),
-], ids=["gravity", "force", "impulse", "pin-velocity"])
+    ({"kind": "wind", "velocity": [0.0, 0.0, "S"]}, "effects[0].velocity"),
+], ids=["gravity", "force", "impulse", "pin-velocity", "wind"])
 def test_a_huge_force_is_refused_naming_its_key(effect, key, size):
     e = {k: ([size if x == "S" else -size if x == "-S" else x for x in v]
              if isinstance(v, list) else v) for k, v in effect.items()}

@@ -105,14 +105,25 @@ def _peak_forces(effect, n: int):
         return f
     if effect.kind in ("gravity", "force"):
         return effect._force
+    if effect.kind == "wind":  # on a cloth at rest facing it: ½ ρ C_d |v|² A n per triangle
+        x, t = effect.model.mesh.vertices, effect._triangles
+        twice_area = np.linalg.norm(np.cross(x[t[:, 1]] - x[t[:, 0]], x[t[:, 2]] - x[t[:, 0]]),
+                                    axis=1)
+        with np.errstate(over="ignore", invalid="ignore"):
+            speed2 = np.abs(effect.velocity).max() ** 2 * 3.0  # float64: inf, not an error
+            per = 0.25 * effect.density * effect.drag * speed2 * twice_area / 3.0
+        return np.bincount(t.ravel(), np.repeat(per, 3), n)[:, None] * np.ones(3)
     return None
 
 
-_FORCE_KEY = {"gravity": "acceleration", "impulse": "force", "pin": "velocity"}
+_FORCE_KEY = {"gravity": "acceleration", "impulse": "force", "pin": "velocity",
+              "wind": "velocity"}
 
 
 def force_problem(effects, model, h: float) -> tuple[str, str] | None:
     """The first bound effect whose force or motion overflows float64 in a step of ``h``.
+
+    Gravity, force, impulse and wind (its drag on a cloth at rest facing it) count.
 
     A step's gradient ∇g = M (x − y) + h² (∇E(x) − f_ext) sums squares of h² f_i, and
     moves a vertex by h² f_i / m_i: with ``f`` the largest force an effect applies, either
