@@ -25,7 +25,7 @@ import tomllib
 
 from ..errors import SceneError
 from .checks import suggest
-from .schema import TOP_KEYS
+from .schema import TOP_KEYS, default
 
 _PART = re.compile(r"^(?P<name>[A-Za-z_][\w-]*)(?:\[(?P<index>\d+)\])?$")
 _BARE = re.compile(r"^[\w.:/+-]+$")
@@ -232,14 +232,15 @@ def moved_indices(before: dict, after: dict, overrides) -> SceneError | None:
         The refusal, naming the ``--set`` and the effect's key; None when nothing moved.
     """
     cloth = after.get("cloth", {})
-    old = before.get("cloth", {}).get("resolution", [21, 21]) if isinstance(
-        before.get("cloth"), dict) else [21, 21]
+    file_cloth = before.get("cloth") if isinstance(before.get("cloth"), dict) else {}
+    old = file_cloth.get("resolution", default("cloth", "resolution"))
     new = cloth.get("resolution")
-    if cloth.get("shape") != "grid" or new == old or not isinstance(old, list):
-        return None
-    item = next((o for o in overrides if o.partition("=")[0].strip().startswith(
-        "cloth.resolution")), None)
+    if (cloth.get("shape") != "grid" or new == old or not isinstance(old, list)
+            or len(old) != 2 or not all(isinstance(r, int) and r > 0 for r in old)):
+        return None  # (a file whose own resolution is invalid has no vertices to move)
     keys = [o.partition("=")[0].strip() for o in overrides]
+    item = next((o for o, k in zip(overrides, keys) if "cloth.resolution".startswith(k)
+                 or k.startswith("cloth.resolution")), overrides[0])
     for i, e in enumerate(after.get("effects", [])):
         if "vertices" not in e or "grid" in e or any(k.startswith(f"effects[{i}].vertices")
                                                       for k in keys):
