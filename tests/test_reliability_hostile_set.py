@@ -70,7 +70,9 @@ def test_grid_pins_are_checked_and_name_their_key():
                                       r"grid \(rows -3\.\.2, columns -4\.\.3\)"),
                           ([[0]], r"effects\[0\]\.grid\[0\]: expected \[row, column\]"),
                           ("corners", r"effects\[0\]\.grid: expected an array"),
-                          ([[0, 0.5]], r"effects\[0\]\.grid\[0\]\[1\]: expected an integer")):
+                          ([[0, 0.5]], r"effects\[0\]\.grid\[0\]\[1\]: expected an integer"),
+                          ([[-1, 0], [2, -4]], r"effects\[0\]\.grid\[1\]: \[2, -4\] is vertex 8, "
+                                               r"as effects\[0\]\.grid\[0\] \[-1, 0\] is")):
         with pytest.raises(SceneError, match=message):
             Scene.from_dict({**base, "effects": [{"kind": "pin", "grid": grid}]})
     with pytest.raises(SceneError, match=r"effects\[0\]\.grid: give one of 'vertices', "

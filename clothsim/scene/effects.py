@@ -230,7 +230,7 @@ def grid_vertices(cells: list, resolution: list, path: str) -> list[int]:
     Raises
     ------
     Invalid
-        At ``path[i]`` for a row or column out of range.
+        At ``path[i]`` for a row or column out of range, or a vertex named twice.
     """
     nx, ny = resolution
     out = []
@@ -238,7 +238,12 @@ def grid_vertices(cells: list, resolution: list, path: str) -> list[int]:
         if not (-ny <= r < ny and -nx <= c < nx):
             raise Invalid(f"{path}[{i}]", f"[{r}, {c}] is outside the {nx} × {ny} grid (rows "
                                           f"{-ny}..{ny - 1}, columns {-nx}..{nx - 1})")
-        out.append((r % ny) * nx + c % nx)
+        v = (r % ny) * nx + c % nx
+        if v in out:
+            j = out.index(v)
+            raise Invalid(f"{path}[{i}]", f"[{r}, {c}] is vertex {v}, as {path}[{j}] "
+                                          f"{cells[j]} is")
+        out.append(v)
     return out
 
 
