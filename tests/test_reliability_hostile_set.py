@@ -147,7 +147,7 @@ def test_accuracy_steps_that_are_no_problem_set_are_one_line(tmp_path, capsys, c
                  "--out", str(tmp_path / "acc")])
     line = _one_line(capsys, code)
     assert line.startswith(f"accuracy.steps: '{steps}' is ")
-    assert not (tmp_path / "acc").exists() or content  # an empty file: refused up front
+    assert not (tmp_path / "acc").exists()  # refused before the study's folder is made
 
 
 def test_compare_plot_to_a_folder_or_a_text_file_is_one_line_before_comparing(tmp_path,

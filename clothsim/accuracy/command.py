@@ -27,7 +27,7 @@ from .dominance import MARGIN as DOMINANCE_MARGIN
 from .limits import method_limits, worse_minimum_notes
 from .parallel import check_scheduler
 from .phases import Phases
-from .problems import check_steps_file, load_problems, record_problems, save_problems
+from .problems import load_problems, record_problems, save_problems
 from .report import (
     fixed_budget_measure,
     fixed_budget_table,
@@ -169,8 +169,8 @@ def run_accuracy(scene, out, *, methods: Sequence[str] = ITERATIVE_METHODS,
                          + ", ".join(ITERATIVE_METHODS))
     if frames is not None and frames < 1:
         raise InputError(f"accuracy.frames: must be >= 1 (a study needs a step), got {frames}")
-    if steps_file is not None:
-        check_steps_file(steps_file)
+    if steps_file is not None:  # a file that is no problem set: refused before any writing
+        load_problems(steps_file)
     if scheduler is not None:
         check_scheduler(scheduler)  # the slowest check, last; before anything is written
     if quick:
