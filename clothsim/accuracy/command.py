@@ -170,6 +170,8 @@ def run_accuracy(scene, out, *, methods: Sequence[str] = ITERATIVE_METHODS,
                          + ", ".join(ITERATIVE_METHODS))
     if frames is not None and frames < 1:
         raise InputError(f"accuracy.frames: must be >= 1 (a study needs a step), got {frames}")
+    if steps_file is not None:  # a file that is no problem set: refused before any writing
+        load_problems(steps_file)
     if scheduler is not None:
         check_scheduler(scheduler)  # the slowest check, last; before anything is written
     if quick:

@@ -54,8 +54,8 @@ def add_set_option(parser) -> None:
     """
     parser.add_argument("--set", action="append", default=[], metavar="KEY=VALUE",
                         help="change a scene key, e.g. springs.structural=50, "
-                        "solver.iterations=20, effects[1].strength=2 (a TOML value; "
-                        "repeatable; validated like the file)")
+                        "solver.iterations=20, 'effects[0].acceleration=[0, -1.62, 0]' (a TOML "
+                        "value; repeatable; validated like the file)")
 
 
 def count(low: int, high: int):

@@ -118,6 +118,19 @@ def _refuse_special(*paths) -> None:
             refuse_special(p, inside=True)
 
 
+def _bad_plot_path(path: Path) -> str | None:
+    """Why ``compare --plot PATH`` cannot write an image there, or None."""
+    from matplotlib.backend_bases import FigureCanvasBase
+
+    kinds = FigureCanvasBase.get_supported_filetypes()
+    if path.is_dir():
+        return f"{path} is a folder; give an image file name, e.g. {path / 'deviation.png'}"
+    if path.suffix.lower().lstrip(".") not in kinds:
+        return (f"{path}: cannot tell the image format from {path.suffix or 'no suffix'!r}; "
+                f"end the name with one of {', '.join('.' + k for k in sorted(kinds))}")
+    return None
+
+
 def _cmd_export(args) -> int:
     from ..ports.export import export_port
     from ..scene import load_scene
@@ -152,6 +165,8 @@ def _cmd_compare(args) -> int:
     if bad:
         return _fail(bad, 2)
     _refuse_special(args.trajectory, args.reference, args.scene)
+    if args.plot and (bad := _bad_plot_path(Path(args.plot))):
+        return _fail(f"--plot: {bad}", 2)  # before the comparison, not after its report
     if Path(args.trajectory).suffix == ".mtx":
         from ..ports.matrices import compare_matrices
 

@@ -67,6 +67,28 @@ def refuse_special(path, *, inside: bool = False) -> None:
             refuse_special(entry.path)
 
 
+def file_stamp(path) -> tuple | None:
+    """What changes whenever a file's content may have: a cache key for what was read from it.
+
+    Parameters
+    ----------
+    path : str or path-like
+
+    Returns
+    -------
+    tuple or None
+        ``(st_mtime_ns, st_size, st_ctime_ns, st_ino, st_dev)`` (a rewrite in the same
+        nanosecond, even one that keeps the size and restores the modification time, changes
+        ``st_ctime_ns``; a file replaced by another changes the inode), or None when ``path``
+        cannot be examined.
+    """
+    try:
+        st = os.stat(path)
+    except (OSError, ValueError):
+        return None
+    return st.st_mtime_ns, st.st_size, st.st_ctime_ns, st.st_ino, st.st_dev
+
+
 def load_meshio():
     """The meshio module (imported here, so ``import clothsim`` stays light).
 
