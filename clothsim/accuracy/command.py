@@ -3,7 +3,9 @@
 :func:`run_accuracy` records the scene's step problems along one converged run, certifies a
 reference per step, measures every configuration on the same problems (errors),
 optionally the time-step and trajectory errors, then times the configurations in
-interleaved repeats (repeating only those an answer could choose, :mod:`.dominance`), and
+interleaved repeats (repeating only those an answer could choose, :mod:`.dominance`, and
+those an answer row has not yet told apart, :mod:`.decide`), extrapolates local/global's
+iterations to targets none of its settings reached (:mod:`.extrapolate`), and
 writes ``accuracy.csv``,
 ``accuracy.json`` (machine, versions, threads, one-off costs), ``steps.md`` and the plots.
 It returns the text the command prints: the answer table first.
@@ -35,6 +37,7 @@ from .report import (
     reference_uncertainty,
     rows,
     steps_table,
+    worse_than_local_global,
     write_csv,
     write_sidecar,
 )
@@ -57,6 +60,7 @@ from .timing import (
     one_off_costs,
     source_commit,
     time_configurations,
+    timing_clock,
 )
 from .trace import ACCURACY_LEVELS, ITERATIVE_METHODS
 from .trajectory import steps_per_frame
@@ -142,9 +146,9 @@ def run_accuracy(scene, out, *, methods: Sequence[str] = ITERATIVE_METHODS,
         instead of recording new ones.
     quick : bool
         A first look in seconds (:data:`QUICK`): at most 4 problems, budgets 1, 5, 10, 20,
-        100, tolerances 1e-3 and 1e-6 (at most 1000 iterations), 1 timing repeat, no
-        trajectory errors, a time-step check of :data:`QUICK_TIME_STEP_FRAMES` frames at h
-        and h/2 only.
+        100, tolerances 1e-3 and 1e-6 (at most 1000 iterations), 1 timing repeat (more for
+        the settings an answer must tell apart, :mod:`.decide`), no trajectory errors, a
+        time-step check of :data:`QUICK_TIME_STEP_FRAMES` frames at h and h/2 only.
     force : bool
         Write into ``out`` even when it holds files that are not an accuracy study's.
 
@@ -293,6 +297,7 @@ def _run(scene, out, methods, problems, frames, repeats, jobs, scheduler, target
     info |= {"status": "complete", "commit": commit, "scene": scene.name, "h": h,
              "frames": frames, "repeats": repeats,
              "chebyshev_rho": options.get("chebyshev", {}).get("rho"),
+             "timing_clock": timing_clock(threads)[1],
              "phase_seconds": phases.seconds}
     write_sidecar(info, out / "accuracy.json")
     write_text(out / "steps.md", steps_table(steps) + "\n")
@@ -327,6 +332,11 @@ def _run(scene, out, methods, problems, frames, repeats, jobs, scheduler, target
                          trajectory_levels=TRAJECTORY_LEVELS if traj else ()), "",
             f"Fixed budget ({fixed_budget_measure(table)} after k iterations per step):", "",
             fixed_budget_table(table), ""]
+    text += [f"note: {n}" for n in worse_than_local_global(table)]
+    if not nothing:
+        notes.append(f"timings are {timing_clock(threads)[1]} seconds per step"
+                     + (" (one BLAS thread): the solver's work, not the time spent waiting "
+                        "for a core on a shared machine" if threads == 1 else ""))
     text += [f"note: {n}" for n in notes]
     text.append(f"wrote {out / 'accuracy.csv'} ({len(table)} configurations), "
                 f"{out / 'accuracy.json'}, {out / 'steps.md'}, {out / 'problems.npz'} "

@@ -275,6 +275,58 @@ def fixed_budget_table(table: Sequence[Row], budgets: Sequence[int] = FIXED_BUDG
     return "\n".join(lines)
 
 
+WORSE = 1.5
+"""An accelerated method's p90 error this many times local/global's, at the same budget, is
+called less accurate (:func:`worse_than_local_global`)."""
+
+
+def worse_than_local_global(table: Sequence[Row], budgets: Sequence[int] = (1, 2, 5, 10),
+                            ) -> list[str]:
+    """One note per accelerated method that is less accurate than plain local/global at the
+    small budgets real-time users run (at least :data:`WORSE` times its p90 error, in the
+    fixed-budget table's measure), detected from the rows, e.g. Chebyshev's gap on contact
+    steps.
+
+    Parameters
+    ----------
+    table : sequence of Row
+        The rows.
+    budgets : sequence of int
+        The budgets compared (those measured).
+
+    Returns
+    -------
+    list of str
+        Empty when no method is worse at any of them.
+    """
+    measure = fixed_budget_measure(table)
+    col = "solver_error_p90" if measure == "solver error" else "objective_gap_p90"
+
+    def p90(method, b):
+        r = next((r for r in table if r.method == method and r.tolerance is None
+                  and r.iterations == b and r.status != "diverged"), None)
+        return getattr(r, col) if r is not None else math.nan
+
+    notes = []
+    for m in dict.fromkeys(r.method for r in table if r.method not in ("local-global",
+                                                                        "newton")):
+        worse = [(b, p90(m, b), p90("local-global", b)) for b in budgets
+                 if p90(m, b) > WORSE * p90("local-global", b) > 0]
+        if not worse:
+            continue
+        larger = sorted({r.iterations for r in table if r.method == m and r.tolerance is None
+                         and r.iterations > max(b for b, _, _ in worse)})
+        pays = next((b for b in larger if p90(m, b) < p90("local-global", b)), None)
+        notes.append(
+            f"{m} is less accurate than plain local/global at "
+            f"{', '.join(str(b) for b, _, _ in worse)} iterations per step ({measure} p90 "
+            f"{', '.join(f'{e:.1e}' for _, e, _ in worse)} against "
+            f"{', '.join(f'{e:.1e}' for _, _, e in worse)}): with a budget this small use "
+            f"local/global" + (f"; {m} is ahead from {pays} iterations per step" if pays
+                               else ""))
+    return notes
+
+
 def fixed_budget_measure(table: Sequence[Row]) -> str:
     """What :func:`fixed_budget_table` shows: "solver error", or "objective gap" when no
     recorded step is unique (every measured step has several minima).

@@ -4,9 +4,10 @@ clothsim writes only into a folder it owns (:func:`claim_folder`): a missing or 
 one whose own record marks it as clothsim's output of the same kind: ``run.json`` with
 ``clothsim_run`` for a run (``clothsim run``), ``manifest.json`` with clothsim's ``layout``
 for an export (``clothsim export``), ``accuracy.json`` with ``clothsim`` and ``scene`` for an
-accuracy study (``clothsim accuracy``), a ``README.md`` headed as a conformance set's or a
-coursework profile's for those (``clothsim conformance``, ``--profile coursework``): one
-folder, one profile. Anything else is refused with an
+accuracy study (``clothsim accuracy``), ``paper.json`` with ``clothsim`` and ``paper`` for
+its paper report (``clothsim accuracy --paper --out``), a ``README.md`` headed as a
+conformance set's or a coursework profile's for those (``clothsim conformance``,
+``--profile coursework``): one folder, one profile. Anything else is refused with an
 :class:`~clothsim.errors.InputError` naming the folder and its first foreign file, unless
 ``force`` is given. :class:`FolderLock` is an exclusive :func:`fcntl.flock` on
 ``<folder>/.clothsim.lock``, taken by every kind alike.
@@ -25,6 +26,7 @@ LOCK_NAME = ".clothsim.lock"
 RUN_RECORD = "run.json"
 EXPORT_RECORD = "manifest.json"
 ACCURACY_RECORD = "accuracy.json"
+PAPER_RECORD = "paper.json"
 CONFORMANCE_RECORD = "README.md"
 #: first line of the README.md of each profile of ``clothsim conformance`` (the writers in
 #: clothsim.ports begin their README with it, so ownership follows the heading they write)
@@ -32,7 +34,8 @@ CONFORMANCE_HEADING = "# clothsim conformance set"
 COURSEWORK_HEADING = "# clothsim coursework profile"
 CONFORMANCE_HEADINGS = {CONFORMANCE_HEADING: "conformance", COURSEWORK_HEADING: "coursework"}
 KINDS = {"run": "a clothsim run", "export": "a clothsim export",
-         "accuracy": "a clothsim accuracy study", "conformance": "a clothsim conformance set",
+         "accuracy": "a clothsim accuracy study",
+         "paper": "a clothsim accuracy --paper report", "conformance": "a clothsim conformance set",
          "coursework": "a clothsim coursework profile"}
 
 
@@ -56,10 +59,11 @@ def folder_kind(folder) -> str | None:
 
     Returns
     -------
-    {"run", "export", "accuracy", "conformance", "coursework"} or None
+    {"run", "export", "accuracy", "paper", "conformance", "coursework"} or None
         ``"run"`` when ``run.json`` is a clothsim run record, ``"export"`` when
         ``manifest.json`` is a clothsim export manifest, ``"accuracy"`` when
-        ``accuracy.json`` is an accuracy study's record, ``"conformance"`` or
+        ``accuracy.json`` is an accuracy study's record, ``"paper"`` when ``paper.json`` is
+        a paper report's, ``"conformance"`` or
         ``"coursework"`` when ``README.md`` is that profile's, else None.
     """
     p = Path(folder)
@@ -72,6 +76,9 @@ def folder_kind(folder) -> str | None:
     study = _record(p / ACCURACY_RECORD)
     if study is not None and "clothsim" in study and "scene" in study:
         return "accuracy"
+    paper = _record(p / PAPER_RECORD)
+    if paper is not None and "clothsim" in paper and "paper" in paper:
+        return "paper"
     return CONFORMANCE_HEADINGS.get(_first_line(p / CONFORMANCE_RECORD))
 
 
@@ -105,7 +112,7 @@ def claim_folder(folder, kind: str, *, force: bool = False) -> Path:
     ----------
     folder : str or Path
         The output folder (need not exist).
-    kind : {"run", "export", "accuracy", "conformance", "coursework"}
+    kind : {"run", "export", "accuracy", "paper", "conformance", "coursework"}
         What will be written.
     force : bool
         Write into a folder clothsim does not own anyway (``--force``).
@@ -153,7 +160,7 @@ class FolderLock:
     ----------
     folder : Path
         The output folder (exists).
-    kind : {"run", "export", "accuracy", "conformance", "coursework"}, default "run"
+    kind : {"run", "export", "accuracy", "paper", "conformance", "coursework"}, default "run"
         What this process writes there (written into the lock file beside its id, so that
         a process refused the lock is told what holds it).
 

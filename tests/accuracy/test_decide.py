@@ -68,7 +68,7 @@ def _fake_clock(outlier):
                      "AndersonSolver": 1.5, "NewtonSolver": 25.0}
     calls = {}
 
-    def time_once(solver, problems):
+    def time_once(solver, problems, clock=None):
         its = sum(solver.solve(p).iterations for p in problems) / len(problems)
         key = (type(solver).__name__, solver.iterations, solver.tolerance)
         calls[key] = calls.get(key, 0) + 1
