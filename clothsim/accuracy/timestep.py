@@ -204,11 +204,14 @@ def what_to_do(error: float, slope: float, h: float, h_asym: float, frame_time: 
                 f"(time-step error); more solver iterations cannot go below that: to halve "
                 f"it, halve h (--set scene.substeps={2 * substeps})")
     need = max(1, math.ceil(frame_time / h_asym))
-    return (f"what to do: at h = {h:.3g} s implicit Euler damps the stiffest springs' "
-            f"motion, which is usually what cloth should do; a smaller h hardly changes "
-            f"the trajectory (converged: {error:.2g} off) until h nears {h_asym:.2g} s "
-            f"(about --set scene.substeps={need}), so keep h and spend the time on solver "
-            f"iterations, unless the stiff springs' own vibration matters to you")
+    halving = (f"halving h removes only {100 * (1 - 2.0 ** -slope):.0f}% of it (slope "
+               f"{slope:.2f})" if math.isfinite(slope) and slope > 0
+               else "halving h does not reduce it")
+    return (f"what to do: even a converged solve is {error:.2g} off at h = {h:.3g} s and "
+            f"{halving}: implicit Euler damps the stiffest springs' motion at this h, and "
+            f"first-order convergence needs h near {h_asym:.2g} s (--set "
+            f"scene.substeps={need}); for plausible cloth keep h and spend the time on "
+            f"solver iterations, for an accurate trajectory take many more substeps")
 
 
 TRAJECTORY_BUDGETS = (1, 5, 10, 20)

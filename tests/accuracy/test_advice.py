@@ -43,3 +43,5 @@ def test_the_time_step_note_says_what_to_do():
     assert "cannot go below" in first
     damped = what_to_do(0.2, 0.45, 1 / 60, 4.88e-4, 1 / 30)
     assert "keep h" in damped and "--set scene.substeps=69" in damped
+    assert "0.2 off" in damped and "removes only 27% of it (slope 0.45)" in damped
+    assert "does not reduce it" in what_to_do(0.2, math.nan, 1 / 30, 5e-4, 1 / 30)
