@@ -59,13 +59,24 @@ def timing_clock(threads: int = 1):
                                                                        "wall")
 
 
+MIN_SAMPLE_SECONDS = 0.05
+"""A timing sample repeats its pass over the steps until it lasts at least this long [s]: a
+pass of a 1-iteration setting takes about a millisecond, where clock resolution, caches and
+interrupts made identical work (Chebyshev 1 it and local/global 1 it) differ by 20 %."""
+
+
 def _time_once(solver, problems, clock=time.perf_counter) -> float:
-    """Mean seconds per step of one pass of ``solver`` over ``problems`` on ``clock`` (the
-    timing seam: tests replace it by a deterministic clock)."""
-    t0 = clock()
-    for p in problems:
-        solver.solve(p)
-    return (clock() - t0) / len(problems)
+    """Mean seconds per step of passes of ``solver`` over ``problems`` on ``clock``, as many
+    passes as make :data:`MIN_SAMPLE_SECONDS` (the timing seam: tests replace it by a
+    deterministic clock)."""
+    passes, t0 = 0, clock()
+    while True:
+        for p in problems:
+            solver.solve(p)
+        passes += 1
+        spent = clock() - t0
+        if spent >= MIN_SAMPLE_SECONDS:
+            return spent / (passes * len(problems))
 
 
 def time_configurations(model: Model, steps: Sequence[StudyStep],
@@ -76,13 +87,13 @@ def time_configurations(model: Model, steps: Sequence[StudyStep],
     """Fill each result's ``seconds`` with per-step times [s] (:func:`timing_clock`), one
     per repeat.
 
-    Each repeat solves all measured steps with one configuration and records the mean
-    seconds per step; configurations are interleaved within each repeat. With ``errors``,
-    repeats after the second skip the configurations no answer can choose
-    (:func:`~.dominance.dominated`, on the fastest of two samples of each, so that one slow
-    sample never drops a setting); they keep their two times. With ``undecided``, further
-    interleaved rounds time the configurations it names until it names none or each has
-    ``cap`` samples (:mod:`.decide`).
+    Each repeat solves all measured steps with one configuration (as many passes as last
+    :data:`MIN_SAMPLE_SECONDS`) and records the mean seconds per step; configurations are
+    interleaved within each repeat. With ``errors``, repeats after the second skip the
+    configurations no answer can choose (:func:`~.dominance.dominated`, on the fastest of
+    two samples of each, so that one slow sample never drops a setting); they keep their two
+    times. With ``undecided``, further interleaved rounds time the configurations it names
+    until it names none or each has ``cap`` samples (:mod:`.decide`).
 
     Parameters
     ----------
