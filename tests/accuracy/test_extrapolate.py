@@ -1,6 +1,7 @@
 """A number for every question: local/global's iterations to a target it did not reach."""
 
 import math
+import re
 import warnings
 
 import numpy as np
@@ -67,3 +68,21 @@ def test_a_step_whose_error_stops_falling_gets_no_count():
     only = extrapolate([falling], 1e-2, "solver error")
     assert only.lower_bound and "at least ≈ 3500 iterations" in only.sentence()
     assert extrapolate([], 1e-2, "solver error") is None
+
+
+def test_a_local_global_study_answers_an_unreached_target_with_a_count(tmp_path):
+    """The issue's question on a small cloth: local/global only, --quick, a target its
+    settings do not reach; the short answer and the table carry the extrapolated count."""
+    from clothsim.accuracy import run_accuracy
+
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        text = run_accuracy(hanging(13), tmp_path, methods=("local-global",), quick=True,
+                            problems=2, target=1e-4, time_steps=False, plots=False)
+    (short,) = [line for line in text.splitlines() if line.startswith("answer for 1e-04")]
+    assert "no setting measured reaches it; local/global would need" in short, short
+    count = re.search(r"≈ (\d+) iterations per step \(extrapolated", short)
+    assert count and int(count.group(1)) > 1000, short   # beyond the quick cap
+    assert "after 1000 iterations" in short and "the tail of the run" in short
+    assert re.search(r"\| 1e-04 \| solver error .*local/global (at least )?≈ \d+ it/step "
+                     r"\(extrapolated\)", text), text
