@@ -7,7 +7,7 @@ import importlib
 import sys
 import time
 
-BENCHMARKS = ("stiffness", "stability_figures", "performance", "iteration_cost",
+BENCHMARKS = ("stiffness", "stability_figures", "performance", "factor_modes", "iteration_cost",
               "accuracy_bench", "accuracy_quick")
 #: run only when named: the 257² × 500-frame memory run, the scale ladder up to 1025² and
 #: the full accuracy study at 41² take minutes each; accuracy_docs regenerates the accuracy

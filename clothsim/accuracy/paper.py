@@ -27,13 +27,12 @@ import csv
 import math
 import time
 import warnings
-from pathlib import Path
 
 import numpy as np
 
 from ..gallery import curtain
 from ..io.common import atomic_path, write_text
-from ..io.folders import FolderLock, claim_folder
+from ..io.outfolder import OutputFolder
 from ..solvers import LocalGlobalSolver, NewtonSolver
 from .extrapolate import TAIL, fit_tail
 from .phases import Phases, advance
@@ -106,10 +105,10 @@ def paper_report(*, n: int = 41, k: float = 1000.0, frames: int = 15, repeats: i
         The report (plain text, Markdown tables).
     """
     if out is not None:
-        out = claim_folder(out, "paper", force=force)
-        out.mkdir(parents=True, exist_ok=True)
-        with FolderLock(out, "paper"):
-            return _paper(n, k, frames, repeats, cap, threads, out)
+        with OutputFolder(out, "paper", force=force) as folder:
+            folder.mark("writing", {"clothsim": machine_info(threads)["clothsim"],
+                                    "paper": {"n": n}})
+            return _paper(n, k, frames, repeats, cap, threads, folder)
     return _paper(n, k, frames, repeats, cap, threads, None)
 
 
@@ -209,11 +208,11 @@ def _text(n, k, frames, ref, rows, per_iteration, nt_sec, traced, repeats, threa
     return "\n".join(lines)
 
 
-def _write(out: Path, text, rows, lg_its, lg_err, per_iteration, nt_err, nt_sec,
+def _write(folder: OutputFolder, text, rows, lg_its, lg_err, per_iteration, nt_err, nt_sec,
            settings) -> None:
     from .plots import plot_paper
-    from .report import write_sidecar
 
+    out = folder.path
     write_text(out / "paper.md", text + "\n")
     with atomic_path(out / "paper.csv") as tmp, tmp.open("w", newline="") as fh:
         w = csv.DictWriter(fh, fieldnames=list(rows[0]))
@@ -222,5 +221,4 @@ def _write(out: Path, text, rows, lg_its, lg_err, per_iteration, nt_err, nt_sec,
     plot_paper(out / "paper.png", lg_its, lg_err, per_iteration, nt_err, nt_sec,
                [(r["level"], r["local_global_iterations"]) for r in rows
                 if r["local_global_extrapolated"]])
-    write_sidecar(machine_info(settings["threads"]) | {"paper": settings},
-                  out / "paper.json")
+    folder.mark("complete", machine_info(settings["threads"]) | {"paper": settings})

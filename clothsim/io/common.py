@@ -147,7 +147,9 @@ def quietly(call, *args, **kwargs):
 @contextmanager
 def atomic_path(path):
     """Yield a temporary name beside ``path``; on success move it onto ``path``
-    (:func:`os.replace`, atomic), otherwise delete it. Readers never see a partial file.
+    (:func:`os.replace`, atomic), otherwise delete it. Readers never see a partial file, an
+    :class:`OSError` names ``path`` (a full disk's names no file), and a link at the
+    temporary name is removed first, never written through.
 
     Parameters
     ----------
@@ -164,10 +166,11 @@ def atomic_path(path):
     path = Path(path)
     tmp = path.with_name(f".{path.name}.{os.getpid()}.tmp{path.suffix}")
     try:
+        tmp.unlink(missing_ok=True)  # a link planted there is removed, never written through
         yield tmp
         os.replace(tmp, path)
-    except OSError as exc:   # the error names the file the caller asked for
-        if exc.filename is not None and Path(os.fsdecode(exc.filename)) == tmp:
+    except OSError as exc:   # the error names the file the caller asked for (a full disk's
+        if exc.filename is None or Path(os.fsdecode(exc.filename)) == tmp:  # has no name)
             exc.filename = str(path)
         raise
     finally:
