@@ -28,6 +28,7 @@ def test_paper_out_writes_table_csv_figure_and_record(tmp_path):
     assert (out / "paper.png").read_bytes().startswith(b"\x89PNG")
     record = json.loads((out / "paper.json").read_text())
     assert record["paper"]["cap"] == 300 and folder_kind(out) == "paper"
+    assert record["status"] == "complete"
     # again into its own folder: allowed; into an accuracy study's: refused by name
     paper.paper_report(n=5, frames=2, repeats=1, cap=300, out=out)
     (tmp_path / "q").mkdir()
