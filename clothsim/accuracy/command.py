@@ -277,7 +277,8 @@ def _run(scene, folder, methods, problems, frames, repeats, jobs, scheduler, tar
                     TRAJECTORY_LEVELS if traj else ())
 
         def still_open():   # the answer rows not yet decided by their timings
-            return undecided(rows(results, steps, h=h), asked)
+            return undecided(rows(results, steps, h=h, time_step_error=ts_error,
+                                  trajectory_errors=traj), asked)
 
         with phases.phase("timing", repeats * len(configs), "config"):
             once = time_configurations(model, steps, results, repeats=repeats,

@@ -114,3 +114,17 @@ def test_a_six_times_slow_sample_gives_the_same_answers(tmp_path, monkeypatch, o
         if line.startswith("| 1e-") and "no setting" not in line:
             n = int(re.search(r"(\d+) timing repeat", line).group(1))
             assert MIN_REPEATS <= n <= MAX_REPEATS
+
+
+def test_trajectory_answers_are_decided_too(tmp_path, monkeypatch):
+    """The trajectory-error rows are asked while timing, with the trajectory errors (they
+    were left provisional when the timing read rows without them)."""
+    monkeypatch.setattr(timing, "_time_once", _fake_clock(None))
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        text = run_accuracy(Scene.from_dict(TINY), tmp_path, methods=("local-global",
+                            "chebyshev"), problems=2, repeats=1, budgets=(1, 5),
+                            tolerances=(1e-6,), plots=False)
+    rows = [line for line in text.splitlines() if "| trajectory error |" in line
+            and "no setting" not in line]
+    assert rows and not any("provisional" in line for line in rows), text
