@@ -3,7 +3,9 @@
 :func:`run_accuracy` records the scene's step problems along one converged run, certifies a
 reference per step, measures every configuration on the same problems (errors),
 optionally the time-step and trajectory errors, then times the configurations in
-interleaved repeats (repeating only those an answer could choose, :mod:`.dominance`), and
+interleaved repeats (repeating only those an answer could choose, :mod:`.dominance`, and
+those an answer row has not yet told apart, :mod:`.decide`), extrapolates local/global's
+iterations to targets none of its settings reached (:mod:`.extrapolate`), and
 writes ``accuracy.csv``,
 ``accuracy.json`` (machine, versions, threads, one-off costs), ``steps.md`` and the plots.
 It returns the text the command prints: the answer table first.
@@ -21,8 +23,9 @@ from ..errors import InputError
 from ..factorization import cholmod_available
 from ..io.common import write_text
 from ..io.outfolder import OutputFolder
-from .answer import answer_table, short_answer
+from .answer import BASELINE, TRAJECTORY, answer_table, questions, short_answer
 from .converged import warm_started
+from .decide import choose, undecided
 from .dominance import MARGIN as DOMINANCE_MARGIN
 from .limits import method_limits, worse_minimum_notes
 from .parallel import check_scheduler
@@ -34,6 +37,7 @@ from .report import (
     reference_uncertainty,
     rows,
     steps_table,
+    worse_than_local_global,
     write_csv,
 )
 from .study import (
@@ -55,6 +59,7 @@ from .timing import (
     one_off_costs,
     source_commit,
     time_configurations,
+    timing_clock,
 )
 from .trace import ACCURACY_LEVELS, ITERATIVE_METHODS
 from .trajectory import steps_per_frame
@@ -142,9 +147,9 @@ def run_accuracy(scene, out, *, methods: Sequence[str] = ITERATIVE_METHODS,
         instead of recording new ones.
     quick : bool
         A first look in seconds (:data:`QUICK`): at most 4 problems, budgets 1, 5, 10, 20,
-        100, tolerances 1e-3 and 1e-6 (at most 1000 iterations), 1 timing repeat, no
-        trajectory errors, a time-step check of :data:`QUICK_TIME_STEP_FRAMES` frames at h
-        and h/2 only.
+        100, tolerances 1e-3 and 1e-6 (at most 1000 iterations), 1 timing repeat (more for
+        the settings an answer must tell apart, :mod:`.decide`), no trajectory errors, a
+        time-step check of :data:`QUICK_TIME_STEP_FRAMES` frames at h and h/2 only.
     force : bool
         Write into ``out`` even when it holds files that are not an accuracy study's.
 
@@ -262,26 +267,39 @@ def _run(scene, folder, methods, problems, frames, repeats, jobs, scheduler, tar
                                          frame_time=frame_time, jobs=jobs)
     table = rows(results, steps, h=h, time_step_error=ts_error, trajectory_errors=traj)
     write_csv(table, out / "accuracy.csv")
+    levels = (target,) if target is not None else ACCURACY_LEVELS
+    short = (target,) if target is not None else (1e-3,)   # the short answer's
+    unc = reference_uncertainty(steps)
+    asked = questions(table, levels=levels, short_levels=short, uncertainty=unc,
+                      trajectory_levels=TRAJECTORY_LEVELS if traj else ())
+    extrapolated = {}
     if not nothing:   # last: which settings an answer could choose is known by now
         errors = [(r.solver_error_p90, r.objective_gap_p90, r.trajectory_error) for r in table]
-        asked = (target,) if target is not None else ACCURACY_LEVELS   # as the answers ask
-        short = (target,) if target is not None else (1e-3,)   # the short answer's
-        answered = ([v for v in asked if v >= reference_uncertainty(steps)] + list(short),
-                    asked, TRAJECTORY_LEVELS if traj else ())
+        answered = ([v for v in levels if v >= unc] + list(short), levels,
+                    TRAJECTORY_LEVELS if traj else ())
+
+        def still_open():   # the answer rows not yet decided by their timings
+            return undecided(rows(results, steps, h=h, time_step_error=ts_error,
+                                  trajectory_errors=traj), asked)
+
         with phases.phase("timing", repeats * len(configs), "config"):
             once = time_configurations(model, steps, results, repeats=repeats,
-                                       threads=threads, errors=errors, levels=answered)
+                                       threads=threads, errors=errors, levels=answered,
+                                       undecided=still_open)
         table = rows(results, steps, h=h, time_step_error=ts_error, trajectory_errors=traj)
         write_csv(table, out / "accuracy.csv")
-        if once and repeats > 1:
-            notes.append(f"{len(once)} configuration(s) timed once (column 'repeats'): for "
-                         f"each, another setting reaches every target it reaches, in every "
-                         f"error, in at most 1/{DOMINANCE_MARGIN:g} of its time, so no answer "
-                         f"can choose it")
+        if once:
+            notes.append(f"{len(once)} configuration(s) timed twice only (column 'repeats'): "
+                         f"for each, another setting reaches every target it reaches, in "
+                         f"every error, in at most 1/{DOMINANCE_MARGIN:g} of its time, so no "
+                         f"answer can choose it")
+        if "local-global" in methods:
+            extrapolated = _extrapolate(model, steps, table, asked, cap, phases)
     info = machine_info(threads) | one_off_costs(model, steps, threads=threads)
     info |= {"status": "complete", "commit": commit, "scene": scene.name, "h": h,
              "frames": frames, "repeats": repeats,
              "chebyshev_rho": options.get("chebyshev", {}).get("rho"),
+             "timing_clock": timing_clock(threads)[1],
              "phase_seconds": phases.seconds}
     folder.mark("complete", info)
     write_text(out / "steps.md", steps_table(steps) + "\n")
@@ -307,19 +325,44 @@ def _run(scene, folder, methods, problems, frames, repeats, jobs, scheduler, tar
     if plots and any(s.kind == "unique" for s in steps):  # it plots the solver error
         from .plots import plot_fixed_budget
 
-        plot_fixed_budget(table, out / FIGURE, title=scene.name,
-                          uncertainty=reference_uncertainty(steps))
-    levels = (target,) if target is not None else ACCURACY_LEVELS
+        plot_fixed_budget(table, out / FIGURE, title=scene.name, uncertainty=unc)
     classes = ", ".join(f"{kinds.count(k)} {k}" for k in KINDS)
     text = [f"# accuracy of {scene.name}: h = {h:.4g} s, {measured} of {len(steps)} recorded "
             f"steps measured ({classes})", "",
-            *short_answer(table, (target,) if target is not None else (1e-3,)), "",
-            answer_table(table, levels=levels, uncertainty=reference_uncertainty(steps),
+            *short_answer(table, short, extrapolated=extrapolated), "",
+            answer_table(table, levels=levels, uncertainty=unc, extrapolated=extrapolated,
                          trajectory_levels=TRAJECTORY_LEVELS if traj else ()), "",
             f"Fixed budget ({fixed_budget_measure(table)} after k iterations per step):", "",
             fixed_budget_table(table), ""]
+    text += [f"note: {n}" for n in worse_than_local_global(table)]
+    if not nothing:
+        notes.append(f"timings are {timing_clock(threads)[1]} seconds per step"
+                     + (" (one BLAS thread): the solver's work, not the time spent waiting "
+                        "for a core on a shared machine" if threads == 1 else ""))
     text += [f"note: {n}" for n in notes]
     text.append(f"wrote {out / 'accuracy.csv'} ({len(table)} configurations), "
                 f"{out / 'accuracy.json'}, {out / 'steps.md'}, {out / 'problems.npz'} "
                 f"(clothsim commit {info['commit']})")
     return "\n".join(text)
+
+
+def _extrapolate(model, steps, table, asked, cap, phases) -> dict:
+    """(column, level) → local/global's extrapolated iterations, for each printed level
+    that no local/global setting reaches (:mod:`.extrapolate`)."""
+    from .extrapolate import extrapolate, tail_runs
+
+    want = sorted({(col, lev) for col, lev, _ in asked if col != TRAJECTORY
+                   and choose(table, lev, error=col, method=BASELINE).row is None})
+    if not want:
+        return {}
+    out = {}
+    for col in dict.fromkeys(c for c, _ in want):
+        measure = "solver error" if col.startswith("solver") else "objective gap"
+        count = sum(1 for s in steps if (s.kind == "unique" if measure == "solver error"
+                                         else s.measured))
+        with phases.phase("extrapolation", count, "step"):
+            tails = tail_runs(model, steps, iterations=cap, measure=measure)
+        for c, lev in want:
+            if c == col and (e := extrapolate(tails, lev, measure)) is not None:
+                out[(c, lev)] = e
+    return out

@@ -265,7 +265,30 @@ def plot_fixed_budget(table, path, *, title: str = "", uncertainty: float = 0.0)
         ``path``.
     """
     plt = _pyplot()
+    fig = fixed_budget_figure(table, title=title, uncertainty=uncertainty)
+    return _save(plt, fig, path)
+
+
+def fixed_budget_figure(table, *, title: str = "", uncertainty: float = 0.0):
+    """The figure of :func:`plot_fixed_budget` (a ``matplotlib.figure.Figure``, not saved).
+
+    The band "below the reference's uncertainty" spans from the bottom of the axes up to
+    ``uncertainty``; the y axis is extended down to a third of it when every point lies
+    above it, so the band is always drawn under the points it bounds.
+
+    Parameters
+    ----------
+    table : sequence of Row
+    title : str, optional
+    uncertainty : float, default 0
+
+    Returns
+    -------
+    matplotlib.figure.Figure
+    """
+    plt = _pyplot()
     fig, ax = plt.subplots(figsize=(6.4, 4.4))
+    shown = []
     for method in dict.fromkeys(r.method for r in table):
         pts = sorted((r.iterations, r.solver_error_median, r.solver_error_p90) for r in table
                      if r.method == method and r.tolerance is None
@@ -275,17 +298,67 @@ def plot_fixed_budget(table, path, *, title: str = "", uncertainty: float = 0.0)
             continue
         k, med, p90 = np.array(pts).T
         p90 = np.where(p90 > uncertainty, p90, np.nan)
+        shown += [*med, *p90[np.isfinite(p90)]]
         c = _COLORS.get(method)
         ax.loglog(k, med, "-o", ms=3, color=c, label=f"{method} (median)")
         ax.loglog(k, p90, ":", color=c, lw=1)
     for b in (5, 10, 20):
         ax.axvline(b, color="0.85", lw=0.6, zorder=0)
     if uncertainty > 0:
-        ax.axhspan(ax.get_ylim()[0], uncertainty, color="0.9", zorder=0,
+        ax.set_yscale("log")
+        low, high = (min(shown) / 1.5, max(shown) * 1.5) if shown else (uncertainty,) * 2
+        low, high = min(low, uncertainty / 3), max(high, 3 * uncertainty)
+        ax.axhspan(low, uncertainty, color="0.9", zorder=0,
                    label="below the reference's uncertainty")
+        ax.set_ylim(low, high)
     ax.set_xlabel("iterations per step")
     ax.set_ylabel("solver error ‖x − x*‖ / ‖x* − x_n‖ (dotted: p90)")
     ax.grid(True, which="both", alpha=0.3)
     ax.legend(fontsize=8)
     ax.set_title(title or "fixed budget: error after k iterations per step")
+    return fig
+
+
+def plot_paper(path, lg_iterations, lg_errors, seconds_per_iteration: float, newton_errors,
+               newton_seconds, extrapolated=()) -> Path:
+    """The paper's Fig. 1 comparison: relative error against wall time, local/global and
+    Newton on one step (:func:`~clothsim.accuracy.paper.paper_report`).
+
+    Parameters
+    ----------
+    path : str or Path
+        The PNG file to write (overwritten).
+    lg_iterations, lg_errors : array_like
+        Local/global's traced iterations and relative errors.
+    seconds_per_iteration : float
+        Time of one local/global iteration [s].
+    newton_errors, newton_seconds : array_like
+        Newton's relative error and cumulative time [s] per iterate.
+    extrapolated : sequence of (float, float)
+        (level, iterations) local/global reaches beyond its trace (drawn dashed).
+
+    Returns
+    -------
+    Path
+        ``path``.
+    """
+    plt = _pyplot()
+    fig, ax = plt.subplots(figsize=(6.4, 4.4))
+    k, e = np.asarray(lg_iterations, float), np.asarray(lg_errors, float)
+    keep = (k > 0) & (e > 0)
+    ms = 1e3 * seconds_per_iteration
+    ax.loglog(k[keep] * ms, e[keep], "-", color=_COLORS["local-global"], label="local/global")
+    far = [(lev, it) for lev, it in extrapolated if math.isfinite(it)]
+    if far and keep.any():
+        ax.loglog([k[keep][-1] * ms] + [it * ms for _, it in far], [e[keep][-1]]
+                  + [lev for lev, _ in far], "--", color=_COLORS["local-global"],
+                  label="local/global, extrapolated")
+    ne, ns = np.asarray(newton_errors, float), np.asarray(newton_seconds, float)
+    good = (ne > 0) & (ns > 0)
+    ax.loglog(ns[good] * 1e3, ne[good], "-o", ms=3, color=_COLORS["newton"], label="Newton")
+    ax.set_xlabel("wall time [ms]")
+    ax.set_ylabel("relative error ‖x − x*‖ / ‖x* − x_n‖")
+    ax.grid(True, which="both", alpha=0.3)
+    ax.legend(fontsize=8)
+    ax.set_title("the paper's Fig. 1 setup: error against time")
     return _save(plt, fig, path)

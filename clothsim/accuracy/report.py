@@ -27,7 +27,7 @@ COLUMNS = ("method", "h", "iterations", "tolerance", "solver_error_median",
            "steps_measured", "steps_skipped", "steps_unique", "steps_several_minima",
            "steps_saddle", "steps_reference_failed", "steps_at_rest", "steps_trivial",
            "time_step_error", "trajectory_error",
-           "seconds_per_step_median", "seconds_per_step_iqr", "repeats",
+           "seconds_per_step_median", "seconds_per_step_iqr", "seconds_per_step_min", "repeats",
            "solves_per_step", "factorizations_per_step", "status", "steps_diverged")
 FIXED_BUDGETS = (5, 10, 20)
 
@@ -67,6 +67,8 @@ class Row:
         Wall time per step and its interquartile range [s].
     repeats : int
         Timing repeats.
+    seconds_per_step_min : float
+        The fastest repeat [s] (a slow sample is another process's doing; a fast one is not).
     solves_per_step : float
         Global-step solves per step (median iterations; 0 for Newton).
     factorizations_per_step : float
@@ -125,6 +127,7 @@ class Row:
     residual_median: float = math.nan
     residual_p90: float = math.nan
     residual_max: float = math.nan
+    seconds_per_step_min: float = math.nan
 
     @property
     def setting(self) -> str:
@@ -181,7 +184,8 @@ def rows(results: Sequence[ConfigResult], steps: Sequence[StudyStep], *, h: floa
                        count["at-rest"], count["trivial"], time_step_error,
                        traj, sec, iqr, len(r.seconds), solves, r.factorizations,
                        "diverged" if diverged else "ok", int(r.diverged), *limit,
-                       basin[0], basin[2], *resid))
+                       basin[0], basin[2], *resid,
+                       seconds_per_step_min=min(r.seconds) if r.seconds else math.nan))
     return out
 
 
@@ -269,6 +273,58 @@ def fixed_budget_table(table: Sequence[Row], budgets: Sequence[int] = FIXED_BUDG
                          f"{getattr(r, prefix + '_p90'):.1e}")
         lines.append(f"| {m} | " + " | ".join(cells) + " |")
     return "\n".join(lines)
+
+
+WORSE = 1.5
+"""An accelerated method's p90 error this many times local/global's, at the same budget, is
+called less accurate (:func:`worse_than_local_global`)."""
+
+
+def worse_than_local_global(table: Sequence[Row], budgets: Sequence[int] = (1, 2, 5, 10),
+                            ) -> list[str]:
+    """One note per accelerated method that is less accurate than plain local/global at the
+    small budgets real-time users run (at least :data:`WORSE` times its p90 error, in the
+    fixed-budget table's measure), detected from the rows, e.g. Chebyshev's gap on contact
+    steps.
+
+    Parameters
+    ----------
+    table : sequence of Row
+        The rows.
+    budgets : sequence of int
+        The budgets compared (those measured).
+
+    Returns
+    -------
+    list of str
+        Empty when no method is worse at any of them.
+    """
+    measure = fixed_budget_measure(table)
+    col = "solver_error_p90" if measure == "solver error" else "objective_gap_p90"
+
+    def p90(method, b):
+        r = next((r for r in table if r.method == method and r.tolerance is None
+                  and r.iterations == b and r.status != "diverged"), None)
+        return getattr(r, col) if r is not None else math.nan
+
+    notes = []
+    for m in dict.fromkeys(r.method for r in table if r.method not in ("local-global",
+                                                                        "newton")):
+        worse = [(b, p90(m, b), p90("local-global", b)) for b in budgets
+                 if p90(m, b) > WORSE * p90("local-global", b) > 0]
+        if not worse:
+            continue
+        larger = sorted({r.iterations for r in table if r.method == m and r.tolerance is None
+                         and r.iterations > max(b for b, _, _ in worse)})
+        pays = next((b for b in larger if p90(m, b) < p90("local-global", b)), None)
+        notes.append(
+            f"{m} is less accurate than plain local/global at "
+            f"{', '.join(str(b) for b, _, _ in worse)} iterations per step ({measure} p90 "
+            f"{', '.join(f'{e:.1e}' for _, e, _ in worse)} against "
+            f"{', '.join(f'{e:.1e}' for _, _, e in worse)}): with a budget this small use "
+            f"local/global" + (f"; {m} is ahead from {pays} iterations per step" if pays
+                               else ""))
+    return notes
 
 
 def fixed_budget_measure(table: Sequence[Row]) -> str:

@@ -25,8 +25,9 @@ import numpy as np
 
 from ..model import Model
 from ..solvers import LocalGlobalSolver, estimate_spectral_radius
+from .decide import MAX_REPEATS
 from .dominance import dominated
-from .phases import advance, shrink
+from .phases import add, advance, shrink
 from .study import BLOW_UPS, ConfigResult, StudyStep
 
 
@@ -38,17 +39,61 @@ def _limited_threads(threads: int):
     return threadpool_limits(limits=threads)
 
 
+def timing_clock(threads: int = 1):
+    """The clock timings are read on: this process's CPU seconds with one BLAS thread (the
+    work itself: on a shared machine, wall time adds the time spent waiting for a core,
+    which moved single samples by 6x and medians by 3x under a load of 10 on 2 cores), wall
+    seconds with more threads (their CPU seconds add up).
+
+    Parameters
+    ----------
+    threads : int, default 1
+        BLAS threads during timing.
+
+    Returns
+    -------
+    tuple of (callable, str)
+        The clock and its name ("process CPU" or "wall").
+    """
+    return (time.process_time, "process CPU") if threads == 1 else (time.perf_counter,
+                                                                       "wall")
+
+
+MIN_SAMPLE_SECONDS = 0.05
+"""A timing sample repeats its pass over the steps until it lasts at least this long [s]: a
+pass of a 1-iteration setting takes about a millisecond, where clock resolution, caches and
+interrupts made identical work (Chebyshev 1 it and local/global 1 it) differ by 20 %."""
+
+
+def _time_once(solver, problems, clock=time.perf_counter) -> float:
+    """Mean seconds per step of passes of ``solver`` over ``problems`` on ``clock``, as many
+    passes as make :data:`MIN_SAMPLE_SECONDS` (the timing seam: tests replace it by a
+    deterministic clock)."""
+    passes, t0 = 0, clock()
+    while True:
+        for p in problems:
+            solver.solve(p)
+        passes += 1
+        spent = clock() - t0
+        if spent >= MIN_SAMPLE_SECONDS:
+            return spent / (passes * len(problems))
+
+
 def time_configurations(model: Model, steps: Sequence[StudyStep],
                         results: Sequence[ConfigResult], *, repeats: int = 5,
                         threads: int = 1,
                         errors: Sequence[Sequence[float]] | None = None,
-                        levels=None) -> set[int]:
-    """Fill each result's ``seconds`` with up to ``repeats`` per-step wall times [s].
+                        levels=None, undecided=None, cap: int = MAX_REPEATS) -> set[int]:
+    """Fill each result's ``seconds`` with per-step times [s] (:func:`timing_clock`), one
+    per repeat.
 
-    Each repeat solves all measured steps with one configuration and records the mean
-    seconds per step; configurations are interleaved within each repeat. With ``errors``,
-    repeats after the first skip the configurations no answer can choose
-    (:func:`~.dominance.dominated`); they keep their one time.
+    Each repeat solves all measured steps with one configuration (as many passes as last
+    :data:`MIN_SAMPLE_SECONDS`) and records the mean seconds per step; configurations are
+    interleaved within each repeat. With ``errors``, repeats after the second skip the
+    configurations no answer can choose (:func:`~.dominance.dominated`, on the fastest of
+    two samples of each, so that one slow sample never drops a setting); they keep their two
+    times. With ``undecided``, further interleaved rounds time the configurations it names
+    until it names none or each has ``cap`` samples (:mod:`.decide`).
 
     Parameters
     ----------
@@ -59,7 +104,7 @@ def time_configurations(model: Model, steps: Sequence[StudyStep],
     results : sequence of ConfigResult
         Filled in place (``seconds``).
     repeats : int, default 5
-        Interleaved repeats.
+        Interleaved repeats of every configuration an answer could choose.
     threads : int, default 1
         BLAS threads during timing.
     errors : sequence of sequence of float, optional
@@ -67,49 +112,65 @@ def time_configurations(model: Model, steps: Sequence[StudyStep],
         None times every configuration ``repeats`` times.
     levels : sequence, optional
         Per error, the targets the answers ask about (:func:`~.dominance.dominated`).
+    undecided : callable, optional
+        ``undecided() -> set of int``: results to time again (read from their ``seconds``
+        so far), empty when every answer is decided (:func:`~.decide.undecided`).
+    cap : int, default :data:`~.decide.MAX_REPEATS`
+        Most samples of one configuration in the ``undecided`` rounds.
 
     Returns
     -------
     set of int
-        Indices of the results timed once because they are dominated (empty without
-        ``errors``); ``results`` are changed in place.
+        Indices of the results left out of later repeats because they are dominated (empty
+        without ``errors``); ``results`` are changed in place.
     """
-    measured = [s for s in steps if s.measured]
+    measured = [s.step.problem for s in steps if s.measured]
     if not measured:
         return set()
     skipped: set[int] = set()
+    clock = timing_clock(threads)[0]
     solvers = [r.config.solver(model) for r in results]
     broken = set()
+
+    def one_round(which) -> None:
+        for i in which:
+            if i in broken or results[i].diverged:  # blown up: not timed
+                continue
+            try:
+                results[i].seconds.append(_time_once(solvers[i], measured, clock))
+            except BLOW_UPS:
+                broken.add(i)
+                continue
+            advance()
+
     with warnings.catch_warnings(), _limited_threads(threads), np.errstate(all="ignore"):
         warnings.simplefilter("ignore")
         for i, solver in enumerate(solvers):  # warm-up: factor M + h² L, estimate ρ (one-off)
             its, tol = solver.iterations, solver.tolerance
             solver.iterations, solver.tolerance = 1, None  # one iteration does all of it
             try:
-                solver.solve(measured[0].step.problem)
+                solver.solve(measured[0])
             except BLOW_UPS:
                 broken.add(i)
             finally:
                 solver.iterations, solver.tolerance = its, tol
         for repeat in range(repeats):
-            if repeat == 1 and errors is not None:  # only what an answer could choose
-                first = [r.seconds[0] if r.seconds and i not in broken else math.nan
-                         for i, r in enumerate(results)]
-                skipped = dominated([r.config.method for r in results], first, errors,
-                                    levels=levels)
-                shrink(len(skipped) * (repeats - 1))
-            for i, (solver, res) in enumerate(zip(solvers, results)):
-                if i in broken or res.diverged or i in skipped:  # blown up: not timed
-                    continue
-                t0 = time.perf_counter()
-                try:
-                    for s in measured:
-                        solver.solve(s.step.problem)
-                except BLOW_UPS:
-                    broken.add(i)
-                    continue
-                res.seconds.append((time.perf_counter() - t0) / len(measured))
-                advance()
+            if repeat == 2 and errors is not None:  # only what an answer could choose
+                fastest = [min(r.seconds) if r.seconds and i not in broken else math.nan
+                           for i, r in enumerate(results)]
+                typical = [float(np.median(r.seconds)) if r.seconds and i not in broken
+                           else math.nan for i, r in enumerate(results)]
+                skipped = dominated([r.config.method for r in results], fastest, errors,
+                                    levels=levels, against=typical)
+                shrink(len(skipped) * (repeats - 2))
+            one_round(i for i in range(len(results)) if i not in skipped)
+        for _ in range(cap):
+            again = (set() if undecided is None
+                     else {i for i in undecided() if len(results[i].seconds) < cap} - broken)
+            if not again:
+                break
+            add(len(again))
+            one_round(sorted(again))
     for i in broken:
         results[i].diverged = max(results[i].diverged, 1)
         results[i].seconds.clear()

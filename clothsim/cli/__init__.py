@@ -65,6 +65,7 @@ from .logs import (
     _configure_logging,
     _isatty,
     _no_progress_bars_off_terminal,
+    _progress_lines_off_terminal,
     _warnings_to_log,
 )
 from .ports import (
@@ -150,9 +151,11 @@ def build_parser() -> argparse.ArgumentParser:
                      help="frames of the recorded run (default: the scene's)")
     acc.add_argument("--repeats", type=count(1, 10_000), default=5,
                      help="interleaved timing repeats (5) of every setting an answer "
-                          "could choose (the others: 1)")
+                          "could choose (the others: 2; up to 10 where an answer must tell "
+                          "settings apart)")
     acc.add_argument("--target", type=float, default=None,
-                     help="report only this solver-error level (e.g. 1e-6)")
+                     help="report only this solver-error level (e.g. 1e-6); when no "
+                          "local/global setting reaches it, its iterations are extrapolated")
     acc.add_argument("--jobs", type=count(1, 1024), default=1,
                      help="parallel workers for the errors and the trajectory runs "
                           "(joblib; same results for any number)")
@@ -164,15 +167,17 @@ def build_parser() -> argparse.ArgumentParser:
     acc.add_argument("--quick", action="store_true",
                      help="a first look in seconds, not for a referee: at most 4 problems, "
                           "budgets 1/5/10/20/100, tolerances 1e-3/1e-6 (at most 1000 "
-                          "iterations), 1 timing repeat, one BLAS thread, no trajectory "
-                          "errors, a 6-frame "
+                          "iterations), 1 timing repeat (up to 10 where an answer must "
+                          "tell settings apart), one BLAS thread, no trajectory errors, a "
+                          "6-frame "
                           "time-step check at h and h/2; stops early when no step can be "
                           "measured")
     acc.add_argument("--steps", default=None, metavar="FILE",
                      help="re-measure exactly the step problems of an earlier study "
                           "(its problems.npz) instead of recording new ones")
     acc.add_argument("--paper", action="store_true",
-                     help="the paper's Fig. 1 setup: local/global against Newton (crossover)")
+                     help="the paper's Fig. 1 setup: local/global against Newton (crossover); "
+                          "with --out DIR, its table and figure are written there")
     acc.add_argument("--paper-size", type=count(2, int(MAX_VERTICES ** 0.5)), default=41,
                      help="vertices per side (--paper)")
     add_set_option(acc)
@@ -272,7 +277,8 @@ def _cmd_accuracy(args) -> int:
     from .. import accuracy
 
     if args.paper:
-        print(accuracy.paper_report(n=args.paper_size, repeats=args.repeats))
+        print(accuracy.paper_report(n=args.paper_size, repeats=args.repeats, out=args.out,
+                                    force=args.force))
         return 0
     from ..scene import load_scene
 
@@ -345,7 +351,8 @@ def main(argv: list[str] | None = None) -> int:
 def _dispatch(args) -> int:
     """Run the command; every error becomes one line and an exit status."""
     try:
-        with _warnings_to_log(), _no_progress_bars_off_terminal():
+        with (_warnings_to_log(), _no_progress_bars_off_terminal(),
+              _progress_lines_off_terminal()):
             return COMMANDS[args.command](args)
     except InputError as exc:  # SceneError included: bad input, exit status 2
         return _fail(str(exc), 2)

@@ -75,6 +75,26 @@ def _no_progress_bars_off_terminal():
             os.environ.pop("TQDM_DISABLE", None)
 
 
+#: loggers whose INFO lines are progress, shown off a terminal (where no bar is drawn)
+PROGRESS_LOGGERS = ("clothsim.accuracy.phases",)
+
+
+@contextmanager
+def _progress_lines_off_terminal():
+    """Show the progress loggers' INFO lines when stderr is not a terminal (no bar there)."""
+    loggers = [logging.getLogger(name) for name in PROGRESS_LOGGERS]
+    old = [lg.level for lg in loggers]
+    if not _isatty(sys.stderr):
+        for lg in loggers:
+            if lg.getEffectiveLevel() > logging.INFO:
+                lg.setLevel(logging.INFO)
+    try:
+        yield
+    finally:
+        for lg, level in zip(loggers, old):
+            lg.setLevel(level)
+
+
 def _isatty(stream) -> bool:
     try:
         return bool(stream.isatty())

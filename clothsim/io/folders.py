@@ -4,9 +4,10 @@ clothsim writes only into a folder it owns (:func:`claim_folder`): a missing or 
 one whose own record marks it as clothsim's output of the same kind: ``run.json`` with
 ``clothsim_run`` for a run (``clothsim run``), ``manifest.json`` with clothsim's ``layout``
 for an export (``clothsim export``), ``accuracy.json`` with ``clothsim`` and ``scene`` for an
-accuracy study (``clothsim accuracy``), a ``README.md`` headed as a conformance set's or a
-coursework profile's for those (``clothsim conformance``, ``--profile coursework``): one
-folder, one profile. Anything else is refused with an
+accuracy study (``clothsim accuracy``), ``paper.json`` with ``clothsim`` and ``paper`` for
+its paper report (``clothsim accuracy --paper --out``), a ``README.md`` headed as a
+conformance set's or a coursework profile's for those (``clothsim conformance``,
+``--profile coursework``): one folder, one profile. Anything else is refused with an
 :class:`~clothsim.errors.InputError` naming the folder and its first foreign file, unless
 ``force`` is given. :class:`FolderLock` (:mod:`clothsim.io.lock`) is an exclusive
 :func:`fcntl.flock` on ``<folder>/.clothsim.lock``, taken by every kind alike.
@@ -28,6 +29,7 @@ from .lock import LOCK_NAME, FolderLock
 RUN_RECORD = "run.json"
 EXPORT_RECORD = "manifest.json"
 ACCURACY_RECORD = "accuracy.json"
+PAPER_RECORD = "paper.json"
 CONFORMANCE_RECORD = "README.md"
 #: first line of the README.md of each profile of ``clothsim conformance`` (the writers in
 #: clothsim.ports begin their README with it, so ownership follows the heading they write)
@@ -35,7 +37,9 @@ CONFORMANCE_HEADING = "# clothsim conformance set"
 COURSEWORK_HEADING = "# clothsim coursework profile"
 CONFORMANCE_HEADINGS = {CONFORMANCE_HEADING: "conformance", COURSEWORK_HEADING: "coursework"}
 KINDS = {"run": "a clothsim run", "export": "a clothsim export",
-         "accuracy": "a clothsim accuracy study", "conformance": "a clothsim conformance set",
+         "accuracy": "a clothsim accuracy study",
+         "paper": "a clothsim accuracy --paper report",
+         "conformance": "a clothsim conformance set",
          "coursework": "a clothsim coursework profile"}
 
 
@@ -59,10 +63,11 @@ def folder_kind(folder) -> str | None:
 
     Returns
     -------
-    {"run", "export", "accuracy", "conformance", "coursework"} or None
+    {"run", "export", "accuracy", "paper", "conformance", "coursework"} or None
         ``"run"`` when ``run.json`` is a clothsim run record, ``"export"`` when
         ``manifest.json`` is a clothsim export manifest, ``"accuracy"`` when
-        ``accuracy.json`` is an accuracy study's record, ``"conformance"`` or
+        ``accuracy.json`` is an accuracy study's record, ``"paper"`` when ``paper.json`` is
+        a paper report's, ``"conformance"`` or
         ``"coursework"`` when ``README.md`` is that profile's, else None.
     """
     p = Path(folder)
@@ -75,6 +80,9 @@ def folder_kind(folder) -> str | None:
     study = _record(p / ACCURACY_RECORD)
     if study is not None and "clothsim" in study and "scene" in study:
         return "accuracy"
+    paper = _record(p / PAPER_RECORD)
+    if paper is not None and "clothsim" in paper and "paper" in paper:
+        return "paper"
     return CONFORMANCE_HEADINGS.get(_first_line(p / CONFORMANCE_RECORD))
 
 
@@ -117,7 +125,7 @@ def claim_folder(folder, kind: str, *, force: bool = False) -> Path:
     ----------
     folder : str or Path
         The output folder (need not exist).
-    kind : {"run", "export", "accuracy", "conformance", "coursework"}
+    kind : {"run", "export", "accuracy", "paper", "conformance", "coursework"}
         What will be written.
     force : bool
         Write into a folder clothsim does not own anyway (``--force``).
@@ -162,7 +170,8 @@ STATUSES = ("writing", "complete", "interrupted", "failed")
 """A folder's status, kept in its record: ``writing`` from before its first file until its
 writer ends, then ``complete``, ``interrupted`` (a signal) or ``failed`` (an error)."""
 RECORDS = {"run": RUN_RECORD, "export": EXPORT_RECORD, "accuracy": ACCURACY_RECORD,
-           "conformance": CONFORMANCE_RECORD, "coursework": CONFORMANCE_RECORD}
+           "paper": PAPER_RECORD, "conformance": CONFORMANCE_RECORD,
+           "coursework": CONFORMANCE_RECORD}
 #: the word a kind's record stores for a status where it is not the status itself:
 #: run.json and accuracy.json said "running" and "completed" before the statuses were one
 #: set, and scripts read them
@@ -174,6 +183,7 @@ STATUS_PREFIX = "status: "
 REMEDY = {"run": "finish it with clothsim run --resume, or run it again",
            "export": "write it again with clothsim export",
            "accuracy": "run the study again with clothsim accuracy",
+           "paper": "run it again with clothsim accuracy --paper --out",
            "conformance": "write the set again with clothsim conformance",
            "coursework": "write the set again with clothsim conformance --profile coursework"}
 _MEANING = {"writing": "still being written, or its writer was killed",

@@ -24,7 +24,8 @@ from ..errors import InputError
 LOCK_NAME = ".clothsim.lock"
 #: what each kind of output is called in a refusal ("another clothsim run (pid …)")
 HOLDERS = {"run": "clothsim run", "export": "clothsim export",
-           "accuracy": "clothsim accuracy study", "conformance": "clothsim conformance set",
+           "accuracy": "clothsim accuracy study",
+           "paper": "clothsim accuracy --paper report", "conformance": "clothsim conformance set",
            "coursework": "clothsim coursework profile"}
 _ATTEMPTS = 5  # opens of a lock file removed by its holder meanwhile, before giving up
 

@@ -106,6 +106,8 @@ def test_on_a_convex_step_every_limit_is_x_star(tmp_path):
         assert lim == pytest.approx(err, rel=1e-6, abs=1e-10), r["method"]
         assert abs(float(r["limit_gap_max"])) <= ROUNDING
     phases = json.loads((tmp_path / "accuracy.json").read_text())["phase_seconds"]
-    assert {"recording", "references", "limits", "errors", "timing"} == set(phases)
+    # extrapolation: when no local/global setting reaches a printed level
+    assert set(phases) - {"extrapolation"} == {"recording", "references", "limits", "errors",
+                                               "timing"}
     steps_md = (tmp_path / "steps.md").read_text()
     assert "lbfgs: x_best" in steps_md and "newton: x_best" in steps_md

@@ -37,3 +37,19 @@ def test_no_bar_off_a_terminal_or_under_tqdm_disable(monkeypatch):
     monkeypatch.setenv("TQDM_DISABLE", "1")
     phases = run(monkeypatch, Terminal())
     assert sys.stderr.getvalue() == "" and "references" in phases.seconds
+
+
+def test_off_a_terminal_a_phase_logs_its_progress(monkeypatch, caplog):
+    import logging
+
+    import clothsim.accuracy.phases as phases_module
+
+    monkeypatch.delenv("TQDM_DISABLE", raising=False)
+    monkeypatch.setattr(phases_module, "LOG_EVERY", 0.0)   # a line per unit
+    with caplog.at_level(logging.INFO, logger="clothsim.accuracy.phases"):
+        run(monkeypatch, io.StringIO())
+    lines = [r.getMessage() for r in caplog.records]
+    assert "references: 1/3 step(s) done, 0 s" in lines[0]
+    assert any(line.startswith("references: 3/3 step(s) done") for line in lines)
+    assert lines[-1].startswith("phase references:")
+    assert sys.stderr.getvalue() == ""      # no bar drawn

@@ -196,7 +196,7 @@ def test_bad_options_are_one_line_errors(tmp_path):
 def test_paper_preset_reports_crossover_and_cost_ratio():
     from clothsim.accuracy import paper_report
 
-    text = paper_report(n=5, frames=2, repeats=1, max_seconds=0.5)
+    text = paper_report(n=5, frames=2, repeats=1, cap=500)
     assert "| 1e-01 |" in text and "| 1e-08 |" in text
     assert "of one Newton iteration" in text
     assert ("crossover: Newton is faster from error" in text
