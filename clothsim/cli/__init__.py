@@ -12,6 +12,7 @@
     clothsim check SCENE PORT [--precision float32|float64] [--tolerance T]
     clothsim diff-model A B
     clothsim conformance [--out DIR]
+    clothsim data list | fetch [NAME ...] | path NAME[/FILE]
 
 SCENE is a scene file (``.toml``, or an assignment ``.json``) or a built-in scene name;
 ``run`` without one runs ``drop-on-square`` into ``out/<scene-name>``.
@@ -53,6 +54,7 @@ from .common import (
     os_error_line,
     other_output,
 )
+from .data import _add_data_command, _cmd_data
 from .logs import _configure_logging, _no_progress_bars_off_terminal, _warnings_to_log
 from .ports import (
     _add_port_commands,
@@ -115,6 +117,7 @@ def build_parser() -> argparse.ArgumentParser:
     add_set_option(val)
 
     _add_port_commands(sub)
+    _add_data_command(sub)
 
     acc = sub.add_parser("accuracy", help="what accuracy costs in time: every solver on the "
                                           "same recorded steps of a scene")
@@ -287,7 +290,7 @@ def _cmd_accuracy(args) -> int:
 COMMANDS = {"run": _cmd_run, "scenes": _cmd_scenes, "validate": _cmd_validate,
             "accuracy": _cmd_accuracy, "export": _cmd_export, "compare": _cmd_compare,
             "check": _cmd_check, "diff-model": _cmd_diff_model,
-            "conformance": _cmd_conformance}
+            "conformance": _cmd_conformance, "data": _cmd_data}
 
 
 def main(argv: list[str] | None = None) -> int:
