@@ -15,7 +15,9 @@
     clothsim data list | fetch [NAME ...] | path NAME[/FILE]
 
 SCENE is a scene file (``.toml``, or an assignment ``.json``) or a built-in scene name;
-``run`` without one runs ``drop-on-square`` into ``out/<scene-name>``.
+``run`` without one runs ``drop-on-square`` into ``out/<scene-name>``. A file or folder
+argument may be written ``data:<data set>/<path>`` (``data:liu13-port/default-scene``, the
+port reference shipped with clothsim; ``clothsim data list`` shows the data sets).
 
 ``export``, ``compare``, ``check``, ``diff-model`` and ``conformance`` check another port
 (docs/ports.md); ``compare``, ``check`` and ``diff-model`` exit 0 when they pass, 1 when not.
@@ -54,7 +56,7 @@ from .common import (
     os_error_line,
     other_output,
 )
-from .data import _add_data_command, _cmd_data
+from .data import _add_data_command, _cmd_data, expand_data_args
 from .logs import _configure_logging, _no_progress_bars_off_terminal, _warnings_to_log
 from .ports import (
     _add_port_commands,
@@ -317,6 +319,7 @@ def main(argv: list[str] | None = None) -> int:
     undo_logging = _configure_logging(args.verbose + getattr(args, "verbose_after", 0))
     try:
         with _warnings_to_log(), _no_progress_bars_off_terminal():
+            expand_data_args(args)
             return COMMANDS[args.command](args)
     except InputError as exc:  # SceneError included: bad input, exit status 2
         return _fail(str(exc), 2)

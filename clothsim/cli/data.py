@@ -5,6 +5,9 @@
     clothsim data list [--verify]
     clothsim data fetch [NAME ...] [--into DIR] [--url URL]
     clothsim data path NAME[/FILE]
+
+Any other command takes ``data:<name>/<path>`` where it takes a file or folder
+(:func:`expand_data_args`).
 """
 
 from __future__ import annotations
@@ -57,8 +60,7 @@ def _list(args) -> int:
         how = f"clothsim data fetch {name}"
         state = _state(st, how)
         if args.verify and st.present and st.origin != "package":
-            changed = [f for f, h in ds.files.items() if not (st.folder / f).is_file()
-                       or datasets.file_sha256(st.folder / f) != h]
+            changed = datasets.changed_files(name, st.folder)
             if changed:
                 state += (f"; {len(changed)} file(s) differ from the pinned SHA-256: "
                           f"{', '.join(changed[:3])}")
@@ -101,6 +103,16 @@ def _path(args) -> int:
         return _fail(f"{args.target}: no such file or folder in data set {name} ({folder})", 2)
     print(target)
     return 0
+
+
+def expand_data_args(args) -> None:
+    """Every argument written ``data:<name>/...`` becomes the file or folder it names
+    (``clothsim check SCENE data:liu13-port/default-scene``), got first when missing."""
+    from ..scene.files import DATA_PREFIX, resolve_data_path
+
+    for key, value in vars(args).items():
+        if isinstance(value, str) and value.startswith(DATA_PREFIX):
+            setattr(args, key, str(resolve_data_path(value, key.upper())))
 
 
 def _cmd_data(args) -> int:

@@ -28,30 +28,23 @@ The command line is ``clothsim data list | fetch | path``.
 
 from __future__ import annotations
 
-import hashlib
-import logging
 import os
-import shutil
-import tarfile
-import tempfile
-from contextlib import contextmanager
 from dataclasses import dataclass
-from importlib import resources
-from io import BytesIO
 from pathlib import Path
 
-from ..errors import ClothsimError, InputError
+from ..errors import InputError
+from .download import fetch_files
 from .registry import DATASETS, JACOBSON_COMMIT, Dataset
-
-log = logging.getLogger(__name__)
-
-#: File in an unpacked bundled data set: the SHA-256 of the archive it came from.
-STAMP = ".clothsim-archive"
-TIMEOUT = 30.0  # seconds without an answer before a download gives up
-
-
-class DataUnavailableError(ClothsimError):
-    """A data set is missing and could not be got; the message (one line) says how to get it."""
+from .store import (
+    STAMP,
+    DataUnavailableError,
+    archive_digest,
+    changed,
+    file_sha256,
+    missing_count,
+    stamp,
+    unpack,
+)
 
 
 @dataclass(frozen=True)
@@ -122,10 +115,6 @@ def user_folder(name: str) -> Path | None:
     return None
 
 
-def _missing(ds: Dataset, folder: Path) -> int:
-    return sum(not (folder / f).is_file() for f in ds.files)
-
-
 def status(name: str) -> Status:
     """Where the data set ``name`` is and whether it is ready (nothing is changed).
 
@@ -143,8 +132,8 @@ def status(name: str) -> Status:
     if user is not None:
         return Status(name, user, True, "CLOTHSIM_DATA", 0)
     folder = cache_dir() / name
-    missing = _missing(ds, folder)
-    if ds.bundled and (missing or _stamp(folder) != _archive_digest(ds)):
+    missing = missing_count(ds, folder)
+    if ds.bundled and (missing or stamp(folder) != archive_digest(ds)):
         return Status(name, folder, True, "package", missing)
     return Status(name, folder, missing == 0, "cache", missing)
 
@@ -185,14 +174,14 @@ def locate(name: str, *, download: bool | None = None) -> Path:
         return user
     folder = cache_dir() / name
     if ds.bundled:
-        return _unpack(ds, folder)
-    if _missing(ds, folder) == 0:
+        return unpack(ds, folder)
+    if missing_count(ds, folder) == 0:
         return folder
     if download is False or (download is None and offline()):
         note = " (CLOTHSIM_OFFLINE is set)" if download is None else ""
         raise DataUnavailableError(f"data set {name} is not downloaded{note}; "
                                    + how_to_get(name))
-    return _download(ds, folder, None)
+    return fetch_files(ds, folder, None, how_to_get(name))
 
 
 def fetch(name: str, *, into=None, base_url: str | None = None) -> Path:
@@ -224,135 +213,28 @@ def fetch(name: str, *, into=None, base_url: str | None = None) -> Path:
     """
     ds = dataset(name)
     folder = (Path(into).expanduser() if into is not None else cache_dir()) / name
-    return _unpack(ds, folder) if ds.bundled else _download(ds, folder, base_url)
+    return unpack(ds, folder, verify=True) if ds.bundled else fetch_files(ds, folder, base_url,
+                                                                       how_to_get(name))
 
 
-def file_sha256(path) -> str:
-    """SHA-256 (hex) of a file's bytes."""
-    h = hashlib.sha256()
-    with open(path, "rb") as f:
-        for chunk in iter(lambda: f.read(1 << 20), b""):
-            h.update(chunk)
-    return h.hexdigest()
+def changed_files(name: str, folder) -> list[str]:
+    """Files of the data set ``name`` missing from ``folder`` or not matching their SHA-256.
 
+    Parameters
+    ----------
+    name : str
+        A key of :data:`~clothsim.datasets.registry.DATASETS`.
+    folder : path
+        Where the data set is (e.g. :attr:`Status.folder`).
 
-# ------------------------------------------------------------------ bundled: unpack
-def _archive_bytes(ds: Dataset) -> bytes:
-    return resources.files(__name__).joinpath(ds.archive).read_bytes()
-
-
-def _archive_digest(ds: Dataset) -> str:
-    return hashlib.sha256(_archive_bytes(ds)).hexdigest()
-
-
-def _stamp(folder: Path) -> str | None:
-    try:
-        return (folder / STAMP).read_text(encoding="ascii").strip()
-    except (OSError, UnicodeDecodeError):
-        return None
-
-
-def _unpack(ds: Dataset, folder: Path) -> Path:
-    """Unpack a bundled data set into ``folder`` (whole or not at all); a folder already
-    unpacked from the same archive is kept."""
-    data = _archive_bytes(ds)
-    digest = hashlib.sha256(data).hexdigest()
-    if _stamp(folder) == digest and _missing(ds, folder) == 0:
-        return folder
-    folder.parent.mkdir(parents=True, exist_ok=True)
-    tmp = Path(tempfile.mkdtemp(prefix=f".{folder.name}.", suffix=".tmp", dir=folder.parent))
-    try:
-        with tarfile.open(fileobj=BytesIO(data), mode="r:xz") as tar:
-            names = {m.name for m in tar.getmembers() if m.isfile()}
-            if names != set(ds.files):
-                raise DataUnavailableError(f"{ds.archive} in the clothsim package does not "
-                                           f"hold the files of {ds.name}; reinstall clothsim")
-            if hasattr(tarfile, "data_filter"):
-                tar.extractall(tmp, filter="data")
-            else:  # pragma: no cover - Python < 3.11.4; the names were checked above
-                tar.extractall(tmp)  # noqa: S202
-        bad = [f for f, h in ds.files.items() if file_sha256(tmp / f) != h]
-        if bad:
-            raise DataUnavailableError(f"{ds.archive} in the clothsim package is damaged "
-                                       f"({bad[0]} fails its SHA-256); reinstall clothsim")
-        if ds.readme:
-            (tmp / "README.md").write_bytes(
-                resources.files(__name__).joinpath(ds.readme).read_bytes())
-        (tmp / STAMP).write_text(digest + "\n", encoding="ascii")
-        tmp.chmod(0o755)
-        if folder.exists():  # an older unpacking: move it aside, then replace it
-            old = Path(tempfile.mkdtemp(prefix=f".{folder.name}.", suffix=".old",
-                                        dir=folder.parent))
-            os.replace(folder, old / "x")
-            shutil.rmtree(old, ignore_errors=True)
-        try:
-            os.rename(tmp, folder)
-        except OSError:
-            if _stamp(folder) != digest:  # not another process's identical unpacking
-                raise
-        log.info("unpacked %s into %s", ds.name, folder)
-        return folder
-    finally:
-        shutil.rmtree(tmp, ignore_errors=True)
-
-
-# ------------------------------------------------------------------ third party: download
-@contextmanager
-def _quiet_pooch():
-    """pooch logs every download on stderr by itself; clothsim logs its own lines."""
-    import pooch
-
-    logger = pooch.get_logger()
-    level = logger.level
-    logger.setLevel(logging.WARNING)
-    try:
-        yield pooch
-    finally:
-        logger.setLevel(level)
-
-
-def _reason(exc: BaseException) -> str:
-    """A short cause of a failed download (requests' own messages run to several lines)."""
-    import requests
-
-    if isinstance(exc, requests.HTTPError) and exc.response is not None:
-        return f"HTTP {exc.response.status_code}"
-    if isinstance(exc, requests.Timeout):
-        return f"no answer within {TIMEOUT:g} s"
-    if isinstance(exc, requests.ConnectionError):
-        return "no connection"
-    if isinstance(exc, ValueError) and "hash" in str(exc).lower():
-        return "the file does not match its pinned SHA-256"
-    return " ".join(str(exc).split())[:200] or type(exc).__name__
-
-
-def _remove_if_empty(folder: Path) -> None:
-    try:
-        folder.rmdir()
-    except OSError:
-        pass
-
-
-def _download(ds: Dataset, folder: Path, base_url: str | None) -> Path:
-    url = base_url or ds.url
-    url = url if url.endswith("/") else url + "/"
-    with _quiet_pooch() as pooch:
-        repo = pooch.create(path=folder, base_url=url, retry_if_failed=1,
-                            registry={f: f"sha256:{h}" for f, h in ds.files.items()})
-        downloader = pooch.HTTPDownloader(progressbar=False, timeout=TIMEOUT)
-        for f in ds.files:
-            try:
-                repo.fetch(f, downloader=downloader)
-            except (OSError, ValueError) as exc:  # requests' errors are OSErrors
-                log.debug("download of %s failed", f, exc_info=True)
-                _remove_if_empty(folder)
-                raise DataUnavailableError(
-                    f"data set {ds.name}: could not download {f} from {url} "
-                    f"({_reason(exc)}); {how_to_get(ds.name)}") from None
-    log.info("%s: %d files in %s", ds.name, len(ds.files), folder)
-    return folder
+    Returns
+    -------
+    list of str
+        Their names, in the registry's order (empty: all there and unchanged).
+    """
+    return changed(dataset(name), Path(folder))
 
 
 __all__ = ["DATASETS", "Dataset", "DataUnavailableError", "Status", "JACOBSON_COMMIT",
-           "cache_dir", "dataset", "fetch", "file_sha256", "how_to_get", "locate", "offline",
-           "status", "user_folder", "STAMP"]
+           "STAMP", "cache_dir", "changed_files", "dataset", "fetch", "file_sha256",
+           "how_to_get", "locate", "offline", "status", "user_folder"]

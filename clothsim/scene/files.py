@@ -20,7 +20,7 @@ from importlib import resources
 from pathlib import Path
 
 from .. import datasets
-from ..errors import SceneError
+from ..errors import InputError, SceneError
 from .checks import Invalid, shorten, suggest
 
 DEFAULT_SCENE = "drop-on-square"
@@ -126,6 +126,37 @@ def _data_path(value: str, path: str) -> Path:
     if not inside:
         raise Invalid(path, f"a data: path must stay inside the data set's folder {folder}, "
                             f"got {shorten(value)}")
+    return p
+
+
+def resolve_data_path(value: str, what: str = "path") -> Path:
+    """The existing file or folder a ``data:<name>/...`` path names (a command-line
+    argument, e.g. ``data:liu13-port/default-scene``), got first when missing.
+
+    Parameters
+    ----------
+    value : str
+        ``data:`` followed by a data set's name and a path inside it (or a path under
+        ``$CLOTHSIM_DATA``).
+    what : str
+        What the value is, for the error message (e.g. ``"PORT"``).
+
+    Returns
+    -------
+    Path
+        The file or folder.
+
+    Raises
+    ------
+    InputError
+        One line: the data set cannot be got (and how to get it), or nothing is there.
+    """
+    try:
+        p = _data_path(value, what)
+    except Invalid as exc:
+        raise InputError(f"{what}: {exc.detail}", field=what) from None
+    if not p.exists():
+        raise InputError(f"{what}: {shorten(value)}: no such file or folder ({p})", field=what)
     return p
 
 
@@ -323,6 +354,6 @@ def find_scene(path_or_name) -> Path:
                      + suggest(name, names).replace("expected one of", "built-in scenes:"))
 
 
-__all__ = ["data_root", "data_dir", "resolve_path", "list_builtin_scenes", "builtin_scene_path",
-           "builtin_scene_text", "parse_toml", "find_scene", "DEFAULT_SCENE", "DATA_PREFIX",
-           "BUILTIN_DIR"]
+__all__ = ["data_root", "data_dir", "resolve_path", "resolve_data_path", "list_builtin_scenes",
+           "builtin_scene_path", "builtin_scene_text", "parse_toml", "find_scene",
+           "DEFAULT_SCENE", "DATA_PREFIX", "BUILTIN_DIR"]

@@ -1,0 +1,106 @@
+"""Unpacking a bundled data set, and checking files against their pinned SHA-256."""
+
+from __future__ import annotations
+
+import hashlib
+import logging
+import os
+import shutil
+import tarfile
+import tempfile
+from importlib import resources
+from io import BytesIO
+from pathlib import Path
+
+from ..errors import ClothsimError
+from .registry import Dataset
+
+log = logging.getLogger("clothsim.datasets")
+
+#: File in an unpacked bundled data set: the SHA-256 of the archive it came from.
+STAMP = ".clothsim-archive"
+
+
+class DataUnavailableError(ClothsimError):
+    """A data set is missing and could not be got; the message (one line) says how to get it."""
+
+
+def missing_count(ds: Dataset, folder: Path) -> int:
+    """Files of ``ds`` not in ``folder``."""
+    return sum(not (folder / f).is_file() for f in ds.files)
+
+
+def changed(ds: Dataset, folder: Path) -> list[str]:
+    """Files of ``folder`` missing or not matching their pinned SHA-256."""
+    return [f for f, h in ds.files.items()
+            if not (folder / f).is_file() or file_sha256(folder / f) != h]
+
+
+def file_sha256(path) -> str:
+    """SHA-256 (hex) of a file's bytes."""
+    h = hashlib.sha256()
+    with open(path, "rb") as f:
+        for chunk in iter(lambda: f.read(1 << 20), b""):
+            h.update(chunk)
+    return h.hexdigest()
+
+
+def _archive_bytes(ds: Dataset) -> bytes:
+    return resources.files(__package__).joinpath(ds.archive).read_bytes()
+
+
+def archive_digest(ds: Dataset) -> str:
+    return hashlib.sha256(_archive_bytes(ds)).hexdigest()
+
+
+def stamp(folder: Path) -> str | None:
+    try:
+        return (folder / STAMP).read_text(encoding="ascii").strip()
+    except (OSError, UnicodeDecodeError):
+        return None
+
+
+def unpack(ds: Dataset, folder: Path, verify: bool = False) -> Path:
+    """Unpack a bundled data set into ``folder`` (whole or not at all); a folder already
+    unpacked from the same archive is kept (``verify``: only if every file still matches
+    its SHA-256)."""
+    data = _archive_bytes(ds)
+    digest = hashlib.sha256(data).hexdigest()
+    if stamp(folder) == digest and missing_count(ds, folder) == 0 and not (
+            verify and changed(ds, folder)):
+        return folder
+    folder.parent.mkdir(parents=True, exist_ok=True)
+    tmp = Path(tempfile.mkdtemp(prefix=f".{folder.name}.", suffix=".tmp", dir=folder.parent))
+    try:
+        with tarfile.open(fileobj=BytesIO(data), mode="r:xz") as tar:
+            names = {m.name for m in tar.getmembers() if m.isfile()}
+            if names != set(ds.files):
+                raise DataUnavailableError(f"{ds.archive} in the clothsim package does not "
+                                           f"hold the files of {ds.name}; reinstall clothsim")
+            if hasattr(tarfile, "data_filter"):
+                tar.extractall(tmp, filter="data")
+            else:  # pragma: no cover - Python < 3.11.4; the names were checked above
+                tar.extractall(tmp)  # noqa: S202
+        bad = changed(ds, tmp)
+        if bad:
+            raise DataUnavailableError(f"{ds.archive} in the clothsim package is damaged "
+                                       f"({bad[0]} fails its SHA-256); reinstall clothsim")
+        if ds.readme:
+            (tmp / "README.md").write_bytes(
+                resources.files(__package__).joinpath(ds.readme).read_bytes())
+        (tmp / STAMP).write_text(digest + "\n", encoding="ascii")
+        tmp.chmod(0o755)
+        if folder.exists():  # an older unpacking: move it aside, then replace it
+            old = Path(tempfile.mkdtemp(prefix=f".{folder.name}.", suffix=".old",
+                                        dir=folder.parent))
+            os.replace(folder, old / "x")
+            shutil.rmtree(old, ignore_errors=True)
+        try:
+            os.rename(tmp, folder)
+        except OSError:
+            if stamp(folder) != digest:  # not another process's identical unpacking
+                raise
+        log.info("unpacked %s into %s", ds.name, folder)
+        return folder
+    finally:
+        shutil.rmtree(tmp, ignore_errors=True)
