@@ -107,7 +107,18 @@ def _path(args) -> int:
 
 def expand_data_args(args) -> None:
     """Every argument written ``data:<name>/...`` becomes the file or folder it names
-    (``clothsim check SCENE data:liu13-port/default-scene``), got first when missing."""
+    (``clothsim check SCENE data:liu13-port/default-scene``), got first when missing.
+
+    Parameters
+    ----------
+    args : argparse.Namespace
+        The parsed command line; its string values are replaced in place.
+
+    Raises
+    ------
+    InputError
+        One line: the data set cannot be got (and how to get it), or nothing is there.
+    """
     from ..scene.files import DATA_PREFIX, resolve_data_path
 
     for key, value in vars(args).items():

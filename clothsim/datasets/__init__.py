@@ -73,7 +73,22 @@ class Status:
 
 
 def dataset(name: str) -> Dataset:
-    """The data set ``name``; an unknown name is an :class:`InputError` listing the known."""
+    """The data set ``name``.
+
+    Parameters
+    ----------
+    name : str
+        A key of :data:`~clothsim.datasets.registry.DATASETS`.
+
+    Returns
+    -------
+    Dataset
+
+    Raises
+    ------
+    InputError
+        An unknown name (the message lists the known ones).
+    """
     if name not in DATASETS:
         raise InputError(f"data set {name!r} is unknown; known: {', '.join(DATASETS)}",
                          field="name")
@@ -81,7 +96,14 @@ def dataset(name: str) -> Dataset:
 
 
 def cache_dir() -> Path:
-    """The cache folder: ``$CLOTHSIM_CACHE``, else ``pooch.os_cache("clothsim")``."""
+    """The cache folder the data sets are unpacked and downloaded into.
+
+    Returns
+    -------
+    Path
+        ``$CLOTHSIM_CACHE``, else ``pooch.os_cache("clothsim")`` (``~/.cache/clothsim`` on
+        Linux). It may not exist yet.
+    """
     env = os.environ.get("CLOTHSIM_CACHE")
     if env:
         return Path(env).expanduser()
@@ -91,16 +113,31 @@ def cache_dir() -> Path:
 
 
 def offline() -> bool:
-    """``$CLOTHSIM_OFFLINE`` is set (and not ``0``): never download on first use."""
+    """Is downloading on first use forbidden?
+
+    Returns
+    -------
+    bool
+        ``$CLOTHSIM_OFFLINE`` is set to anything but empty or ``0``.
+    """
     return os.environ.get("CLOTHSIM_OFFLINE", "0") not in ("", "0")
 
 
 def user_folder(name: str) -> Path | None:
-    """The data set's folder under ``$CLOTHSIM_DATA``, or None (unset, or not there).
+    """The data set's folder under ``$CLOTHSIM_DATA``, if the user named one.
 
-    ``$CLOTHSIM_DATA/<name>/`` when it is a folder; for ``jacobson-a8`` also
-    ``$CLOTHSIM_DATA`` itself when it holds one of the assignment's files or any scene of
-    its format (a ``.json`` file: a student's own checkout may have others).
+    Parameters
+    ----------
+    name : str
+        A key of :data:`~clothsim.datasets.registry.DATASETS`.
+
+    Returns
+    -------
+    Path or None
+        ``$CLOTHSIM_DATA/<name>/`` when it is a folder; for ``jacobson-a8`` also
+        ``$CLOTHSIM_DATA`` itself when it holds one of the assignment's files or any scene
+        of its format (a ``.json`` file: a student's own checkout may have others). None
+        when unset or not there.
     """
     env = os.environ.get("CLOTHSIM_DATA")
     if not env:
@@ -139,7 +176,18 @@ def status(name: str) -> Status:
 
 
 def how_to_get(name: str) -> str:
-    """One line saying how to get the data set ``name``."""
+    """How to get the data set ``name``, for error messages.
+
+    Parameters
+    ----------
+    name : str
+        A key of :data:`~clothsim.datasets.registry.DATASETS`.
+
+    Returns
+    -------
+    str
+        One line: the ``clothsim data fetch`` command, and ``CLOTHSIM_DATA`` for a copy.
+    """
     ds = dataset(name)
     if ds.bundled:
         return f"it ships with clothsim: `clothsim data fetch {name}` unpacks it"

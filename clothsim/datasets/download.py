@@ -50,8 +50,30 @@ def _remove_if_empty(folder: Path) -> None:
 
 
 def fetch_files(ds: Dataset, folder: Path, base_url: str | None, how: str) -> Path:
-    """Download every file of ``ds`` missing from ``folder`` or not matching its SHA-256
-    (from ``base_url``, else the data set's own URL); ``how``: how to get it, for errors."""
+    """Download every file of ``ds`` missing from ``folder`` or not matching its SHA-256.
+
+    Parameters
+    ----------
+    ds : Dataset
+        A third-party data set (with a ``url``).
+    folder : Path
+        Where its files go (made if missing; an empty one is removed again on failure).
+    base_url : str or None
+        A mirror to download from instead of ``ds.url``.
+    how : str
+        How to get the data set otherwise, the end of the error message.
+
+    Returns
+    -------
+    Path
+        ``folder``, holding every file, each matching its SHA-256.
+
+    Raises
+    ------
+    DataUnavailableError
+        One line: the file, the URL, the short cause (no connection, HTTP status, no
+        answer, SHA-256 mismatch) and ``how``. A file that failed is not kept.
+    """
     url = base_url or ds.url
     url = url if url.endswith("/") else url + "/"
     with _quiet_pooch() as pooch:

@@ -26,18 +26,50 @@ class DataUnavailableError(ClothsimError):
 
 
 def missing_count(ds: Dataset, folder: Path) -> int:
-    """Files of ``ds`` not in ``folder``."""
+    """How many files of a data set a folder lacks.
+
+    Parameters
+    ----------
+    ds : Dataset
+    folder : Path
+
+    Returns
+    -------
+    int
+        Files of ``ds`` not in ``folder`` (contents not checked).
+    """
     return sum(not (folder / f).is_file() for f in ds.files)
 
 
 def changed(ds: Dataset, folder: Path) -> list[str]:
-    """Files of ``folder`` missing or not matching their pinned SHA-256."""
+    """The files of a data set a folder lacks, or holds with other contents.
+
+    Parameters
+    ----------
+    ds : Dataset
+    folder : Path
+
+    Returns
+    -------
+    list of str
+        Files of ``ds`` missing from ``folder`` or not matching their pinned SHA-256.
+    """
     return [f for f, h in ds.files.items()
             if not (folder / f).is_file() or file_sha256(folder / f) != h]
 
 
 def file_sha256(path) -> str:
-    """SHA-256 (hex) of a file's bytes."""
+    """The SHA-256 of a file.
+
+    Parameters
+    ----------
+    path : path-like
+
+    Returns
+    -------
+    str
+        Its bytes' SHA-256, 64 hex digits.
+    """
     h = hashlib.sha256()
     with open(path, "rb") as f:
         for chunk in iter(lambda: f.read(1 << 20), b""):
@@ -50,10 +82,33 @@ def _archive_bytes(ds: Dataset) -> bytes:
 
 
 def archive_digest(ds: Dataset) -> str:
+    """The SHA-256 of a bundled data set's archive in the package.
+
+    Parameters
+    ----------
+    ds : Dataset
+        A bundled data set.
+
+    Returns
+    -------
+    str
+        64 hex digits (what an unpacking's :data:`STAMP` file holds).
+    """
     return hashlib.sha256(_archive_bytes(ds)).hexdigest()
 
 
 def stamp(folder: Path) -> str | None:
+    """The archive digest an unpacked folder was made from.
+
+    Parameters
+    ----------
+    folder : Path
+
+    Returns
+    -------
+    str or None
+        The content of its :data:`STAMP` file; None when missing or unreadable.
+    """
     try:
         return (folder / STAMP).read_text(encoding="ascii").strip()
     except (OSError, UnicodeDecodeError):
@@ -61,9 +116,34 @@ def stamp(folder: Path) -> str | None:
 
 
 def unpack(ds: Dataset, folder: Path, verify: bool = False) -> Path:
-    """Unpack a bundled data set into ``folder`` (whole or not at all); a folder already
-    unpacked from the same archive is kept (``verify``: only if every file still matches
-    its SHA-256)."""
+    """Unpack a bundled data set into ``folder``, whole or not at all.
+
+    The archive is unpacked into a temporary folder beside ``folder``, every file checked
+    against its SHA-256, then renamed onto ``folder``: a reader never sees half of it, and
+    two processes unpacking at once both end with the same complete folder.
+
+    Parameters
+    ----------
+    ds : Dataset
+        A bundled data set.
+    folder : Path
+        Where it goes.
+    verify : bool
+        Keep an existing unpacking of the same archive only if every file still matches
+        its SHA-256 (otherwise: if every file is there).
+
+    Returns
+    -------
+    Path
+        ``folder``.
+
+    Raises
+    ------
+    DataUnavailableError
+        The package's archive is damaged (reinstall clothsim).
+    OSError
+        The folder cannot be written (nothing is left behind).
+    """
     data = _archive_bytes(ds)
     digest = hashlib.sha256(data).hexdigest()
     if stamp(folder) == digest and missing_count(ds, folder) == 0 and not (
