@@ -23,7 +23,8 @@ def _add_data_command(sub) -> None:
     data = sub.add_parser("data", help="list, fetch and locate the data sets: the shipped port "
                           "reference (liu13-port), the assignment's scenes (jacobson-a8, "
                           "downloaded on first use)")
-    actions = data.add_subparsers(dest="data_action", metavar="ACTION", parser_class=_Parser)
+    actions = data.add_subparsers(dest="data_action", metavar="ACTION", parser_class=_Parser,
+                                  help="list, fetch or path")
     actions.required = True
     lst = actions.add_parser("list", help="each data set: what it is, where, whether it is there")
     lst.add_argument("--verify", action="store_true",
