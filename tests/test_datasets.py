@@ -114,8 +114,11 @@ def test_a_failed_unpacking_leaves_nothing(cache, monkeypatch):
         raise OSError(28, "No space left on device")
 
     monkeypatch.setattr(tarfile.TarFile, "extractall", broken)
-    with pytest.raises(OSError, match="No space left"):
+    with pytest.raises(DataUnavailableError) as info:
         datasets.locate("liu13-port")
+    assert str(info.value) == (f"data set liu13-port: cannot unpack it into "
+                               f"{cache / 'liu13-port'} (No space left on device); set "
+                               f"CLOTHSIM_CACHE to a writable folder")
     assert list(cache.iterdir()) == []
 
 

@@ -222,7 +222,7 @@ def locate(name: str, *, download: bool | None = None) -> Path:
         return user
     folder = cache_dir() / name
     if ds.bundled:
-        return unpack(ds, folder)
+        return _unpack(ds, folder, False)
     if missing_count(ds, folder) == 0:
         return folder
     if download is False or (download is None and offline()):
@@ -261,8 +261,18 @@ def fetch(name: str, *, into=None, base_url: str | None = None) -> Path:
     """
     ds = dataset(name)
     folder = (Path(into).expanduser() if into is not None else cache_dir()) / name
-    return unpack(ds, folder, verify=True) if ds.bundled else fetch_files(ds, folder, base_url,
-                                                                       how_to_get(name))
+    if ds.bundled:
+        return _unpack(ds, folder, True)
+    return fetch_files(ds, folder, base_url, how_to_get(name))
+
+
+def _unpack(ds: Dataset, folder: Path, verify: bool) -> Path:
+    try:
+        return unpack(ds, folder, verify=verify)
+    except OSError as exc:  # a read-only or full cache folder: say where and what to do
+        raise DataUnavailableError(
+            f"data set {ds.name}: cannot unpack it into {folder} "
+            f"({exc.strerror or exc}); set CLOTHSIM_CACHE to a writable folder") from None
 
 
 def changed_files(name: str, folder) -> list[str]:
