@@ -122,6 +122,22 @@ def test_a_failed_unpacking_leaves_nothing(cache, monkeypatch):
     assert list(cache.iterdir()) == []
 
 
+def test_two_processes_unpacking_at_once_both_get_the_whole_folder(cache):
+    import subprocess
+    import sys
+
+    code = ("from clothsim import datasets; from clothsim.datasets import store; "
+            "f = datasets.locate('liu13-port'); "
+            "print(f, store.changed(datasets.dataset('liu13-port'), f))")
+    env = {**os.environ, "CLOTHSIM_CACHE": str(cache)}
+    procs = [subprocess.Popen([sys.executable, "-c", code], env=env, stdout=subprocess.PIPE,
+                              stderr=subprocess.PIPE, text=True) for _ in range(3)]
+    outs = [p.communicate(timeout=300) for p in procs]
+    assert all(p.returncode == 0 for p in procs), [e for _, e in outs]
+    assert {o.strip() for o, _ in outs} == {f"{cache / 'liu13-port'} []"}
+    assert [p.name for p in cache.iterdir()] == ["liu13-port"]
+
+
 def test_unpacking_into_a_named_folder(tmp_path, cache, monkeypatch):
     out = datasets.fetch("liu13-port", into=tmp_path / "mine")
     assert out == tmp_path / "mine" / "liu13-port" and not (cache / "liu13-port").exists()

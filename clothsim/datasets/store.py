@@ -115,6 +115,13 @@ def stamp(folder: Path) -> str | None:
         return None
 
 
+def _kept(ds: Dataset, folder: Path, digest: str, verify: bool) -> bool:
+    """``folder`` is a complete unpacking of the archive ``digest`` (``verify``: every file
+    still matching its SHA-256)."""
+    return (stamp(folder) == digest and missing_count(ds, folder) == 0
+            and not (verify and changed(ds, folder)))
+
+
 def unpack(ds: Dataset, folder: Path, verify: bool = False) -> Path:
     """Unpack a bundled data set into ``folder``, whole or not at all.
 
@@ -146,8 +153,7 @@ def unpack(ds: Dataset, folder: Path, verify: bool = False) -> Path:
     """
     data = _archive_bytes(ds)
     digest = hashlib.sha256(data).hexdigest()
-    if stamp(folder) == digest and missing_count(ds, folder) == 0 and not (
-            verify and changed(ds, folder)):
+    if _kept(ds, folder, digest, verify):
         return folder
     folder.parent.mkdir(parents=True, exist_ok=True)
     tmp = Path(tempfile.mkdtemp(prefix=f".{folder.name}.", suffix=".tmp", dir=folder.parent))
@@ -170,7 +176,9 @@ def unpack(ds: Dataset, folder: Path, verify: bool = False) -> Path:
                 resources.files(__package__).joinpath(ds.readme).read_bytes())
         (tmp / STAMP).write_text(digest + "\n", encoding="ascii")
         tmp.chmod(0o755)
-        if folder.exists():  # an older unpacking: move it aside, then replace it
+        if _kept(ds, folder, digest, verify):
+            return folder  # another process unpacked it meanwhile
+        if folder.exists():  # an older or damaged unpacking: move it aside, then replace it
             old = Path(tempfile.mkdtemp(prefix=f".{folder.name}.", suffix=".old",
                                         dir=folder.parent))
             os.replace(folder, old / "x")
