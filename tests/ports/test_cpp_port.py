@@ -27,6 +27,10 @@ from clothsim.errors import InputError
 from clothsim.ports.check import check_steps
 from clothsim.ports.export import export_port
 
+# building the two programs with g++ and Eigen is most of this module's time: CI runs it,
+# `make test` does not (.venv/bin/python -m pytest -q -m slow runs it)
+pytestmark = pytest.mark.slow
+
 REPO = Path(__file__).resolve().parents[2]
 CPP = REPO / "examples" / "ports" / "cpp"
 SCENES = REPO / "clothsim" / "scenes"
