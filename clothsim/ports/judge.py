@@ -22,6 +22,7 @@ from ..objective import gradient_noise_floor, objective, objective_gradient
 from ..solvers.local_global import LocalGlobalSolver
 from ..solvers.newton import NewtonSolver
 from .compare import EPS32, cloth_size
+from .flat import flat_evidence
 from .verdicts import StepCheck
 
 #: Longest iteration path searched for the port's answer (start y and x_n each).
@@ -158,7 +159,7 @@ def _settings_text(start, k) -> str:
 
 
 def judge(sim, model, problem, k, x_cs, x_port, err, tol, optimality, precision,
-          search: bool = True) -> StepCheck:
+          search: bool = True, unit: float | None = None) -> StepCheck:
     """Classify a step whose answers differ by more than ``tol`` somewhere.
 
     Parameters
@@ -181,6 +182,10 @@ def judge(sim, model, problem, k, x_cs, x_port, err, tol, optimality, precision,
     precision : {"float64", "float32"}
     search : bool, default True
         Search clothsim's iterations for the port's settings (:func:`match_settings`).
+    unit : float, optional
+        Relative rounding of the port's numbers when they are printed coarser than its
+        precision (:class:`clothsim.ports.precision.Printed`): the gradient's rounding
+        floor scales with it.
 
     Returns
     -------
@@ -193,8 +198,8 @@ def judge(sim, model, problem, k, x_cs, x_port, err, tol, optimality, precision,
     rp = float(np.linalg.norm(grad_p)) / g0
     rc = float(np.linalg.norm(grad_c)) / g0
     floor = gradient_noise_floor(model, problem, x_port) / g0
-    if precision == "float32":
-        floor *= EPS32 / float(np.finfo(np.float64).eps)
+    eps64 = float(np.finfo(np.float64).eps)
+    floor *= max(unit or 0.0, EPS32 if precision == "float32" else eps64) / eps64
     opt = max(optimality, 10 * floor)
     worst = int(np.argmax(err))
     settings = ""
@@ -206,7 +211,8 @@ def judge(sim, model, problem, k, x_cs, x_port, err, tol, optimality, precision,
     if not np.isfinite(rp):
         return verdict("not a minimizer", worst, "the port's positions are not finite")
     if rp <= opt:
-        return _optimal(model, problem, x_cs, x_port, tol, verdict, worst)
+        return _optimal(model, problem, x_cs, x_port, tol, verdict, worst,
+                        (rp, optimality, opt, g0))
     hint = match_settings(sim, model, problem, x_port, tol) if search else None
     settings = _settings_text(*hint[:2]) if hint is not None else ""
     excess = np.linalg.norm(grad_p - grad_c, axis=1)
@@ -265,8 +271,15 @@ def _descends(model, problem, x_port) -> bool:
                 < objective(model, problem, problem.initial_guess()))
 
 
-def _optimal(model, problem, x_cs, x_port, tol, verdict, worst) -> StepCheck:
-    """The port's answer is optimal: same minimizer, two certified minima, or a saddle."""
+def _optimal(model, problem, x_cs, x_port, tol, verdict, worst, gradient) -> StepCheck:
+    """The port's answer is optimal: same minimizer, two certified minima, or a saddle.
+
+    ``gradient`` is (the port's relative gradient, the stated optimality, the optimality
+    raised to the rounding floor, ‖∇g(x_0)‖). Off the minimizer by more than ``tol``, an
+    answer that meets the stated optimality is "ill-conditioned" (undecided, with the
+    evidence of :mod:`clothsim.ports.flat`); one that meets only the rounding floor of ∇g
+    (a float32 port, whose gradient cannot resolve the distance) is "not converged".
+    """
     xp, xc = refine(model, problem, x_port), refine(model, problem, x_cs)
     gap = float(np.linalg.norm(xp - xc, axis=1).max())
     off = float(np.linalg.norm(x_port - xp, axis=1).max())
@@ -275,8 +288,15 @@ def _optimal(model, problem, x_cs, x_port, tol, verdict, worst) -> StepCheck:
             return verdict("agrees", worst, "the port's answer is within the tolerance of the "
                            "minimizer of g that clothsim's answer converges to (another "
                            "stopping rule)")
-        return verdict("not converged", worst, f"optimal by its gradient, yet {off:.3e} m from "
-                       f"the minimizer (an ill-conditioned step): tighten the port's tolerance")
+        rp, stated, opt, g0 = gradient
+        if rp <= stated:
+            return verdict("ill-conditioned", worst,
+                           flat_evidence(model, problem, x_port, xp, g0, rp, tol))
+        return verdict("not converged", worst, f"its relative gradient {rp:.1e} is within the "
+                       f"rounding floor of the gradient at this precision ({opt:.1e}), which "
+                       f"therefore cannot judge it; it is {off:.3e} m from the minimizer, "
+                       f"beyond the tolerance {tol:.3e} m: raise its iterations or tighten its "
+                       f"tolerance")
     if not is_minimum(model, problem, xp):
         return verdict("not a minimizer", worst, "the port's answer leads to a saddle point of "
                        "g (an indefinite Hessian), not a minimum")

@@ -108,7 +108,7 @@ def test_defaults_and_roundtrip():
     assert again.to_dict() == d
     # no [springs] families and no effects: nothing is built
     sim = scene.build_simulation()
-    assert sim.model.spring_count == 0 and sim.effects == []
+    assert sim.model.spring_count == 0 and sim.effects == ()
 
 
 def test_vertex_mass_and_overrides():
