@@ -1,5 +1,6 @@
 # make demo : set up (first time only) and run the default scene into out/drop-on-square
-# make test : set up (first time only) and run the test suite
+# make test : set up (first time only) and run the test suite, less the tests marked slow
+#             (.venv/bin/python -m pytest -q -m slow runs those; CI runs both)
 # make bench: run the benchmarks (heavy measurements, not part of the tests)
 # make docs : build the documentation site into docs/_build/html (runs every gallery lesson;
 #             warnings are errors)
@@ -15,7 +16,7 @@ demo: setup
 
 test: setup
 	$(VENV)/bin/ruff check clothsim tests benchmarks examples scripts
-	$(PY) -m pytest -q
+	$(PY) -m pytest -q -m "not slow"
 
 bench: setup
 	$(PY) -m benchmarks

@@ -98,7 +98,7 @@ API_PAGES = {
     "effects": ("Effects", ["clothsim.effects"]),
     "scenes-and-runs": ("Scenes, runs and files", [
         "clothsim.scene", "clothsim.runner", "clothsim.interrupts", "clothsim.io",
-        "clothsim.cli"]),
+        "clothsim.datasets", "clothsim.cli"]),
     "pictures": ("Pictures", ["clothsim.plotting", "clothsim.painter", "clothsim.camera",
                               "clothsim.display"]),
     "analysis": ("Matrices, energy, accuracy, ports", [

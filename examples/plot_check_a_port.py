@@ -8,56 +8,51 @@ penalty pins, 10 local/global iterations per frame): its initial positions, spri
 61 frames of positions. We rebuild the same model here from those files, take one step with
 clothsim from the same state, and compare with the port's frame 1.
 
-The data is read from ``$CLOTHSIM_DATA`` or ``../shared/data`` beside the repository;
-without it this lesson says so and stops.
+The data ships with clothsim (the data set ``liu13-port``, :mod:`clothsim.datasets`,
+unpacked on first use).
 """
 
 import matplotlib.pyplot as plt
 import numpy as np
 
 import clothsim as cs
+from clothsim import datasets
 from clothsim.plotting import draw
-from clothsim.scene import data_dir
 from clothsim.solvers import LocalGlobalSolver, StepProblem
 
-port = data_dir().parent / "liu13-port" / "default-scene"
-if not (port / "positions.txt").is_file():
-    print(f"port data not found in {port}; set CLOTHSIM_DATA to run this lesson")
-    fig, ax = plt.subplots(figsize=(4, 1))
-    ax.text(0.5, 0.5, "port data not found", ha="center", va="center")
-    ax.set_axis_off()
-else:
-    # %%
-    # The model, exactly as the port builds it: springs (type 1) with their stiffness and
-    # rest length, two penalty "attachments" (type 0), uniform masses, gravity M (0, −100, 0).
-    x0 = np.loadtxt(port / "x0.txt").reshape(-1, 3)
-    triangles = np.loadtxt(port / "triangles.txt", dtype=np.int64)
-    table = np.loadtxt(port / "springs.txt", comments="#")
-    springs, attach = table[table[:, 0] == 1], table[table[:, 0] == 0]
-    mesh = cs.Mesh(x0, triangles)
-    model = cs.Model.build(mesh, cs.Springs(spring_vertices=springs[:, 1:3].astype(int),
-                                            spring_stiffness=springs[:, 3],
-                                            spring_rest_length=springs[:, 4],
-                                            spring_family=0), total_mass=1.0)
-    positions = np.loadtxt(port / "positions.txt").reshape(61, -1, 3)
-    h = 0.0333
-    problem = StepProblem(h=h, x=positions[0], v=np.zeros_like(x0),
-                          f_ext=model.vertex_mass[:, None] * [0.0, -100.0, 0.0],
-                          anchor_vertices=attach[:, 1].astype(int),
-                          anchor_positions=x0[attach[:, 1].astype(int)],
-                          anchor_stiffness=attach[:, 3])
+port = datasets.locate("liu13-port") / "default-scene"
 
-    # %%
-    # One step, 10 iterations from y = x + h v, as the port does it.
-    x1 = LocalGlobalSolver(model, iterations=10).solve(problem).x
-    difference = np.abs(x1 - positions[1]).max()
-    print(f"largest difference from the port's frame 1: {difference:.1e} m "
-          f"(the step moved the sheet by {np.abs(positions[1] - positions[0]).max():.2f} m)")
-    assert difference < 1e-9
+# %%
+# The model, exactly as the port builds it: springs (type 1) with their stiffness and
+# rest length, two penalty "attachments" (type 0), uniform masses, gravity M (0, −100, 0).
+x0 = np.loadtxt(port / "x0.txt").reshape(-1, 3)
+triangles = np.loadtxt(port / "triangles.txt", dtype=np.int64)
+table = np.loadtxt(port / "springs.txt", comments="#")
+springs, attach = table[table[:, 0] == 1], table[table[:, 0] == 0]
+mesh = cs.Mesh(x0, triangles)
+model = cs.Model.build(mesh, cs.Springs(spring_vertices=springs[:, 1:3].astype(int),
+                                        spring_stiffness=springs[:, 3],
+                                        spring_rest_length=springs[:, 4],
+                                        spring_family=0), total_mass=1.0)
+positions = np.loadtxt(port / "positions.txt").reshape(61, -1, 3)
+h = 0.0333
+problem = StepProblem(h=h, x=positions[0], v=np.zeros_like(x0),
+                      f_ext=model.vertex_mass[:, None] * [0.0, -100.0, 0.0],
+                      anchor_vertices=attach[:, 1].astype(int),
+                      anchor_positions=x0[attach[:, 1].astype(int)],
+                      anchor_stiffness=attach[:, 3])
 
-    fig, axes = plt.subplots(1, 2, figsize=(8, 4))
-    draw(axes[0], mesh, positions[10])
-    axes[0].set_title("the port, frame 10", fontsize=9)
-    axes[1].semilogy(np.abs(x1 - positions[1]).max(axis=1), ".")
-    axes[1].set(xlabel="vertex", ylabel="|clothsim − port| [m]", title="one step")
-    fig.tight_layout()
+# %%
+# One step, 10 iterations from y = x + h v, as the port does it.
+x1 = LocalGlobalSolver(model, iterations=10).solve(problem).x
+difference = np.abs(x1 - positions[1]).max()
+print(f"largest difference from the port's frame 1: {difference:.1e} m "
+      f"(the step moved the sheet by {np.abs(positions[1] - positions[0]).max():.2f} m)")
+assert difference < 1e-9
+
+fig, axes = plt.subplots(1, 2, figsize=(8, 4))
+draw(axes[0], mesh, positions[10])
+axes[0].set_title("the port, frame 10", fontsize=9)
+axes[1].semilogy(np.abs(x1 - positions[1]).max(axis=1), ".")
+axes[1].set(xlabel="vertex", ylabel="|clothsim − port| [m]", title="one step")
+fig.tight_layout()

@@ -9,8 +9,10 @@ import numpy as np
 import pytest
 
 from clothsim import cli, io
-from clothsim.scene import data_dir, list_builtin_scenes
+from clothsim.scene import list_builtin_scenes
 from clothsim.simulation import Simulation
+
+from .data_sets import assignment_dir, write_assignment_scene
 
 RESULTS = ("trajectory.pvd", "trajectory.npz", "preview.gif", "final.png", "run.json")
 
@@ -70,13 +72,12 @@ def test_default_scene_and_out_dir(tmp_path, monkeypatch, capsys):
 @pytest.mark.parametrize("scene, vertices", [("jacobson-flag", 3200),
                                              ("jacobson-skirt", 9840)])
 def test_jacobson_cloths_run(tmp_path, scene, vertices):
-    if not (data_dir() / "flag.json").is_file():
-        pytest.skip("assignment data not found")
+    data = assignment_dir()  # third party: skipped when absent
     out = tmp_path / scene
     assert cli.main(["run", scene, "--out", str(out), "--frames", "2"]) == 0
     z, run = check_results(out, 2, vertices)
     assert run["effects_built"] == ["pin", "force"]  # the assignment: −9.8 N per vertex
-    pins = np.asarray(json.loads((data_dir() / f"{scene[9:]}.json").read_text())["b"]) - 1
+    pins = np.asarray(json.loads((data / f"{scene[9:]}.json").read_text())["b"]) - 1
     # the assignment's penalty pins (w = 1e10 N/m) hold within load / w, far below 1e-6 m
     moved = np.abs(z["positions"][2][pins] - z["positions"][0][pins]).max()
     assert 0 < moved < 1e-6
@@ -85,9 +86,7 @@ def test_jacobson_cloths_run(tmp_path, scene, vertices):
 
 
 def test_jacobson_json_runs_directly(tmp_path):
-    path = data_dir() / "horizontal-chain.json"
-    if not path.is_file():
-        pytest.skip("assignment data not found")
+    path = write_assignment_scene(tmp_path, "chain")  # as the assignment's horizontal chain
     out = tmp_path / "chain"
     assert cli.main(["run", str(path), "--out", str(out), "--frames", "3"]) == 0
     z, run = check_results(out, 3, 10)

@@ -1,9 +1,9 @@
 """Every code block of README.md and docs/**/*.md works as written.
 
 * ``python`` blocks run, each in a fresh temporary working folder with the repository on
-  ``sys.path``; ``../shared/data`` (the data beside the repository) is resolved like
-  ``clothsim.scene.files.data_root`` and a block needing it skips when it is absent. A block
-  that is deliberately partial is preceded in the page by ``<!-- not-run: reason -->``.
+  ``sys.path``; a block reading the assignment's files (``jacobson-a8``, third party, never
+  downloaded by the tests) skips when they are absent. A block that is deliberately partial
+  is preceded in the page by ``<!-- not-run: reason -->``.
 * Shell blocks (``sh``, ``bash``, ``shell``, ``console``, or unlabelled blocks that look like
   commands) work copied into a fresh shell at the repository root: each command starts with
   ``.venv/bin/``, ``make``, ``cd``, ``git``, ``sh scripts/`` or is ``. .venv/bin/activate``
@@ -26,7 +26,7 @@ from pathlib import Path
 
 import pytest
 
-from clothsim.scene.files import data_root
+from .data_sets import SKIP_ASSIGNMENT, have_assignment
 
 ROOT = Path(__file__).resolve().parents[1]
 DOCS = ROOT / "docs"
@@ -180,11 +180,8 @@ def test_python_blocks_run(block, tmp_path, monkeypatch):
     if block.not_run:
         pytest.skip(f"marked not-run in the page: {block.not_run}")
     code = block.code
-    if "../shared/data" in code:
-        root = data_root()
-        if not root.is_dir():
-            pytest.skip(f"needs ../shared/data ({root} is absent; set CLOTHSIM_DATA)")
-        code = code.replace("../shared/data", root.as_posix())
+    if "jacobson" in code and not have_assignment():
+        pytest.skip(SKIP_ASSIGNMENT)
     import matplotlib
 
     matplotlib.use("Agg", force=True)
@@ -242,7 +239,7 @@ def test_the_shell_check_can_fail():
     assert bad_lines(_block(".venv/bin/clothsim scenes && pytest -q\n"))
     assert not bad_lines(_block(".venv/bin/clothsim scenes && cp a b\n"))  # plain POSIX tools
     assert not bad_lines(_block(". .venv/bin/activate\nclothsim --version\npython -V\n"))
-    assert not bad_lines(_block("CLOTHSIM_DATA=../shared/data .venv/bin/clothsim run x  # c\n"))
+    assert not bad_lines(_block("CLOTHSIM_DATA=data .venv/bin/clothsim run x  # c\n"))
     console = _block("$ .venv/bin/clothsim run hanging\nhanging: 30 frames written\n", "console")
     assert commands(console) == [".venv/bin/clothsim run hanging"]
     assert not bad_lines(console)

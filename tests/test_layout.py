@@ -29,6 +29,7 @@ STAGES = [
     {"simulation"},
     {"gallery"},
     {"io"},
+    {"datasets"},
     {"scene"},
     {"display", "camera", "painter", "plotting"},
     {"runner", "runfolder", "interrupts"},
@@ -36,7 +37,8 @@ STAGES = [
     {"cli", "__main__", "__init__"},
 ]
 STAGE_OF = {name: i for i, names in enumerate(STAGES) for name in names}
-HEAVY = ("meshio", "matplotlib", "sksparse", "tqdm", "joblib", "dask", "threadpoolctl")
+HEAVY = ("meshio", "matplotlib", "sksparse", "tqdm", "joblib", "dask", "threadpoolctl",
+         "pooch", "requests")
 
 
 def module_name(path: Path) -> str:

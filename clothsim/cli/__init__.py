@@ -12,9 +12,12 @@
     clothsim check SCENE PORT [--precision float32|float64] [--tolerance T]
     clothsim diff-model A B
     clothsim conformance [--out DIR]
+    clothsim data list | fetch [NAME ...] | path NAME[/FILE]
 
 SCENE is a scene file (``.toml``, or an assignment ``.json``) or a built-in scene name;
-``run`` without one runs ``drop-on-square`` into ``out/<scene-name>``.
+``run`` without one runs ``drop-on-square`` into ``out/<scene-name>``. A file or folder
+argument may be written ``data:<data set>/<path>`` (``data:liu13-port/default-scene``, the
+port reference shipped with clothsim; ``clothsim data list`` shows the data sets).
 
 ``export``, ``compare``, ``check``, ``diff-model`` and ``conformance`` check another port
 (docs/ports.md); ``compare``, ``check`` and ``diff-model`` exit 0 when they pass, 1 when not.
@@ -60,6 +63,7 @@ from .common import (
     other_output,
     stopped,
 )
+from .data import _add_data_command, _cmd_data, expand_data_args
 from .logs import (
     ProgressLines,
     _configure_logging,
@@ -132,6 +136,7 @@ def build_parser() -> argparse.ArgumentParser:
     add_set_option(val)
 
     _add_port_commands(sub)
+    _add_data_command(sub)
 
     acc = sub.add_parser("accuracy", help="what accuracy costs in time: every solver on the "
                                           "same recorded steps of a scene")
@@ -310,7 +315,7 @@ def _cmd_accuracy(args) -> int:
 COMMANDS = {"run": _cmd_run, "scenes": _cmd_scenes, "validate": _cmd_validate,
             "accuracy": _cmd_accuracy, "export": _cmd_export, "compare": _cmd_compare,
             "check": _cmd_check, "diff-model": _cmd_diff_model,
-            "conformance": _cmd_conformance}
+            "conformance": _cmd_conformance, "data": _cmd_data}
 
 
 def main(argv: list[str] | None = None) -> int:
@@ -353,6 +358,7 @@ def _dispatch(args) -> int:
     try:
         with (_warnings_to_log(), _no_progress_bars_off_terminal(),
               _progress_lines_off_terminal()):
+            expand_data_args(args)
             return COMMANDS[args.command](args)
     except InputError as exc:  # SceneError included: bad input, exit status 2
         return _fail(str(exc), 2)

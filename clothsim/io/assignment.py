@@ -41,7 +41,7 @@ import numpy as np
 from ..errors import InputError, SceneError
 from ..mesh import Mesh, fan_triangles
 from ..voronoi import voronoi_areas
-from .common import file_stamp
+from .common import file_stamp, write_text
 from .obj import read_obj_cells
 
 
@@ -253,4 +253,43 @@ def scene_dict(path, *, frames: int = 60, iterations: int = 50) -> dict:
     }
 
 
-__all__ = ["Assignment", "AssignmentError", "read_assignment", "read_pins", "scene_dict"]
+def write_assignment(path, vertices, faces, *, k: float, m: float | None = None,
+                     b=()) -> Path:
+    """Write a scene in the assignment's format: ``path`` (JSON) and its OBJ beside it.
+
+    The counterpart of :func:`read_assignment`, for scenes of one's own (a student's test
+    case, the coursework profile's cases, the tests' stand-ins for the assignment's files).
+
+    Parameters
+    ----------
+    path : str or path-like
+        The JSON file; the mesh goes to the same name with ``.obj``.
+    vertices : array_like, shape (n, 3)
+        Positions [m], written with 17 significant digits (read back exactly).
+    faces : sequence of sequence of int
+        0-based vertex indices: two for a strand, three or more for a polygon.
+    k : float
+        Stiffness of every spring [N/m].
+    m : float, optional
+        Mass of every vertex [kg]; without it the reader gives Voronoi masses.
+    b : sequence of int
+        Pinned vertices, 0-based (written 1-based, as the assignment reads them).
+
+    Returns
+    -------
+    Path
+        The JSON file.
+    """
+    p = Path(path)
+    obj = p.with_suffix(".obj")
+    lines = [f"v {a:.17g} {c:.17g} {d:.17g}" for a, c, d in np.asarray(vertices, float)]
+    lines += ["f " + " ".join(str(int(v) + 1) for v in f) for f in faces]
+    doc = {"obj": obj.name, "k": k, **({} if m is None else {"m": m}),
+           "b": [int(v) + 1 for v in b]}
+    write_text(obj, "\n".join(lines) + "\n")
+    write_text(p, json.dumps(doc, indent=1) + "\n")
+    return p
+
+
+__all__ = ["Assignment", "AssignmentError", "read_assignment", "read_pins", "scene_dict",
+           "write_assignment"]

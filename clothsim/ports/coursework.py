@@ -1,7 +1,7 @@
 """The coursework conformance profile: cases any solution of the mass-spring assignment runs.
 
 The assignment (A. Jacobson's CSC317/CSC418 mass-spring exercise, whose scenes are in
-``../shared/data/jacobson-a8``) fixes what a solution can take: one stiffness k for every
+the data set ``jacobson-a8``) fixes what a solution can take: one stiffness k for every
 spring, pins held by a penalty of one w (1e10 N/m in its ``main.cpp``), −9.8 N on every
 vertex (a force, not m g), iterations started from x_n, 50 iterations at h = 1/30 s. The
 general conformance set (:mod:`clothsim.ports.conformance`) mixes stiffnesses and exact
@@ -24,12 +24,9 @@ A solution passes a case when ``clothsim check CASE/scene.toml ITS_OUTPUT`` pass
 
 from __future__ import annotations
 
-import json
-from pathlib import Path
-
 import numpy as np
 
-from ..io.assignment import scene_dict
+from ..io.assignment import scene_dict, write_assignment
 from ..io.common import write_text
 from ..io.folders import COURSEWORK_HEADING, claim_folder
 from ..io.outfolder import OutputFolder
@@ -87,12 +84,6 @@ def _cases() -> dict:
 CASES = tuple(_cases())
 
 
-def _write_obj(path: Path, x: np.ndarray, faces) -> None:
-    lines = [f"v {a:.17g} {b:.17g} {c:.17g}" for a, b, c in x]
-    lines += ["f " + " ".join(str(v + 1) for v in f) for f in faces]
-    write_text(path, "\n".join(lines) + "\n")
-
-
 README = COURSEWORK_HEADING + """
 
 Cases of the mass-spring assignment that every solution can run without edits: one
@@ -146,9 +137,7 @@ def _write_cases(folder: OutputFolder, frames: int, names: list[str]) -> list[st
         (x, faces), spec, description = table[name]
         d = claim_folder(out / name, "export")   # new, empty, or an earlier case's export
         d.mkdir(exist_ok=True)
-        _write_obj(d / "case.obj", x, faces)
-        doc = {"obj": "case.obj", **spec, "b": [v + 1 for v in spec["b"]]}
-        write_text(d / "case.json", json.dumps(doc, indent=1) + "\n")
+        write_assignment(d / "case.json", x, faces, **spec)
         scene_doc = scene_dict(d / "case.json", frames=frames)
         scene_doc["scene"].update(name=f"coursework-{name}", description=description)
         scene_doc["cloth"]["file"] = "case.json"

@@ -1,10 +1,12 @@
 """Where scene files and the data they name are found.
 
 The data root
-    A path ``data:<relative>`` in a scene names a file under the data root: the folder in
-    ``$CLOTHSIM_DATA``, else ``<repository>/../shared/data``. For example
-    ``data:liu13-port/default-scene/x0.txt`` or ``data:jacobson-a8/flag.json``. The old
-    form ``data:flag.json`` (relative to the ``jacobson-a8`` folder) is still accepted.
+    A path ``data:<name>/<file>`` in a scene names a file of a data set
+    (:mod:`clothsim.datasets`): ``data:liu13-port/default-scene/x0.txt`` (shipped with
+    clothsim) or ``data:jacobson-a8/flag.json`` (the assignment's files, downloaded on
+    first use). ``$CLOTHSIM_DATA``, when set, is looked in first, and may hold other
+    folders of the user's own (``data:my-meshes/sheet.obj``). The old form
+    ``data:flag.json`` (relative to the ``jacobson-a8`` folder) is still accepted.
 Built-in scenes
     ``clothsim/scenes/<name>.toml``, loaded by name.
 """
@@ -14,49 +16,48 @@ from __future__ import annotations
 import os
 import re
 import tomllib
+from importlib import resources
 from pathlib import Path
 
-from ..errors import SceneError
+from .. import datasets
+from ..errors import InputError, SceneError
 from ..io.common import special_file
 from .checks import Invalid, shorten, suggest
 
 DEFAULT_SCENE = "drop-on-square"
 DATA_PREFIX = "data:"
-BUILTIN_DIR = Path(__file__).resolve().parent.parent / "scenes"
+BUILTIN_DIR = Path(str(resources.files("clothsim").joinpath("scenes")))  # package data
 ASSIGNMENT_FOLDER = "jacobson-a8"
 
 
 def data_root() -> Path:
-    """The folder ``data:`` paths are relative to.
+    """The folder ``data:`` paths are looked up in first.
 
     Returns
     -------
     Path
-        ``$CLOTHSIM_DATA`` when set, else ``<repository>/../shared/data`` (the repository
-        being the folder holding the ``clothsim`` package). It may not exist.
+        ``$CLOTHSIM_DATA`` when set, else the cache folder the data sets are unpacked and
+        downloaded into (:func:`clothsim.datasets.cache_dir`). It may not exist.
     """
     env = os.environ.get("CLOTHSIM_DATA")
     if env:
         return Path(env).expanduser()
-    return Path(__file__).resolve().parents[3] / "shared" / "data"
+    return datasets.cache_dir()
 
 
 def data_dir() -> Path:
-    """The folder of A. Jacobson's assignment data (``<data root>/jacobson-a8``).
+    """The folder of A. Jacobson's assignment data, where it is or would be downloaded to.
 
-    ``$CLOTHSIM_DATA`` may also name that folder itself (the older convention).
+    Nothing is downloaded: see :func:`clothsim.datasets.locate` for that.
 
     Returns
     -------
     Path
-        The folder (it may not exist).
+        ``$CLOTHSIM_DATA/jacobson-a8`` (or ``$CLOTHSIM_DATA`` itself when it is the
+        assignment's folder, the older convention), else the cache's ``jacobson-a8``
+        (it may not exist, or not hold every file yet).
     """
-    root = data_root()
-    if (root / ASSIGNMENT_FOLDER).is_dir():
-        return root / ASSIGNMENT_FOLDER
-    if os.environ.get("CLOTHSIM_DATA") and root.is_dir():
-        return root  # $CLOTHSIM_DATA is the assignment folder itself
-    return root / ASSIGNMENT_FOLDER
+    return datasets.status(ASSIGNMENT_FOLDER).folder
 
 
 def _data_candidates(rel: str) -> list[Path]:
@@ -80,6 +81,86 @@ def _inside_data_root(p: Path, root: Path) -> bool:
     return any(real == r or real.is_relative_to(r) for r in roots)
 
 
+def _data_set_of(rel: str) -> tuple[str, str] | None:
+    """(data set, path inside it) a ``data:`` path names, or None."""
+    first, _, rest = rel.partition("/")
+    if first in datasets.DATASETS:
+        return first, rest
+    if rel in datasets.DATASETS[ASSIGNMENT_FOLDER].files:  # the old form data:flag.json
+        return ASSIGNMENT_FOLDER, rel
+    return None
+
+
+def _data_path(value: str, path: str) -> Path:
+    """The file a ``data:`` path names: under ``$CLOTHSIM_DATA`` first, else in its data
+    set (unpacked or downloaded on first use)."""
+    rel = value[len(DATA_PREFIX):]
+    env = os.environ.get("CLOTHSIM_DATA")
+    named = _data_set_of(rel)
+    if env:
+        root = data_root()
+        if not root.is_dir():
+            raise Invalid(path, f"data directory {root} not found (CLOTHSIM_DATA names it); "
+                                f"set CLOTHSIM_DATA to an existing folder, or unset it")
+        candidates = _data_candidates(rel)
+        p = next((c for c in candidates if c.exists()), None)
+        if p is not None or named is None:
+            p = candidates[0] if p is None else p
+            if not _inside_data_root(p, root):
+                raise Invalid(path, f"a data: path must stay inside the data root {root}, "
+                                    f"got {shorten(value)}")
+            return p
+    if named is None:
+        raise Invalid(path, f"{shorten(value)} names no data set (known: "
+                            f"{', '.join(datasets.DATASETS)}); set CLOTHSIM_DATA to the "
+                            f"folder holding it")
+    name, inner = named
+    try:
+        folder = datasets.locate(name)
+    except datasets.DataUnavailableError as exc:
+        raise Invalid(path, str(exc)) from None
+    p = folder / inner
+    try:
+        inside = p.resolve().is_relative_to(folder.resolve())
+    except (OSError, RuntimeError):
+        inside = False
+    if not inside:
+        raise Invalid(path, f"a data: path must stay inside the data set's folder {folder}, "
+                            f"got {shorten(value)}")
+    return p
+
+
+def resolve_data_path(value: str, what: str = "path") -> Path:
+    """The existing file or folder a ``data:<name>/...`` path names (a command-line
+    argument, e.g. ``data:liu13-port/default-scene``), got first when missing.
+
+    Parameters
+    ----------
+    value : str
+        ``data:`` followed by a data set's name and a path inside it (or a path under
+        ``$CLOTHSIM_DATA``).
+    what : str
+        What the value is, for the error message (e.g. ``"PORT"``).
+
+    Returns
+    -------
+    Path
+        The file or folder.
+
+    Raises
+    ------
+    InputError
+        One line: the data set cannot be got (and how to get it), or nothing is there.
+    """
+    try:
+        p = _data_path(value, what)
+    except Invalid as exc:
+        raise InputError(f"{what}: {exc.detail}", field=what) from None
+    if not p.exists():
+        raise InputError(f"{what}: {shorten(value)}: no such file or folder ({p})", field=what)
+    return p
+
+
 def resolve_path(value: str, base_dir: Path, path: str) -> Path:
     """An existing file named in a scene: ``data:...``, absolute, or relative to the scene.
 
@@ -100,21 +181,13 @@ def resolve_path(value: str, base_dir: Path, path: str) -> Path:
     Raises
     ------
     Invalid
-        At ``path``: the data root is missing, the file is missing, or it is a directory.
+        At ``path``: ``$CLOTHSIM_DATA`` names no folder, a data set is missing and cannot
+        be got (one line saying how to get it), the file is missing, or it is a directory.
     """
     if "\x00" in value:
         raise Invalid(path, "a file name cannot contain a NUL character")
     if value.startswith(DATA_PREFIX):
-        rel = value[len(DATA_PREFIX):]
-        root = data_root()
-        if not root.is_dir():
-            raise Invalid(path, f"data directory {root} not found; set CLOTHSIM_DATA to the "
-                                f"folder holding the shared data (jacobson-a8, liu13-port)")
-        candidates = _data_candidates(rel)
-        p = next((c for c in candidates if c.exists()), candidates[0])
-        if not _inside_data_root(p, root):
-            raise Invalid(path, f"a data: path must stay inside the data root {root}, got "
-                                f"{shorten(value)}")
+        p = _data_path(value, path)
     else:
         p = Path(value).expanduser()
         p = p if p.is_absolute() else base_dir / p
@@ -284,6 +357,6 @@ def find_scene(path_or_name) -> Path:
                      + suggest(name, names).replace("expected one of", "built-in scenes:"))
 
 
-__all__ = ["data_root", "data_dir", "resolve_path", "list_builtin_scenes", "builtin_scene_path",
-           "builtin_scene_text", "parse_toml", "find_scene", "DEFAULT_SCENE", "DATA_PREFIX",
-           "BUILTIN_DIR"]
+__all__ = ["data_root", "data_dir", "resolve_path", "resolve_data_path", "list_builtin_scenes",
+           "builtin_scene_path", "builtin_scene_text", "parse_toml", "find_scene",
+           "DEFAULT_SCENE", "DATA_PREFIX", "BUILTIN_DIR"]

@@ -10,9 +10,6 @@ import pytest
 from clothsim import io
 from clothsim.errors import InputError
 from clothsim.mesh import Mesh, grid
-from clothsim.scene import data_dir
-
-JACOBSON = data_dir()  # the coursework data ($CLOTHSIM_DATA or ../shared/data)
 
 
 def pvd_entries(path):

@@ -5,9 +5,6 @@ import numpy as np
 import scipy.sparse
 
 from clothsim import io
-from clothsim.scene import data_dir
-
-JACOBSON = data_dir()  # the coursework data ($CLOTHSIM_DATA or ../shared/data)
 
 
 def test_matrix_and_vector_round_trip_exact(tmp_path):

@@ -13,10 +13,10 @@ import pytest
 from clothsim import io, load
 from clothsim.errors import InputError
 from clothsim.mesh import grid
-from clothsim.scene import data_dir
+
+from ..data_sets import assignment_dir
 
 REPO = Path(__file__).resolve().parents[2]
-JACOBSON = data_dir()
 
 
 def quad_mesh():
@@ -80,10 +80,7 @@ def test_load_runs_the_checks(tmp_path):
 
 
 def jacobson(name):
-    path = JACOBSON / f"{name}.obj"
-    if not path.exists():
-        pytest.skip(f"assignment data not found at {JACOBSON}")
-    return path
+    return assignment_dir() / f"{name}.obj"  # skips when the third-party files are absent
 
 
 @pytest.mark.parametrize("name, vertices, triangles, strands", [

@@ -7,9 +7,7 @@ import pytest
 from clothsim import io, load
 from clothsim.errors import InputError
 from clothsim.mesh import Mesh, grid
-from clothsim.scene import data_dir
 
-JACOBSON = data_dir()  # the coursework data ($CLOTHSIM_DATA or ../shared/data)
 
 def test_obj_reader_index_forms_negative_indices_and_lines(tmp_path):
     path = tmp_path / "forms.obj"

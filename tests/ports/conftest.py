@@ -1,7 +1,8 @@
 """Fixtures of the port-checking tests: the paper authors' default scene, from its own files.
 
 The model comes from ``examples/ports/liu13-default.toml``, a scene built only from the
-port's own files (no Python glue); the data is read from the data root.
+port's own files (no Python glue); the data is the data set liu13-port, shipped with
+clothsim.
 """
 
 from __future__ import annotations
@@ -15,24 +16,26 @@ import pytest
 
 import clothsim as cs
 from clothsim.scene import Scene
-from clothsim.scene import data_root as scene_data_root
+
+from ..data_sets import assignment_stand_in, liu13_dir
 
 REPO = Path(__file__).resolve().parents[2]
 SCENE = REPO / "examples" / "ports" / "liu13-default.toml"
 H = 0.0333
 
 
-def data_root() -> Path | None:
-    """The data root scenes' ``data:`` paths use, when it holds the port's data; else None."""
-    root = scene_data_root()
-    return root if (root / "liu13-port" / "default-scene" / "x0.txt").is_file() else None
+@pytest.fixture(scope="module", autouse=True)
+def _assignment_scenes(tmp_path_factory):
+    """The port tests run the built-in jacobson-net and jacobson-flag scenes: without the
+    assignment's own files (third party; the suite never downloads them), on stand-ins of
+    their format (tests/data_sets.py), for each module of this folder."""
+    with assignment_stand_in(tmp_path_factory.mktemp("assignment")):
+        yield
 
 
 def port_dir() -> Path:
-    root = data_root()
-    if root is None:
-        pytest.skip("the liu13-port data is absent (set CLOTHSIM_DATA or provide ../shared/data)")
-    return root / "liu13-port" / "default-scene"
+    """The port's folder (the data set liu13-port, shipped with clothsim)."""
+    return liu13_dir()
 
 
 def liu13_simulation(*, attachments: bool = True, iterations: int = 10,

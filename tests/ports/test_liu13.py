@@ -1,4 +1,5 @@
-"""Acceptance on the paper authors' own C++ run (``../shared/data/liu13-port``)."""
+"""Acceptance on the paper authors' own C++ run (the data set liu13-port, shipped with
+clothsim)."""
 
 import numpy as np
 import pytest

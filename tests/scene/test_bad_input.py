@@ -74,16 +74,13 @@ def test_bad_scene_numbers_name_key_and_index(tmp_path, label, text, path, messa
 
 def test_bad_scene_overrides_and_assignment_json(tmp_path):
     """h ≤ 0 and iterations < 1 through overrides; NaN/inf in an assignment's JSON."""
-    from clothsim.scene import SceneError, data_dir, load_scene
+    from clothsim.scene import SceneError, load_scene
     scene = load_scene("hanging")
     with pytest.raises(SceneError, match=r": scene\.substeps: must be an integer >= 1, got 0$"):
         scene.build_simulation(substeps=0)
     with pytest.raises(SceneError, match=r": solver\.iterations: must be an integer >= 1, got -1$"):
         scene.build_simulation(iterations=-1)
-    obj = data_dir() / "single-spring-horizontal.obj"
-    if not obj.is_file():
-        pytest.skip("assignment data not found")
-    (tmp_path / "s.obj").write_bytes(obj.read_bytes())
+    (tmp_path / "s.obj").write_text("v 0 0 0\nv 1 0 0\nf 1 2\n")  # the assignment's spring
     for key, text in (("k", "NaN"), ("m", "Infinity"), ("m", "-Infinity")):
         p = tmp_path / "s.json"
         values = {"k": "1.0", "m": "1.0", key: text}
@@ -239,12 +236,10 @@ def test_plane_normal_of_huge_numbers_is_not_ignored():
 
 
 def test_assignment_file_name_with_a_space_is_not_a_scene_name_error(tmp_path):
-    from clothsim.scene import data_dir, load_scene
-    src = data_dir() / "single-spring-horizontal.json"
-    if not src.is_file():
-        pytest.skip(f"assignment data not found in {data_dir()}")
-    (tmp_path / "single-spring-horizontal.obj").write_bytes(
-        (data_dir() / "single-spring-horizontal.obj").read_bytes())
+    from clothsim.scene import load_scene
+
+    from ..data_sets import write_assignment_scene
+    src = write_assignment_scene(tmp_path, "spring")  # spring.json + spring.obj
     p = tmp_path / "my spring (copy).json"
     p.write_bytes(src.read_bytes())
     scene = load_scene(p)

@@ -1,6 +1,6 @@
 """A model from files in a scene: vertices, triangles, spring tables with attachments,
 masses and pins from plain text; the paper authors' default scene rebuilt from its own
-files (skipped when the shared data is absent)."""
+files (the data set liu13-port, shipped with clothsim)."""
 
 from pathlib import Path
 
@@ -10,17 +10,16 @@ import scipy.sparse as sp
 
 from clothsim import cli
 from clothsim import matrices as mx
-from clothsim.scene import Scene, SceneError, data_root, load_scene
+from clothsim.scene import Scene, SceneError, load_scene
+
+from ..data_sets import liu13_dir
 
 REPO = Path(__file__).resolve().parents[2]
 PORT_SCENE = REPO / "examples" / "ports" / "liu13-default.toml"
 
 
 def port_dir() -> Path:
-    d = data_root() / "liu13-port" / "default-scene"
-    if not (d / "x0.txt").is_file():
-        pytest.skip(f"shared port data not found in {d} (set CLOTHSIM_DATA)")
-    return d
+    return liu13_dir()  # ships with clothsim
 
 
 def square(tmp_path, *, one_line=False, base=0, table=None, extra_cloth="", effects=""):

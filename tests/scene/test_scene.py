@@ -2,7 +2,6 @@
 naming the file and key, with exit status 2 from the command line."""
 
 import json
-import shutil
 import textwrap
 
 import numpy as np
@@ -14,10 +13,11 @@ from clothsim.scene import (
     DEFAULT_SCENE,
     Scene,
     SceneError,
-    data_dir,
     list_builtin_scenes,
     load_scene,
 )
+
+from ..data_sets import assignment_dir, have_assignment, write_assignment_scene
 
 FULL = """
 [scene]
@@ -148,33 +148,47 @@ def test_mesh_and_polygon_shapes(tmp_path):
     assert m.springs.family_count("structural") == len(m.mesh.edges)
 
 
-def test_jacobson_json_net_and_flag():
-    d = data_dir()
-    if not (d / "net.json").is_file():
-        pytest.skip("assignment data not found")
-    net = load_scene(d / "net.json")
+def check_as_main_cpp(net_json, n, springs, pins, sheet, sheet_springs):
+    """An assignment net and quad sheet are run as the assignment's main.cpp: w = 1e10
+    penalty pins (1-based b), −9.8 N per vertex, x_n, 50 iterations, h = 1/30 s; springs on
+    polygon sides only (no quad diagonals); without m, libigl's Voronoi masses at 1 kg/m²."""
+    from clothsim.voronoi import voronoi_areas
+
+    net = load_scene(net_json)
     model = net.build_model()
-    assert model.vertex_count == 61 and model.spring_count == 156
-    np.testing.assert_array_equal(model.vertex_mass, np.ones(61))
+    assert model.vertex_count == n and model.spring_count == springs
+    np.testing.assert_array_equal(model.vertex_mass, np.ones(n))
     assert set(model.springs.spring_stiffness) == {300.0}
     sim = net.build_simulation(model)
-    # the assignment's main.cpp: w = 1e10 penalty pins, −9.8 N per vertex, x_n, 50
-    # iterations, h = 1/30 s
     assert sim.effects_built == ["pin", "force"]
-    np.testing.assert_array_equal(np.sort(sim.effects[0].vertices), [0, 4, 26, 34, 56, 60])
+    np.testing.assert_array_equal(np.sort(sim.effects[0].vertices), pins)
     assert sim.effects[0].method == "penalty" and sim.effects[0].stiffness == 1e10
     assert sim.effects[1].per_vertex.tolist() == [0.0, -9.8, 0.0]
     assert sim.solver.iterations == 50 and sim.h == pytest.approx(1 / 30)
     assert sim.initial_guess == "x_n"
-    flag_scene = load_scene("jacobson-flag")
-    flag = flag_scene.build_model()
-    # 40 x 80 vertices, 39 x 79 quads: springs on quad sides only (no diagonals)
-    assert flag.vertex_count == 3200 and flag.spring_count == 40 * 79 + 39 * 80
-    # no m in flag.json: libigl's Voronoi areas at 1 kg/m², summing to the area
-    assert flag.total_mass == pytest.approx(flag.mesh.triangle_areas().sum())
-    from clothsim.voronoi import voronoi_areas
-    np.testing.assert_array_equal(flag.vertex_mass,
-                                  voronoi_areas(flag.mesh.vertices, flag.mesh.triangles))
+    sheet_scene = load_scene(sheet)
+    quads = sheet_scene.build_model()
+    assert quads.spring_count == sheet_springs
+    assert quads.total_mass == pytest.approx(quads.mesh.triangle_areas().sum())
+    np.testing.assert_array_equal(quads.vertex_mass,
+                                  voronoi_areas(quads.mesh.vertices, quads.mesh.triangles))
+    return quads, sheet_scene
+
+
+def test_assignment_json_is_run_as_its_main_cpp(tmp_path):
+    """A net and a quad sheet of one's own in the assignment's format."""
+    # 5 x 4 vertices, 4 x 3 quads: 4 x 4 + 5 x 3 quad sides
+    check_as_main_cpp(write_assignment_scene(tmp_path, "net"), 25, 40, [0, 4, 24],
+                      write_assignment_scene(tmp_path, "sheet"), 4 * 4 + 5 * 3)
+
+
+def test_jacobson_json_net_and_flag():
+    """The same on the assignment's own files (third party: skipped when absent)."""
+    d = assignment_dir()
+    # the flag: 40 x 80 vertices, 39 x 79 quads
+    flag, flag_scene = check_as_main_cpp(d / "net.json", 61, 156, [0, 4, 26, 34, 56, 60],
+                                         "jacobson-flag", 40 * 79 + 39 * 80)
+    assert flag.vertex_count == 3200
     assert 1e-4 < flag.vertex_mass.min() < flag.vertex_mass.max() < 1e-3
     f = flag_scene.build_simulation(flag).problem().f_ext
     np.testing.assert_array_equal(f, np.tile([0.0, -9.8, 0.0], (3200, 1)))
@@ -187,10 +201,16 @@ def test_builtin_scenes_all_validate():
                 "jacobson-spring"}
     assert required <= set(scenes) and DEFAULT_SCENE == "drop-on-square"
     assert all(scenes[n] and "\n" not in scenes[n] for n in required)
-    have_data = data_dir().is_dir()
+    have_data = have_assignment()
     for name in sorted(required - {"jacobson-skirt", "jacobson-flag"}):  # the big two: test_cli
         if name.startswith("jacobson-") and not have_data:
-            continue  # needs ../shared/data/jacobson-a8; covered by the skip-marked tests
+            # the third-party files are absent (the suite never downloads): one line on
+            # how to get them
+            with pytest.raises(SceneError) as info:
+                load_scene(name)
+            assert "\n" not in str(info.value)
+            assert "`clothsim data fetch jacobson-a8`" in str(info.value)
+            continue
         scene = load_scene(name)
         sim = scene.build_simulation()
         assert scene.name == name and scene.frames > 0
@@ -291,10 +311,7 @@ def test_missing_scene_file_and_unknown_name(tmp_path, capsys):
 
 
 def test_bad_jacobson_json(tmp_path, capsys):
-    src = data_dir() / "single-spring-horizontal.obj"
-    if not src.is_file():
-        pytest.skip("assignment data not found")
-    shutil.copy(src, tmp_path / "s.obj")
+    (tmp_path / "s.obj").write_text("v 0 0 0\nv 1 0 0\nf 1 2\n")  # the assignment's spring
     p = tmp_path / "s.json"
     for b, path, msg in (([0], "b[0]", "vertex 0 out of range (b is 1-based)"),
                          ([3], "b[0]", "vertex 3 out of range 1..2"),
