@@ -61,8 +61,12 @@ def test_validate_export_and_check_take_it(tmp_path, capsys):
                  "--iterate-steps", "0", "--out", str(out)]) == 0
     assert "iterations 3" in (out / "settings.txt").read_text()
     capsys.readouterr()
-    assert main(["check", "hanging", str(out), "--set", "solver.iterations=3"]) == 0
+    # the export holds 2 of the scene's 90 frames: --steps 2 checks those (a short output fails)
+    assert main(["check", "hanging", str(out), "--set", "solver.iterations=3"]) == 1
+    assert "the scene asks for" in capsys.readouterr().out
+    assert main(["check", "hanging", str(out), "--set", "solver.iterations=3",
+                 "--steps", "2"]) == 0
     assert capsys.readouterr().out.startswith("PASS")
     # without the override the 3-iteration answers are another setting's
-    assert main(["check", "hanging", str(out)]) == 1
+    assert main(["check", "hanging", str(out), "--steps", "2"]) == 1
     assert np.isfinite(np.loadtxt(out / "positions.txt")).all()
