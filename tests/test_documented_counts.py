@@ -9,7 +9,9 @@ naming the file and the count, when the code no longer gives it: then re-run the
 Counts are compared exactly, except Anderson's and L-BFGS's (:data:`ROUNDING_BAND`): their
 least-squares and line-search paths follow the rounding of the BLAS build, and on a slowly
 converging step the first iteration under a level moves with it (the curtain's Anderson
-count to 1e-6 is 428 with one OpenBLAS kernel and 498 with another, numpy 2.4.6). A
+count to 1e-6 is 428 with one OpenBLAS kernel and 498 with another, numpy 2.4.6; the
+buckling step's Anderson count to 1e-3 is 171 on the machine that wrote the page and 214 on
+an AMD EPYC with the same code, 45afcb3, so Anderson's band is 0.3). A
 change of the code that matters moves counts by far more (5092 → 461 after the fused
 iteration).
 """
@@ -27,7 +29,7 @@ from clothsim.solvers import estimate_spectral_radius
 
 DATA = Path(__file__).resolve().parents[1] / "docs" / "data"
 pytestmark = pytest.mark.slow
-ROUNDING_BAND = {"anderson": 0.2, "lbfgs": 0.2}
+ROUNDING_BAND = {"anderson": 0.3, "lbfgs": 0.2}
 """Relative band of the counts that follow the BLAS build's rounding (module text)."""
 
 
