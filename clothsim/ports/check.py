@@ -16,6 +16,7 @@ import numpy as np
 from ..effects.base import overrides
 from ..errors import InputError
 from ..simulation import State
+from ..solvers import make_solver
 from .causes import FITTED, StepData, name_cause
 from .compare import EPS32, RTOL64, cloth_size, condition_number
 from .judge import gradient_scale, judge, pin_role, pinned_moved
@@ -135,7 +136,12 @@ def check_steps(simulation, positions, velocities=None, *, precision: str = "flo
     count = len(xs) - 1 if steps is None else min(int(steps), len(xs) - 1)
     projected = [e.kind for e in sim.effects if overrides(e, "correct_positions")]
     iterations = sim.solver.iterations
-    out, searches, unexplained = [], 0, []
+    out, searches, unexplained, others = [], 0, [], []
+
+    def replay(model, problem):   # clothsim's step of another model, the same settings
+        return make_solver(sim.solver.name, model, iterations=iterations,
+                           tolerance=sim.solver.tolerance).solve(problem).x
+
     t = sim.state.time  # accumulated as the simulation does (time-dependent effects)
     for k in range(count):
         state = State(xs[k].copy(), vs[k].copy(), t, k)
@@ -175,10 +181,11 @@ def check_steps(simulation, positions, velocities=None, *, precision: str = "flo
             step = judge(sim, model, problem, k, x_cs, x_port, err, tol, optimality, precision,
                          search=searches < MAX_SEARCHES)
             searches += 1
-            if step.status in FITTED and not step.settings:   # a model that the port solves?
+            if step.status in FITTED + ("start-dependent",) and not step.settings:
                 g0, opt = gradient_scale(model, problem, x_port, optimality, precision)
-                unexplained.append(StepData(k, model, problem, x_port, g0, opt,
-                                            step.gradient_clothsim))
+                (unexplained if step.status in FITTED else others).append(StepData(
+                    k, model, problem, x_port, g0, opt, step.gradient_clothsim,
+                    float(err[worst]), tol, replay))
             if (precision == "float64" and tolerance is None and not step.passed
                     and _float32_data(x_port)):
                 b32 = bound32()
@@ -195,7 +202,7 @@ def check_steps(simulation, positions, velocities=None, *, precision: str = "flo
         if not step.role:
             step.role = pin_role(problem, step.vertex)
         out.append(step)
-    name_cause({s.k: s for s in out}, unexplained)
+    name_cause({s.k: s for s in out}, unexplained, others)   # a model the port solves?
     return CheckReport(out, float(tol64), precision, notes)
 
 

@@ -234,8 +234,10 @@ def judge(sim, model, problem, k, x_cs, x_port, err, tol, optimality, precision,
         return verdict("not a minimizer", worst, f"the port's answer is its start point "
                        f"{hint[0]} itself ({hint[2]:.1e} m): its solve does not move the cloth")
     settings = _settings_text(*hint[:2]) if hint is not None else ""
-    # a vertex within the tolerance is no evidence (a 1e10 N/m pin turns 1e-10 m into newtons)
-    excess = np.where(err > tol, np.linalg.norm(grad_p - grad_c, axis=1), 0.0)
+    # the gradient difference as a displacement (over the Hessian's diagonal, where a
+    # 1e10 N/m pin turns 1e-10 m into newtons); a vertex within the tolerance is no evidence
+    excess = np.where(err > tol, np.linalg.norm(grad_p - grad_c, axis=1)
+                      / _diagonal(model, problem), 0.0)
     vertex = int(np.argmax(excess))
     total = float(np.linalg.norm(excess))
     local = total > 0 and excess[vertex] > LOCAL * total
@@ -284,6 +286,16 @@ def judge(sim, model, problem, k, x_cs, x_port, err, tol, optimality, precision,
                  f"clothsim {away_c:.3e} m (a port whose pin is missing or of another "
                  f"stiffness)")
     return verdict("not a minimizer", worst, note)
+
+
+def _diagonal(model, problem) -> np.ndarray:
+    """m_v + h² (Σ k of v's springs + its pins' k): ∇²g's diagonal per vertex [kg]."""
+    n = model.vertex_count
+    a, b = model.springs.spring_vertices.T
+    k = model.springs.spring_stiffness
+    d = np.bincount(a, k, n) + np.bincount(b, k, n)
+    d += np.bincount(problem.anchor_vertices, problem.anchor_stiffness, n)
+    return model.vertex_mass + problem.h ** 2 * d + 1e-300
 
 
 def _approaches(problem, x_port, x_cs) -> bool:

@@ -1,0 +1,309 @@
+"""The hypotheses of :mod:`clothsim.ports.causes`: ∇g as a linear function of a model change.
+
+At the port's answer x (fixed), the gradient of a step's objective g (Liu et al. 2013, Eq. 4)
+
+    ∇g(x) = M (x − y) + h² [ Σ_i A_i k_i (p_i − r_i p_i / |p_i|) + Σ_j w_j (x_j − q_j) − f ]
+
+is linear in each model parameter: the external force f, a stiffness scale s (k → s k), a
+rest-length scale ρ (the r_i term × ρ), a pin-stiffness scale ω (w → ω w) and a scale μ of
+the inertia term (M/h² → μ M/h²). A hypothesis is a set of such parameters θ, θ = 0 the
+scene's model; R(θ) = R₀ + Σ θ_j ∂R/∂θ_j is ∇g of the changed model, and :func:`fit` is the
+least-squares θ over one or several steps. :func:`replay` runs clothsim's own step with
+the changed model, for ports whose answers are as unconverged as clothsim's.
+
+The hypotheses (:func:`applicable`): ``stiffness``, ``rest lengths``, ``inertia``, ``pins``
+(one parameter each), ``force per vertex``, ``force per unit mass`` (three),
+``stiffness and rest lengths`` (two), ``family F`` (the stiffness of one spring family),
+and ``vertex force`` (a scale of the force per vertex, fitted alone by
+:func:`fit_vertex_force`).
+"""
+
+from __future__ import annotations
+
+import dataclasses
+from dataclasses import dataclass
+
+import numpy as np
+
+from ..errors import ClothsimError
+from ..model import Model
+from ..springs import FAMILIES, Springs
+
+
+@dataclass
+class StepData:
+    """One failing step, as ``check`` judged it.
+
+    Attributes
+    ----------
+    k : int
+        The step k → k + 1.
+    model : Model
+        The step's model (damping folded in).
+    problem : StepProblem
+    x_port : ndarray, shape (n, 3)
+        The port's x_{k+1} [m].
+    gradient0 : float
+        ‖∇g(x₀)‖ of the scene's g at the step's initial guess [N·s²].
+    optimality : float
+        Relative gradient counted as a minimizer.
+    gradient_clothsim : float
+        Relative gradient of clothsim's answer for the scene's g.
+    error : float
+        max |x_clothsim − x_port| over the vertices [m].
+    tolerance : float
+        The step's per-vertex tolerance [m].
+    solve : callable, optional
+        ``solve(model, problem) -> x``: clothsim's step with the check's solver settings,
+        for :func:`replay`.
+    """
+
+    k: int
+    model: object
+    problem: object
+    x_port: np.ndarray
+    gradient0: float
+    optimality: float
+    gradient_clothsim: float
+    error: float = float("inf")
+    tolerance: float = 0.0
+    solve: object = None
+
+
+
+def _scatter(model, per_spring: np.ndarray) -> np.ndarray:
+    """Σ_i A_i ⊗ v_i: +v_i at a_i, −v_i at b_i, shape (n, 3)."""
+    a, b = model.springs.spring_vertices.T
+    out = np.zeros((model.vertex_count, 3))
+    np.add.at(out, a, per_spring)
+    np.add.at(out, b, -per_spring)
+    return out
+
+
+def terms(step: StepData, mask=None) -> dict:
+    """The parts of ∇g at the port's answer, each (n, 3): inertia, the springs' k p and
+    −k r p/|p| parts, the pins, the force, and the mass per vertex."""
+    model, p, x = step.model, step.problem, step.x_port
+    a, b = model.springs.spring_vertices.T
+    k, r = model.springs.spring_stiffness, model.springs.spring_rest_length
+    if mask is not None:
+        k = np.where(mask, k, 0.0)
+    vec = x[a] - x[b]
+    length = np.linalg.norm(vec, axis=1)
+    unit = vec / np.where(length > 0, length, 1.0)[:, None]
+    pins = np.zeros_like(x)
+    p.anchors.add_gradient(pins, x)
+    f = np.zeros_like(x) if p.f_ext is None else p.f_ext
+    return {"inertia": step.model.vertex_mass[:, None] * (x - p.y),
+            "kp": _scatter(model, k[:, None] * vec),
+            "kr": _scatter(model, -(k * r)[:, None] * unit),
+            "pins": pins, "force": f, "mass": model.vertex_mass}
+
+
+def residual(step: StepData) -> np.ndarray:
+    """∇g of the scene's model at the port's answer, shape (n, 3) [N·s²]."""
+    t = terms(step)
+    h2 = step.problem.h ** 2
+    return t["inertia"] + h2 * (t["kp"] + t["kr"] + t["pins"] - t["force"])
+
+
+def columns(step: StepData, hypothesis: str) -> list[np.ndarray]:
+    """dR/dθ for each parameter θ of ``hypothesis``, each (n, 3); θ = 0 is the scene."""
+    h2 = step.problem.h ** 2
+    if hypothesis.startswith("family "):
+        family = FAMILIES.index(hypothesis.split()[1])
+        mask = step.model.springs.spring_family == family
+        t = terms(step, mask)
+        return [h2 * (t["kp"] + t["kr"])]
+    t = terms(step)
+    n = len(step.x_port)
+    if hypothesis == "stiffness":
+        return [h2 * (t["kp"] + t["kr"])]
+    if hypothesis == "rest lengths":
+        return [h2 * t["kr"]]
+    if hypothesis == "stiffness and rest lengths":
+        return [h2 * t["kp"], h2 * t["kr"]]
+    if hypothesis == "pins":
+        return [h2 * t["pins"]]
+    if hypothesis == "inertia":
+        return [t["inertia"]]
+    if hypothesis in ("force per vertex", "force per unit mass"):
+        weight = np.ones(n) if hypothesis == "force per vertex" else t["mass"]
+        out = []
+        for c in range(3):
+            col = np.zeros((n, 3))
+            col[:, c] = -h2 * weight
+            out.append(col)
+        return out
+    if hypothesis == "vertex force":   # a force scale c_v per vertex: one column per vertex
+        return [-h2 * t["force"]]
+    raise ValueError(hypothesis)
+
+
+def free_rows(step: StepData) -> np.ndarray:
+    """The vertices whose gradient counts (not exactly pinned), shape (n,), bool."""
+    return step.problem.free_mask(len(step.x_port))
+
+
+def relative(step: StepData, cols, theta) -> float:
+    """‖R(θ)‖ / ‖∇g(x₀)‖ over the free vertices: the port's relative gradient under θ.
+
+    Parameters
+    ----------
+    step : StepData
+    cols : list of ndarray
+        :func:`columns` of the hypothesis ([] for the scene's model).
+    theta : array_like
+        One value per column, or per vertex for ``vertex force``.
+
+    Returns
+    -------
+    float
+    """
+    R = residual(step)
+    if len(cols) == 1 and np.size(theta) == len(R) > 1:
+        R = R + np.asarray(theta)[:, None] * cols[0]   # per-vertex scales
+    elif len(cols):
+        R = R + sum(t * c for t, c in zip(np.atleast_1d(theta), cols))
+    return float(np.linalg.norm(R[free_rows(step)])) / step.gradient0
+
+
+def fit(steps, hypothesis):
+    """Least-squares θ of ``hypothesis`` over the steps jointly (each weighted by
+    1/‖∇g(x₀)‖), or None when the hypothesis changes nothing (no force, no pins)."""
+    rows, rhs = [], []
+    for s in steps:
+        free = free_rows(s)
+        cols = columns(s, hypothesis)
+        rows.append(np.stack([c[free].ravel() for c in cols], 1) / s.gradient0)
+        rhs.append(-residual(s)[free].ravel() / s.gradient0)
+    B, y = np.concatenate(rows), np.concatenate(rhs)
+    if not np.any(B):
+        return None
+    theta, *_ = np.linalg.lstsq(B, y, rcond=None)
+    return theta
+
+
+def fit_vertex_force(step: StepData):
+    """Per-vertex scale c_v of the force (first step only): R_v + c_v (−h² f_v) = 0."""
+    col = columns(step, "vertex force")[0]
+    R = residual(step)
+    free = free_rows(step)
+    den = np.einsum("ij,ij->i", col, col)
+    c = np.where((den > 0) & free, -np.einsum("ij,ij->i", R, col) / np.where(den > 0, den, 1),
+                 0.0)
+    return c
+
+
+def applicable(steps) -> list[str]:
+    """The hypotheses that can change the steps' g, simplest first."""
+    s = steps[0]
+    out = ["stiffness", "rest lengths", "inertia"]
+    if len(s.problem.anchors):
+        out.append("pins")
+    out += ["force per vertex", "force per unit mass", "stiffness and rest lengths"]
+    families = np.unique(s.model.springs.spring_family)
+    if len(families) > 1:
+        out += [f"family {FAMILIES[f]}" for f in families]
+    return out
+
+
+def variant(step: StepData, hypothesis: str, theta) -> tuple:
+    """The step's (model, problem) with the hypothesis' parameters θ applied.
+
+    Parameters
+    ----------
+    step : StepData
+    hypothesis : str
+    theta : ndarray
+
+    Returns
+    -------
+    (Model, StepProblem)
+    """
+    model, p = step.model, step.problem
+    sp = model.springs
+    k, r, mass = sp.spring_stiffness, sp.spring_rest_length, model.vertex_mass
+    one = 1.0 + float(np.atleast_1d(theta)[0])
+    if hypothesis == "stiffness":
+        k = max(one, 0.0) * k
+    elif hypothesis == "rest lengths":
+        r = max(one, 0.0) * r
+    elif hypothesis == "stiffness and rest lengths":
+        k, r = max(one, 0.0) * k, max((1.0 + theta[1]) / one, 0.0) * r
+    elif hypothesis.startswith("family "):
+        mask = sp.spring_family == FAMILIES.index(hypothesis.split()[1])
+        k = np.where(mask, max(one, 0.0) * k, k)
+    elif hypothesis == "inertia":
+        mass = max(one, 0.0) * mass
+    elif hypothesis == "pins":
+        p = dataclasses.replace(p, anchor_stiffness=max(one, 0.0) * p.anchor_stiffness)
+    else:
+        f = np.zeros_like(step.x_port) if p.f_ext is None else p.f_ext
+        if hypothesis == "vertex force":
+            f = f * (1.0 + np.asarray(theta))[:, None]
+        else:
+            weight = np.ones(len(f)) if hypothesis == "force per vertex" else mass
+            f = f + weight[:, None] * np.asarray(theta)[None, :]
+        p = dataclasses.replace(p, f_ext=f)
+    springs = Springs(sp.spring_vertices, k, r, sp.spring_family, sp.vertex_count,
+                      sp.spring_damping)
+    return Model(model.mesh, springs, mass), p
+
+
+def replay(step: StepData, hypothesis: str, theta) -> float:
+    """max |x − x_port| of clothsim's step under the changed model [m] (inf without a solver).
+
+    Parameters
+    ----------
+    step : StepData
+    hypothesis : str
+    theta : ndarray
+
+    Returns
+    -------
+    float
+    """
+    if step.solve is None:
+        return float("inf")
+    try:
+        x = step.solve(*variant(step, hypothesis, theta))
+    except (ClothsimError, ArithmeticError, ValueError, RuntimeError) as exc:   # a model that cannot be
+        del exc                                                 # solved reproduces nothing
+        return float("inf")
+    d = np.linalg.norm(x - step.x_port, axis=1)
+    return float(np.max(np.where(np.isfinite(d), d, np.inf)))
+
+
+def approach(step: StepData, hypothesis: str, theta) -> tuple[float, float]:
+    """How far the port's answer went towards the minimizer of the changed g, and of the scene's.
+
+    Newton's method from the port's answer finds the minimizer x* of each; the ratio is
+    max |x_port − x*| / max |x₀ − x*| (x₀ the step's initial guess): 0 at x*, 1 where the
+    step started.
+
+    Parameters
+    ----------
+    step : StepData
+    hypothesis : str
+    theta : ndarray
+
+    Returns
+    -------
+    (float, float)
+        The ratio for the changed model and for the scene's (inf when Newton fails).
+    """
+    from ..solvers.newton import NewtonSolver
+
+    out = []
+    for model, problem in (variant(step, hypothesis, theta), (step.model, step.problem)):
+        try:
+            x = NewtonSolver(model, iterations=50, tolerance=1e-12).solve(
+                problem, step.x_port).x
+        except (ClothsimError, ArithmeticError, ValueError, RuntimeError):
+            out.append(float("inf"))
+            continue
+        start = float(np.linalg.norm(problem.initial_guess() - x, axis=1).max())
+        went = float(np.linalg.norm(step.x_port - x, axis=1).max())
+        out.append(went / start if start > 0 else float("inf"))
+    return out[0], out[1]
