@@ -268,9 +268,8 @@ def replay(step: StepData, hypothesis: str, theta) -> float:
         return float("inf")
     try:
         x = step.solve(*variant(step, hypothesis, theta))
-    except (ClothsimError, ArithmeticError, ValueError, RuntimeError) as exc:   # a model that cannot be
-        del exc                                                 # solved reproduces nothing
-        return float("inf")
+    except (ClothsimError, ArithmeticError, ValueError, RuntimeError):
+        return float("inf")                  # a model that cannot be solved reproduces nothing
     d = np.linalg.norm(x - step.x_port, axis=1)
     return float(np.max(np.where(np.isfinite(d), d, np.inf)))
 

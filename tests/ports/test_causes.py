@@ -184,7 +184,7 @@ def cpp_drivers(tmp_path_factory) -> dict[str, Path]:
         if len(jobs) % 2 == 0:   # two compilers at a time (a shared machine)
             for job in jobs.values():
                 job.wait()
-    for name, job in jobs.items():
+    for job in jobs.values():
         assert job.wait() == 0, job.stderr.read()[-2000:]
     return {name: build / name for name in jobs}
 
@@ -206,3 +206,45 @@ def test_cpp_solution_faults_are_named(cpp_drivers, cases, tmp_path, fault):
             report.summary()
     else:
         assert_named(report, x, fault, scene)
+
+
+# -- a subset: one spring family, some vertices (clothsim itself as the port) ---------------
+def sheet(*, bending=10.0, forced=None, iterations=100, method="newton"):
+    """A 6 × 6 hanging sheet, -9.8 N on every vertex (or only on ``forced``), converged."""
+    mesh = cs.grid(6, 6, size=(1.0, 1.0), plane="xy")
+    springs = cs.grid_springs(mesh, structural=200.0, shear=200.0, bending=bending)
+    model = cs.Model.build(mesh, springs, total_mass=1.0)
+    top = np.flatnonzero(mesh.vertices[:, 1] == mesh.vertices[:, 1].max())[[0, -1]]
+    force = cs.Force([0.0, -9.8, 0.0], vertices=forced)
+    return cs.Simulation(model, h=1 / 30, effects=[force, cs.Pin(top)], solver=method,
+                         iterations=iterations, tolerance=1e-12 if method == "newton" else None)
+
+
+def run_sim(sim, steps=3):
+    xs, vs = [sim.state.positions.copy()], [sim.state.velocities.copy()]
+    for _ in range(steps):
+        sim.step()
+        xs.append(sim.state.positions.copy())
+        vs.append(sim.state.velocities.copy())
+    return np.stack(xs), np.stack(vs)
+
+
+def test_bending_springs_of_another_stiffness_are_named_by_family():
+    x, v = run_sim(sheet(bending=5.0))
+    summary = check_steps(sheet, x, v).summary()
+    assert "stiffness × 0.500 (the bending springs only)" in summary, summary
+
+
+def test_a_force_missing_on_some_vertices_is_named_with_them():
+    x, v = run_sim(sheet(forced=np.arange(6, 36)))   # the bottom row feels no force
+    summary = check_steps(sheet, x, v).summary()
+    assert "no external force on 6 of 36 vertices (0, 1, 2, 3, 4, 5)" in summary, summary
+
+
+def test_a_port_with_fewer_iterations_keeps_its_unconverged_verdict():
+    """No model is fitted onto a port that only stops short: the iterations are named."""
+    x, v = run_sim(sheet(method="local-global", iterations=5))
+    report = check_steps(sheet, x, v)
+    first = report.first_failure
+    assert first is not None and first.status == "not converged", report.summary()
+    assert "iterations" in first.note and "the port's steps" not in first.note, first.line()
