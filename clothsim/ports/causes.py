@@ -88,7 +88,19 @@ class Cause:
         return all(how == "minimizes" for how, _ in self.evidence.values())
 
     def explains(self, step: StepData, replays: bool = True) -> bool:
-        """True when the fitted parameters also explain ``step`` (another failing step)."""
+        """True when the fitted parameters also explain ``step`` (another failing step).
+
+        Parameters
+        ----------
+        step : StepData
+        replays : bool, default True
+            Allow replaying clothsim's step (else only "minimizes" can explain it).
+
+        Returns
+        -------
+        bool
+            Records the step's gradient and evidence in :attr:`gradients`, :attr:`evidence`.
+        """
         return _explains(step, self.hypothesis, self.parameters, self.gradients,
                          self.evidence, replays)
 
@@ -278,7 +290,20 @@ def _scale_text(what: str, value: float, none: str, springs: str, hint: str = ""
 
 
 def describe(steps, hyp, theta) -> str:
-    """The fitted model in words: "rest lengths × 0.900 (all springs)"."""
+    """The fitted model in words.
+
+    Parameters
+    ----------
+    steps : list of StepData
+        The fitted steps (the first supplies the scene's force, pins and h).
+    hyp : str
+    theta : ndarray
+
+    Returns
+    -------
+    str
+        E.g. "rest lengths × 0.900 (all springs)".
+    """
     one = float(1 + theta[0])
     s = steps[0]
     if hyp == "stiffness":

@@ -81,8 +81,20 @@ def _scatter(model, per_spring: np.ndarray) -> np.ndarray:
 
 
 def terms(step: StepData, mask=None) -> dict:
-    """The parts of ∇g at the port's answer, each (n, 3): inertia, the springs' k p and
-    −k r p/|p| parts, the pins, the force, and the mass per vertex."""
+    """The parts of ∇g at the port's answer.
+
+    Parameters
+    ----------
+    step : StepData
+    mask : ndarray, shape (s,), bool, optional
+        Only these springs (the others' stiffness counts as 0).
+
+    Returns
+    -------
+    dict
+        ``inertia`` M (x − y), ``kp`` Σ A_i k_i p_i, ``kr`` −Σ A_i k_i r_i p_i / |p_i|,
+        ``pins`` Σ w_j (x_j − q_j), ``force`` f, each (n, 3); ``mass`` m, shape (n,).
+    """
     model, p, x = step.model, step.problem, step.x_port
     a, b = model.springs.spring_vertices.T
     k, r = model.springs.spring_stiffness, model.springs.spring_rest_length
@@ -101,14 +113,36 @@ def terms(step: StepData, mask=None) -> dict:
 
 
 def residual(step: StepData) -> np.ndarray:
-    """∇g of the scene's model at the port's answer, shape (n, 3) [N·s²]."""
+    """∇g of the scene's model at the port's answer.
+
+    Parameters
+    ----------
+    step : StepData
+
+    Returns
+    -------
+    ndarray, shape (n, 3)
+        ∇g(x_port) [N·s²], rows of exact pins included (:func:`free_rows` leaves them out).
+    """
     t = terms(step)
     h2 = step.problem.h ** 2
     return t["inertia"] + h2 * (t["kp"] + t["kr"] + t["pins"] - t["force"])
 
 
 def columns(step: StepData, hypothesis: str) -> list[np.ndarray]:
-    """dR/dθ for each parameter θ of ``hypothesis``, each (n, 3); θ = 0 is the scene."""
+    """∂R/∂θ_j for each parameter θ_j of ``hypothesis`` (θ = 0 is the scene's model).
+
+    Parameters
+    ----------
+    step : StepData
+    hypothesis : str
+        A name of :func:`applicable`, or ``"vertex force"``.
+
+    Returns
+    -------
+    list of ndarray, each shape (n, 3)
+        One per parameter (``vertex force``: one, scaled per vertex by θ_v).
+    """
     h2 = step.problem.h ** 2
     if hypothesis.startswith("family "):
         family = FAMILIES.index(hypothesis.split()[1])
@@ -141,7 +175,16 @@ def columns(step: StepData, hypothesis: str) -> list[np.ndarray]:
 
 
 def free_rows(step: StepData) -> np.ndarray:
-    """The vertices whose gradient counts (not exactly pinned), shape (n,), bool."""
+    """The vertices whose gradient counts (not exactly pinned).
+
+    Parameters
+    ----------
+    step : StepData
+
+    Returns
+    -------
+    ndarray, shape (n,), bool
+    """
     return step.problem.free_mask(len(step.x_port))
 
 
@@ -169,8 +212,19 @@ def relative(step: StepData, cols, theta) -> float:
 
 
 def fit(steps, hypothesis):
-    """Least-squares θ of ``hypothesis`` over the steps jointly (each weighted by
-    1/‖∇g(x₀)‖), or None when the hypothesis changes nothing (no force, no pins)."""
+    """Least-squares θ of ``hypothesis`` over the steps jointly.
+
+    Parameters
+    ----------
+    steps : list of StepData
+        Each step's residual is weighted by 1/‖∇g(x₀)‖ of that step.
+    hypothesis : str
+
+    Returns
+    -------
+    ndarray or None
+        θ, one value per column; None when the hypothesis changes nothing (no pins).
+    """
     rows, rhs = [], []
     for s in steps:
         free = free_rows(s)
@@ -185,7 +239,17 @@ def fit(steps, hypothesis):
 
 
 def fit_vertex_force(step: StepData):
-    """Per-vertex scale c_v of the force (first step only): R_v + c_v (−h² f_v) = 0."""
+    """Per-vertex scale c_v of the force: c_v minimizes |R_v − c_v h² f_v| on its own.
+
+    Parameters
+    ----------
+    step : StepData
+
+    Returns
+    -------
+    ndarray, shape (n,)
+        c_v (0 where there is no force, and at exact pins): the force there is (1 + c_v) f_v.
+    """
     col = columns(step, "vertex force")[0]
     R = residual(step)
     free = free_rows(step)
@@ -196,7 +260,18 @@ def fit_vertex_force(step: StepData):
 
 
 def applicable(steps) -> list[str]:
-    """The hypotheses that can change the steps' g, simplest first."""
+    """The hypotheses that can change the steps' g.
+
+    Parameters
+    ----------
+    steps : list of StepData
+
+    Returns
+    -------
+    list of str
+        Global ones first; ``pins`` only with penalty pins; ``family F`` per spring family
+        when there are several.
+    """
     s = steps[0]
     out = ["stiffness", "rest lengths", "inertia"]
     if len(s.problem.anchors):
