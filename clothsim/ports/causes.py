@@ -27,6 +27,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
+from .cause_words import cause_text, describe, evidence_text, head, listing, span
 from .hypotheses import (
     StepData,
     applicable,
@@ -87,14 +88,15 @@ class Cause:
         """True when the port's answers minimize the fitted g."""
         return all(how == "minimizes" for how, _ in self.evidence.values())
 
-    def explains(self, step: StepData, replays: bool = True) -> bool:
+    def explains(self, step: StepData, replays: list | None = None) -> bool:
         """True when the fitted parameters also explain ``step`` (another failing step).
 
         Parameters
         ----------
         step : StepData
-        replays : bool, default True
-            Allow replaying clothsim's step (else only "minimizes" can explain it).
+        replays : list of one int, optional
+            The replays of clothsim's step still allowed, decremented by one that is run
+            (at 0, only "minimizes" can explain the step); default: unlimited.
 
         Returns
         -------
@@ -105,15 +107,17 @@ class Cause:
                          self.evidence, replays)
 
 
-def _explains(step, hyp, theta, gradients, evidence, replays=True) -> bool:
+def _explains(step, hyp, theta, gradients, evidence, replays=None) -> bool:
     """The criteria of the module docstring; records the step's gradient and evidence."""
     r = relative(step, columns(step, hyp), theta)
     gradients[step.k] = r
     if r <= step.optimality:
         evidence[step.k] = ("minimizes", r)
         return True
-    if not replays or r > GAIN * relative(step, [], ()):
+    if (replays is not None and replays[0] <= 0) or r > GAIN * relative(step, [], ()):
         return False
+    if replays is not None:
+        replays[0] -= 1
     d = replay(step, hyp, theta)
     if d <= max(step.tolerance, REPLAY * step.error):
         evidence[step.k] = ("reproduces", d)
@@ -146,7 +150,7 @@ def infer_cause(steps: list[StepData]) -> Cause | None:
         for hyp, theta, _ in _candidates(fitted):
             gradients, evidence = {}, {}
             if all(_explains(s, hyp, theta, gradients, evidence) for s in fitted):
-                return Cause(_text(fitted, hyp, theta, gradients, evidence), hyp, theta,
+                return Cause(cause_text(fitted, hyp, theta, gradients, evidence), hyp, theta,
                              gradients, evidence)
     return _vertex_force_cause(steps[0])
 
@@ -198,139 +202,11 @@ def _vertex_force_cause(step: StepData) -> Cause | None:
         return None
     scale = 1 + c[changed]
     what = ("no external force" if np.allclose(scale, 0, atol=1e-2)
-            else f"the external force × {_span(scale)}")
-    text = (f"{_head(evidence)} {what} on {len(changed)} of {len(c)} vertices "
-            f"({_listing(changed)}), the scene's force on the others"
-            f"{_evidence([step], gradients, evidence)}")
+            else f"the external force × {span(scale)}")
+    text = (f"{head(evidence)} {what} on {len(changed)} of {len(c)} vertices "
+            f"({listing(changed)}), the scene's force on the others"
+            f"{evidence_text([step], gradients, evidence)}")
     return Cause(text, "vertex force", c, gradients, evidence)
-
-
-def _text(steps, hyp, theta, gradients, evidence) -> str:
-    return (f"{_head(evidence)} {describe(steps, hyp, theta)}"
-            f"{_evidence(steps, gradients, evidence)}")
-
-
-def _weakest(evidence) -> str:
-    kinds = {how for how, _ in evidence.values()}
-    return next(how for how in ("approaches", "reproduces", "minimizes") if how in kinds)
-
-
-def _head(evidence) -> str:
-    return {"minimizes": "the port's steps minimize g with",
-            "reproduces": "the port's steps are clothsim's steps with",
-            "approaches": "the port's steps head for the minimizer of g with"}[
-        _weakest(evidence)]
-
-
-def _evidence(steps, gradients, evidence) -> str:
-    ks = [s.k for s in steps]
-    before = min(relative(s, [], ()) for s in steps)
-    where = (f"step {ks[0]} -> {ks[0] + 1}" if len(ks) == 1 else
-             "steps " + ", ".join(f"{k} -> {k + 1}" for k in ks) + " fitted jointly")
-    text = (f": relative gradient at most {max(gradients[k] for k in ks):.1e} under that "
-            f"model, at least {before:.1e} under the scene's ({where}")
-    how = _weakest(evidence)
-    worst = max(evidence[k][1] for k in ks if evidence[k][0] == how)
-    if how == "reproduces":
-        text += (f"; clothsim's step with that model is within {worst:.1e} m of the port's "
-                 f"answer, with the scene's {max(s.error for s in steps):.1e} m")
-    elif how == "approaches":
-        text += (f"; the port's answer covers at least {1 - worst:.0%} of the way from the "
-                 f"step's start to that model's minimizer and no nearer the scene's: it "
-                 f"stops short, but more iterations would not make it clothsim's")
-    return text + ")"
-
-
-def _span(values) -> str:
-    lo, hi = float(np.min(values)), float(np.max(values))
-    return f"{lo:.3g}" if np.isclose(lo, hi, rtol=1e-3) else f"{lo:.3g} to {hi:.3g}"
-
-
-def _listing(items, limit=6) -> str:
-    items = [str(int(i)) for i in items]
-    return ", ".join(items[:limit]) + (f", … {len(items)} in all" if len(items) > limit else "")
-
-
-def _vector(v) -> str:
-    """(+0.1, -9.8, 0): three digits; a component below 1e-6 of the largest is fit noise."""
-    big = max(float(np.abs(v).max()), 1e-300)
-    return "(" + ", ".join("0" if abs(c) < 1e-6 * big else f"{c:+.3g}" for c in v) + ")"
-
-
-def _force_text(steps, hyp, theta) -> str:
-    s = steps[0]
-    f = np.zeros_like(s.x_port) if s.problem.f_ext is None else s.problem.f_ext
-    m = s.model.vertex_mass
-    if hyp == "force per vertex":
-        scene = f[0] if np.allclose(f, f[0]) else None
-        new = (scene if scene is not None else 0.0) + theta
-        unit = "N per vertex"
-    else:
-        with np.errstate(divide="ignore", invalid="ignore"):
-            g = f / m[:, None]
-        scene = g[0] if np.all(m > 0) and np.allclose(g, g[0]) else None
-        new = (scene if scene is not None else 0.0) + theta
-        unit = "m/s² per unit mass"
-    if scene is None:
-        return f"an added external force {_vector(theta)} {unit} on top of the scene's"
-    if not np.any(scene):
-        return f"an external force {_vector(new)} {unit} the scene does not have"
-    return f"the external force {_vector(new)} {unit} instead of {_vector(scene)}"
-
-
-def _scale_text(what: str, value: float, none: str, springs: str, hint: str = "") -> str:
-    if abs(value) < 5e-3:
-        return f"{none} ({what} × {abs(value):.3f}, {springs}{hint})"
-    if abs(value) < 0.05 and none.endswith("no force"):
-        return (f"{none.replace('no force', 'almost no force')} ({what} × {value:.3f}, "
-                f"{springs}{hint})")
-    if what == "stiffness" and abs(value - 2) < 5e-3:
-        return f"springs twice as stiff ({what} × {value:.2f}, {springs})"
-    return f"{what} × {value:.3f} ({springs})"
-
-
-def describe(steps, hyp, theta) -> str:
-    """The fitted model in words.
-
-    Parameters
-    ----------
-    steps : list of StepData
-        The fitted steps (the first supplies the scene's force, pins and h).
-    hyp : str
-    theta : ndarray
-
-    Returns
-    -------
-    str
-        E.g. "rest lengths × 0.900 (all springs)".
-    """
-    one = float(1 + theta[0])
-    s = steps[0]
-    if hyp == "stiffness":
-        what = _scale_text("stiffness", one, "springs that exert no force", "all springs",
-                           "; e.g. a local step that does not normalize d to the rest length")
-    elif hyp == "rest lengths":
-        what = _scale_text("rest lengths", one, "zero-length springs", "all springs")
-    elif hyp == "stiffness and rest lengths":
-        what = (f"stiffness × {one:.3f} and rest lengths × {(1 + theta[1]) / one:.3f} "
-                f"(all springs)")
-    elif hyp.startswith("family "):
-        family = hyp.split()[1]
-        what = _scale_text("stiffness", one, "springs that exert no force",
-                           f"the {family} springs only")
-    elif hyp == "pins":
-        w = s.problem.anchor_stiffness
-        w = f"{float(w[0]):.3g} N/m" if np.allclose(w, w[0]) else "the scene's stiffness"
-        what = ("pins that exert no force (the penalty pins missing: stiffness × 0.000)"
-                if abs(one) < 5e-3 else f"penalty pins × {one:.3g} (the scene's are {w})")
-    elif hyp == "inertia":
-        h = s.problem.h
-        what = (f"the inertia term M (x − y) / h² × {one:.3f} (as if h were "
-                f"{h / np.sqrt(one):.4g} s there, not {h:.4g} s)" if one > 0 else
-                f"the inertia term M (x − y) / h² × {one:.3f}")
-    else:
-        what = _force_text(steps, hyp, theta)
-    return what
 
 
 #: The verdicts a fitted model may replace: a port that solves another problem gets them.
@@ -370,10 +246,9 @@ def name_cause(checks: dict, steps: list[StepData], others=()) -> Cause | None:
         return None
     first = steps[0].k
     fitted = list(cause.gradients)
-    replays = MAX_REPLAYS
+    replays = [MAX_REPLAYS]
     for s in sorted(steps + list(others), key=lambda s: s.k):
-        if s.k in fitted or cause.explains(s, replays > 0):
-            replays -= s.k in cause.evidence and s.k not in fitted
+        if s.k in fitted or cause.explains(s, replays):
             check = checks[s.k]
             check.status = "model differs"
             check.note = (cause.text if s.k == first else
