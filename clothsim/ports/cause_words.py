@@ -130,24 +130,29 @@ def _vector(v) -> str:
 
 
 def _force_text(steps, hyp, theta) -> str:
+    """The fitted force (θ replaces the scene's) beside the scene's, in the same form."""
     s = steps[0]
     f = np.zeros_like(s.x_port) if s.problem.f_ext is None else s.problem.f_ext
     m = s.model.vertex_mass
-    if hyp == "force per vertex":
-        scene = f[0] if np.allclose(f, f[0]) else None
-        new = (scene if scene is not None else 0.0) + theta
-        unit = "N per vertex"
-    else:
-        with np.errstate(divide="ignore", invalid="ignore"):
-            g = f / m[:, None]
-        scene = g[0] if np.all(m > 0) and np.allclose(g, g[0]) else None
-        new = (scene if scene is not None else 0.0) + theta
-        unit = "m/s² per unit mass"
-    if scene is None:
-        return f"an added external force {_vector(theta)} {unit} on top of the scene's"
-    if not np.any(scene):
-        return f"an external force {_vector(new)} {unit} the scene does not have"
-    return f"the external force {_vector(new)} {unit} instead of {_vector(scene)}"
+    unit = "N per vertex" if hyp == "force per vertex" else "m/s² × m on each vertex"
+    if not np.any(f):
+        return f"an external force {_vector(theta)} {unit} the scene does not have"
+    if np.allclose(f, f[0]):
+        return f"the external force {_vector(theta)} {unit} instead of {_vector(f[0])} N per vertex"
+    with np.errstate(divide="ignore", invalid="ignore"):
+        g = f / m[:, None]
+    if np.all(m > 0) and np.allclose(g, g[0]):
+        return (f"the external force {_vector(theta)} {unit} instead of {_vector(g[0])} "
+                f"m/s² × m")
+    return f"the external force {_vector(theta)} {unit} instead of the scene's"
+
+
+#: A fitted pin stiffness below this share of the scene's is no pin (a 1e10 N/m pin fitted
+#: to a port without pins leaves 1e-16 of it; a port's 1e7 N/m pin is 1e-3).
+PINS_OFF = 1e-8
+#: What a negative rest-length scale means in the code.
+NEGATIVE = ("; a negative rest length: the springs' d term enters the right-hand side "
+            "with the wrong sign")
 
 
 def _scale_text(what: str, value: float, none: str, springs: str, hint: str = "") -> str:
@@ -183,18 +188,28 @@ def describe(steps, hyp, theta) -> str:
                            "; e.g. a local step that does not normalize d to the rest length")
     elif hyp == "rest lengths":
         what = _scale_text("rest lengths", one, "zero-length springs", "all springs")
+        what = what[:-1] + NEGATIVE + ")" if one < 0 else what
     elif hyp == "stiffness and rest lengths":
-        what = (f"stiffness × {one:.3f} and rest lengths × {(1 + theta[1]) / one:.3f} "
-                f"(all springs)")
+        rest = float((1 + theta[1]) / one)
+        what = (f"zero-length springs of stiffness × {one:.3f} (rest lengths × "
+                f"{abs(rest):.3f}, all springs; e.g. a local step d = r (x_a − x_b), not "
+                f"normalized)" if abs(rest) < 5e-3 else
+                f"stiffness × {one:.3f} and rest lengths × {rest:.3f} (all springs"
+                f"{NEGATIVE if rest < 0 else ''})")
     elif hyp.startswith("family "):
         family = hyp.split()[1]
         what = _scale_text("stiffness", one, "springs that exert no force",
                            f"the {family} springs only")
     elif hyp == "pins":
         w = s.problem.anchor_stiffness
-        w = f"{float(w[0]):.3g} N/m" if np.allclose(w, w[0]) else "the scene's stiffness"
-        what = ("pins that exert no force (the penalty pins missing: stiffness × 0.000)"
-                if abs(one) < 5e-3 else f"penalty pins × {one:.3g} (the scene's are {w})")
+        same = bool(np.allclose(w, w[0]))
+        if abs(one) < PINS_OFF:
+            what = "pins that exert no force (the penalty pins missing)"
+        elif same:
+            what = (f"penalty pins of {one * float(w[0]):.3g} N/m instead of "
+                    f"{float(w[0]):.3g} N/m")
+        else:
+            what = f"penalty pins × {one:.3g} (the scene's stiffnesses)"
     elif hyp == "inertia":
         h = s.problem.h
         what = (f"the inertia term M (x − y) / h² × {one:.3f} (as if h were "

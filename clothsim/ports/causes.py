@@ -51,6 +51,8 @@ REPLAY = 0.01
 #: ... or the port's answer must be this much nearer the fitted model's minimizer than its
 #: start was (and no nearer the scene's minimizer than its start).
 APPROACH = 0.5
+#: Gauss–Newton iterations that refine θ on replayed steps.
+REFINE = 4
 #: Failing steps fitted jointly (later ones are tested with the fitted parameters).
 JOINT = 3
 #: Steps replayed to test the fitted model on later steps (a long run stays quick).
@@ -107,9 +109,18 @@ class Cause:
                          self.evidence, replays)
 
 
-def _explains(step, hyp, theta, gradients, evidence, replays=None) -> bool:
-    """The criteria of the module docstring; records the step's gradient and evidence."""
-    r = relative(step, columns(step, hyp), theta)
+def _explains(step, hyp, theta, gradients, evidence, replays=None, fitted=None) -> bool:
+    """The criteria of the module docstring; records the step's gradient and evidence.
+
+    ``theta`` is refined on replayed steps (:func:`_refine`); ``fitted``, the least-squares
+    θ when it differs, is what the gradient and approach criteria judge."""
+    if fitted is not None and not np.array_equal(fitted, theta):
+        if _explains(step, hyp, theta, {}, evidence, replays) and \
+                evidence[step.k][0] != "approaches":
+            gradients[step.k] = relative(step, columns(step, hyp), theta, hyp)
+            return True
+        theta = fitted
+    r = relative(step, columns(step, hyp), theta, hyp)
     gradients[step.k] = r
     if r <= step.optimality:
         evidence[step.k] = ("minimizes", r)
@@ -122,6 +133,8 @@ def _explains(step, hyp, theta, gradients, evidence, replays=None) -> bool:
     if d <= max(step.tolerance, REPLAY * step.error):
         evidence[step.k] = ("reproduces", d)
         return True
+    if len(np.atleast_1d(theta)) != 1:   # heading for: only the one-parameter causes
+        return False
     mine, scene = approach(step, hyp, theta)
     log.debug("step %d, %s: approach ratio %.3g (scene's %.3g)", step.k, hyp, mine, scene)
     if mine <= APPROACH and scene >= 1:   # a port heading for the scene's minimizer is
@@ -149,10 +162,59 @@ def infer_cause(steps: list[StepData]) -> Cause | None:
     for fitted in (steps[:JOINT], steps[:1]) if len(steps) > 1 else (steps,):
         for hyp, theta, _ in _candidates(fitted):
             gradients, evidence = {}, {}
-            if all(_explains(s, hyp, theta, gradients, evidence) for s in fitted):
+            fitted_theta = theta
+            if _replayable(fitted, hyp, theta) and _promising(fitted[0], hyp, theta):
+                theta = _refine(fitted[:1], hyp, theta)
+            if all(_explains(s, hyp, theta, gradients, evidence, fitted=fitted_theta)
+                   for s in fitted):
                 return Cause(cause_text(fitted, hyp, theta, gradients, evidence), hyp, theta,
                              gradients, evidence)
     return _vertex_force_cause(steps[0])
+
+
+def _replayable(fitted, hyp, theta) -> bool:
+    """True when the fit lowers every step's gradient enough, yet not to a minimizer."""
+    r = [relative(s, columns(s, hyp), theta, hyp) for s in fitted]
+    return (any(ri > s.optimality for ri, s in zip(r, fitted))
+            and all(ri <= GAIN * relative(s, [], ()) for ri, s in zip(r, fitted)))
+
+
+def _refine(fitted, hyp, theta, iterations: int = REFINE):
+    """θ that brings clothsim's replayed steps nearest the port's answers (Gauss–Newton,
+    finite differences): the least-squares θ of an unconverged port is biased."""
+    theta = np.array(theta, dtype=np.float64)
+
+    def misfit(th):
+        xs = [replay(s, hyp, th, positions=True) for s in fitted]
+        if any(x is None for x in xs):
+            return None
+        return np.concatenate([(x - s.x_port).ravel() for x, s in zip(xs, fitted)])
+
+    r = misfit(theta)
+    for _ in range(iterations if r is not None else 0):
+        delta = 1e-6 * np.maximum(1.0, np.abs(theta))
+        columns_ = []
+        for j in range(len(theta)):
+            step_ = theta.copy()
+            step_[j] += delta[j]
+            rj = misfit(step_)
+            if rj is None:
+                return theta
+            columns_.append((rj - r) / delta[j])
+        change, *_ = np.linalg.lstsq(np.stack(columns_, 1), -r, rcond=None)
+        trial = misfit(theta + change)
+        if trial is None or np.linalg.norm(trial) >= np.linalg.norm(r):
+            break
+        theta, r = theta + change, trial
+        if np.all(np.abs(change) <= 1e-9 * np.maximum(1.0, np.abs(theta))):
+            break
+    return theta
+
+
+def _promising(step, hyp, theta) -> bool:
+    """clothsim's step with the least-squares θ lands at most half as far from the port's
+    answer as the scene's step: worth refining θ on replays."""
+    return replay(step, hyp, theta) <= 0.5 * step.error
 
 
 def _candidates(fitted) -> list:
@@ -161,7 +223,7 @@ def _candidates(fitted) -> list:
     for hyp in applicable(fitted):
         theta = fit(fitted, hyp)
         if theta is not None:
-            worst = max(relative(s, columns(s, hyp), theta) for s in fitted)
+            worst = max(relative(s, columns(s, hyp), theta, hyp) for s in fitted)
             out.append((hyp, theta, worst))
     return sorted(out, key=lambda c: (len(c[1]), c[2]))
 

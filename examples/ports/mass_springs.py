@@ -27,6 +27,7 @@ from scipy.sparse.linalg import splu
 #: The planted mistakes: name -> what a student wrote.
 FAULTS = {
     "gravity-sign": "l = M y / h² − f_ext: the external force with the wrong sign",
+    "gravity-mass": "f_ext = m g: gravity as m (0, −9.8, 0), not the assignment's −9.8 N",
     "rest-length": "r = 0.9 |V_a − V_b|: rest lengths 10 % short",
     "stiffness": "2 k in Q and in the right-hand side: springs twice as stiff",
     "unnormalized": "d = A U (no r p / |p|): the local step not normalized",
@@ -64,6 +65,8 @@ def fast_mass_springs_step_sparse(V, E, k, b, delta_t, fext, r, M, A, C, factor,
     w = 0.0 if fault == "unpinned" else W
     y = 2.0 * Ucur - Uprev
     f = -fext if fault == "gravity-sign" else fext
+    if fault == "gravity-mass":
+        f = M @ np.tile([0.0, -9.8, 0.0], (M.shape[0], 1))
     rhs = M @ y / delta_t**2 + f + w * (C.T @ (C @ V))
     U = Ucur.copy()
     for _ in range(50):

@@ -99,6 +99,20 @@ def test_python_solution_faults_are_named(cases, tmp_path, case, fault):
         assert "pinned by a 1e+10 N/m penalty" in report.first_failure.line()
 
 
+def test_gravity_as_m_g_is_named_where_the_masses_are_not_1_kg(cases, tmp_path):
+    d = cases / "sheet-voronoi"                        # libigl's Voronoi masses
+    out = mass_springs.run(d, tmp_path / "out", fault="gravity-mass")
+    scene = cs.load_scene(d / "scene.toml")
+    report, x = checked(scene, out)
+    NAMED["gravity-mass"] = ("the external force (0, -9.8, 0) m/s² × m on each vertex "
+                             "instead of (0, -9.8, 0) N per vertex")
+    assert_named(report, x, "gravity-mass", scene)
+    # on the net every mass is 1 kg: the same program, and it passes
+    d = cases / "net"
+    assert checked(cs.load_scene(d / "scene.toml"),
+                   mass_springs.run(d, tmp_path / "net", fault="gravity-mass"))[0].passed
+
+
 @pytest.mark.parametrize("case", ["net", "sheet-voronoi", "chain"])
 def test_python_solution_passes_with_every_step_agreeing(cases, tmp_path, case):
     d = cases / case
