@@ -203,7 +203,7 @@ def describe(steps, hyp, theta) -> str:
     elif hyp == "pins":
         w = s.problem.anchor_stiffness
         same = bool(np.allclose(w, w[0]))
-        if abs(one) < PINS_OFF:
+        if one < PINS_OFF:
             what = "pins that exert no force (the penalty pins missing)"
         elif same:
             what = (f"penalty pins of {one * float(w[0]):.3g} N/m instead of "

@@ -29,6 +29,7 @@ import numpy as np
 
 from .cause_words import cause_text, describe, evidence_text, head, listing, span
 from .hypotheses import (
+    REPLACING,
     StepData,
     applicable,
     approach,
@@ -202,6 +203,8 @@ def _refine(fitted, hyp, theta, iterations: int = REFINE):
                 return theta
             columns_.append((rj - r) / delta[j])
         change, *_ = np.linalg.lstsq(np.stack(columns_, 1), -r, rcond=None)
+        if hyp not in REPLACING:          # a scale stays >= 0 (the replay clamps it there)
+            change = np.maximum(theta + change, -1.0) - theta
         trial = misfit(theta + change)
         if trial is None or np.linalg.norm(trial) >= np.linalg.norm(r):
             break

@@ -25,6 +25,8 @@ from clothsim.ports.coursework import write_coursework
 from clothsim.ports.export import export_port
 from clothsim.scene.files import data_root
 
+from .test_check_verdicts import trajectory as clothsim_trajectory
+
 REPO = Path(__file__).resolve().parents[2]
 CPP = REPO / "examples" / "ports" / "cpp"
 EIGEN = Path("/usr/include/eigen3")
@@ -235,12 +237,7 @@ def sheet(*, bending=10.0, forced=None, iterations=100, method="newton"):
 
 
 def run_sim(sim, steps=3):
-    xs, vs = [sim.state.positions.copy()], [sim.state.velocities.copy()]
-    for _ in range(steps):
-        sim.step()
-        xs.append(sim.state.positions.copy())
-        vs.append(sim.state.velocities.copy())
-    return np.stack(xs), np.stack(vs)
+    return clothsim_trajectory(sim, steps)
 
 
 def test_bending_springs_of_another_stiffness_are_named_by_family():
