@@ -25,7 +25,7 @@ WORK = Path("out") / "port-causes"          # relative to ROOT: the commands as 
 #: unnormalized local step on the Voronoi sheet, where they do not
 RUNS = [("net", None), *(("net", f) for f in ("gravity-sign", "rest-length", "stiffness",
                                               "unnormalized", "unpinned")),
-        ("sheet-voronoi", "unnormalized")]
+        ("sheet-voronoi", "gravity-mass"), ("sheet-voronoi", "unnormalized")]
 
 
 def _solution():
