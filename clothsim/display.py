@@ -20,6 +20,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from .io.frames import OBSTACLES_NAME
 from .io.meshes import write_mesh
 from .mesh import Mesh
 
@@ -306,8 +307,6 @@ def decimate(mesh: Mesh, budget: int) -> tuple[Mesh, str]:
     return Mesh(mesh.vertices, tris, mesh.strands), note
 
 
-#: File name of the obstacle surfaces in a run folder (beside ``trajectory.pvd``).
-OBSTACLES_NAME = "obstacles.vtu"
 
 
 def write_obstacles(path, effects, positions) -> object | None:

@@ -16,12 +16,9 @@ backend        what runs
 :class:`Factor` records which backend ran (``factor.backend``) and can estimate the
 matrix's 1-norm condition number.
 
-Which CHOLMOD mode is faster depends on the size and on how many solves the factor serves:
-for the global step's n × n matrix with three right-hand sides (x, y, z), simplicial solves
-faster than supernodal on small cloth grids, while supernodal factors faster, by more the
-larger the cloth. :func:`choose_cholmod_mode` weighs the predicted factorization and the
-run's expected solves (:data:`MODE_COSTS`, measured) for
-:class:`~clothsim.solvers.LocalGlobalSolver` (``[solver] cholmod_mode`` overrides it).
+Which CHOLMOD mode is faster depends on the size and on how many solves the factor serves;
+:mod:`clothsim.factor_mode` decides it for :class:`~clothsim.solvers.LocalGlobalSolver`
+(``[solver] cholmod_mode`` overrides it).
 
 Two helpers of the iterations that run around a factor: :func:`spmv_add` (a sparse product
 accumulated in place, no temporary) and :func:`single_threaded` (BLAS and OpenMP limited to
@@ -50,92 +47,6 @@ log = logging.getLogger(__name__)
 
 BACKENDS = ("auto", "cholmod", "splu")
 CHOLMOD_MODES = ("auto", "simplicial", "supernodal")
-#: Cost model of the two CHOLMOD modes on the global step's matrix: for each mode, the
-#: factorization's and one three-column solve's CPU seconds as power laws c · n^p of the
-#: free vertices n, ``{mode: ((c_factor, p_factor), (c_solve, p_solve))}``. Fitted on the
-#: ``hanging`` cloth's matrices from 65² to 513² by ``python -m benchmarks.scale_ladder
-#: --mode-sizes 65,129,193,257,385,513`` (docs/data/cholmod-modes.md, which prints these fits;
-#: tests/test_cholmod_mode.py checks they agree). scikit-sparse 0.4.16's symbolic analysis
-#: (``cholmod.analyze``) exposes only the fill-reducing permutation, not CHOLMOD's nonzero
-#: and flop counts of the factor, so the model predicts from n. The supernodal factor is
-#: ordered by AMD alone: on the cloth grids it factors about 1.5× faster than CHOLMOD's
-#: default (which also tries METIS) at 513² and 1025², and its solves are as fast.
-MODE_COSTS = {"simplicial": ((1.463e-07, 1.425), (3.927e-08, 1.178)),
-              "supernodal": ((1.220e-06, 1.147), (6.738e-08, 1.134))}
-#: Solves a factor is assumed to serve when the run's count is unknown (an API user stepping
-#: a simulation): 600, the scene defaults' run (60 frames × 1 substep × 10 iterations).
-ASSUMED_SOLVES = 600
-
-
-def predicted_costs(n: int, costs: dict | None = None) -> dict[str, tuple[float, float]]:
-    """Predicted CPU seconds of each CHOLMOD mode for an n × n global-step matrix.
-
-    Parameters
-    ----------
-    n : int
-        Free vertices (the matrix's size).
-    costs : dict, optional
-        A cost model in the form of :data:`MODE_COSTS` (default: it).
-
-    Returns
-    -------
-    dict
-        ``{"simplicial": (factor [s], solve [s]), "supernodal": (factor [s], solve [s])}``,
-        the solve with three right-hand sides.
-    """
-    costs = MODE_COSTS if costs is None else costs
-    return {mode: tuple(c * float(n) ** p for c, p in pair) for mode, pair in costs.items()}
-
-
-def choose_cholmod_mode(n: int, requested: str = "auto", expected_solves: int | None = None,
-                        costs: dict | None = None) -> tuple[str, str]:
-    """CHOLMOD's mode for the global step's n × n matrix, and why.
-
-    "auto" picks the mode whose predicted factorization plus ``expected_solves`` solves
-    costs less (:data:`MODE_COSTS`): simplicial's solves are faster on the smaller cloths,
-    supernodal's factor is faster from about 10 000 free vertices up and gains more with
-    size, so a run of few solves factors supernodal from a smaller size than a long one.
-
-    Parameters
-    ----------
-    n : int
-        Free vertices (the matrix's size).
-    requested : {"auto", "simplicial", "supernodal"}
-        ``[solver] cholmod_mode``: "auto" decides by the predicted cost.
-    expected_solves : int, optional
-        Solves the factor will serve (frames × substeps × iterations of a run, at most);
-        None when unknown: :data:`ASSUMED_SOLVES`.
-    costs : dict, optional
-        A cost model in the form of :data:`MODE_COSTS` (default: it).
-
-    Returns
-    -------
-    (str, str)
-        "simplicial" or "supernodal", and the reason in one line with the predicted
-        seconds.
-    """
-    if requested not in CHOLMOD_MODES:
-        raise InputError(f"solver.cholmod_mode: must be one of "
-                         f"{', '.join(map(repr, CHOLMOD_MODES))}, got {requested!r}")
-    if requested != "auto":
-        return requested, f"{requested}: requested by solver.cholmod_mode"
-    known = expected_solves is not None
-    solves = int(expected_solves) if known else ASSUMED_SOLVES
-    pred = predicted_costs(n, costs)
-    total = {m: f + solves * s for m, (f, s) in pred.items()}
-    mode = "supernodal" if total["supernodal"] < total["simplicial"] else "simplicial"
-    other = "simplicial" if mode == "supernodal" else "supernodal"
-    how = (f"{solves} expected solves" if known
-           else f"{solves} solves assumed (the run's count is unknown)")
-
-    def cost(m: str) -> str:
-        f, s = pred[m]
-        return f"factor {f:.3g} s + {solves} x {1e3 * s:.3g} ms = {total[m]:.3g} s"
-
-    return mode, (f"{mode}: {n} free vertices, {how}: predicted {cost(mode)}, "
-                  f"{other} {cost(other)}")
-
-
 CONDITION_WARNING_THRESHOLD = 1e12
 _warned_fallback = False
 

@@ -16,6 +16,7 @@ from collections.abc import Iterator
 from contextlib import contextmanager
 
 SIGNALS = tuple(getattr(signal, s) for s in ("SIGINT", "SIGTERM", "SIGHUP") if hasattr(signal, s))
+_handling = False  # a handle_signals block is open (an inner one then does nothing)
 
 
 class SignalInterrupt(KeyboardInterrupt):
@@ -37,7 +38,8 @@ def handle_signals() -> Iterator[None]:
     """Within the block, SIGINT, SIGTERM and SIGHUP raise :class:`SignalInterrupt` (once:
     a second signal while the run cleans up is ignored), so all three take Ctrl-C's path.
     A signal whose handler is ``SIG_IGN`` (inherited, e.g. SIGHUP under ``nohup``) stays
-    ignored. Does nothing outside the main thread.
+    ignored. Does nothing outside the main thread, or inside another such block (whose
+    handlers stay: a second signal never escapes while the outer block cleans up).
 
     Yields
     ------
@@ -49,8 +51,9 @@ def handle_signals() -> Iterator[None]:
     SignalInterrupt
         Inside the block, on the first SIGINT, SIGTERM or SIGHUP.
     """
-    if threading.current_thread() is not threading.main_thread():
-        yield
+    global _handling
+    if threading.current_thread() is not threading.main_thread() or _handling:
+        yield  # nested (the CLI installs them around every command): the outer ones act
         return
     fired: list[int] = []
 
@@ -60,9 +63,11 @@ def handle_signals() -> Iterator[None]:
             raise SignalInterrupt(signum)
 
     old = {s: signal.signal(s, handler) for s in _not_ignored()}
+    _handling = True
     try:
         yield
     finally:
+        _handling = False
         for s, h in old.items():
             signal.signal(s, h)
 

@@ -34,7 +34,6 @@ import copy
 import hashlib
 import json
 import logging
-import time as _time
 from collections.abc import Callable
 from dataclasses import dataclass, field
 from datetime import UTC, datetime
@@ -42,27 +41,13 @@ from pathlib import Path
 
 import numpy as np
 
-from .display import OBSTACLES_NAME, pinned_mask, write_obstacles
+from .display import pinned_mask, write_obstacles
 from .errors import InputError, NonFiniteStateError
 from .interrupts import SignalInterrupt, handle_signals, signals_deferred
-from .io.folders import FolderLock, claim_folder
-from .io.frames import PVD_NAME, FrameWriter, read_frame
-from .io.runfiles import (
-    RunRecord,
-    TrajectoryStore,
-    package_versions,
-    read_json,
-    write_json,
-    write_trajectory,
-)
+from .io.frames import OBSTACLES_NAME, PVD_NAME
+from .io.runfiles import package_versions, write_json, write_trajectory
+from .io.runfolder import RESULT_FILES, STALE_FILES, RunFolder, completed_frames
 from .plotting import write_final_image, write_preview
-from .runfolder import (
-    RESULT_FILES,
-    STALE_FILES,
-    clear_earlier_run,
-    completed_frames,
-    resume_point,
-)
 from .scene import Scene, load_scene
 from .scene.inputs import input_hashes
 from .scene.schema import MAX_FRAMES
@@ -178,33 +163,25 @@ def run_scene(scene, out_dir, *, frames: int | None = None,
     frames = scene.frames if frames is None else int(frames)
     model = scene.build_model()
     sim = scene.build_simulation(model)
-    out = claim_folder(out_dir, "run", force=force)  # before anything is written there
-    out.mkdir(parents=True, exist_ok=True)
-    with FolderLock(out):
-        claim_folder(out, "run", force=force)  # again, now that no other run can write
-        return _run_locked(scene, model, sim, out, frames, progress, resume, preview, force)
+    with RunFolder(out_dir, force=force, guard=signals_deferred) as folder:
+        return _run_in(folder, scene, model, sim, frames, progress, resume, preview)
 
 
-def _run_locked(scene, model, sim, out: Path, frames: int, progress, resume: bool,
-                preview: bool, force: bool = False) -> RunResult:
+def _run_in(folder: RunFolder, scene, model, sim, frames: int, progress, resume: bool,
+            preview: bool) -> RunResult:
+    """The run, once ``folder`` is claimed and locked: frames computed here, written there."""
     fps, substeps, n = scene.fps, scene.substeps, model.vertex_count
     shash = scene_hash(scene, model)
     inputs = input_hashes(scene)  # every file the scene reads, by content
-    previous = read_json(out / "run.json")
-    ours = previous is not None and "clothsim_run" in previous
-    start = resume_point(out, previous, shash, frames, inputs) if resume else None
-    if start is not None:  # one record per frame: recompute frames without one (bit for bit)
-        start = _recorded_through(previous, start)
+    start = folder.resume_point(shash, frames, inputs) if resume else None
+    previous = folder.previous
     resuming = start is not None
-    if not resuming:
-        if resume:
-            log.info("nothing to resume in %s; starting from frame 0", out)
-        clear_earlier_run(out, ours or force)
-        start = 0
+    if resume and not resuming:
+        log.info("nothing to resume in %s; starting from frame 0", folder.path)
     info = {
         "clothsim_run": 1, "scene": scene.to_dict(), "scene_hash": shash,
         "overrides": list(scene.overrides),
-        "source": scene.source, "inputs": inputs, "out_dir": str(out.resolve()),
+        "source": scene.source, "inputs": inputs, "out_dir": str(folder.path.resolve()),
         "h": sim.h, "fps": fps, "substeps": substeps, "frames_requested": frames,
         "vertex_count": n, "spring_count": model.spring_count,
         "triangle_count": model.mesh.triangle_count, "total_mass": model.total_mass,
@@ -219,99 +196,52 @@ def _run_locked(scene, model, sim, out: Path, frames: int, progress, resume: boo
         "resumed_from": start if resuming else None,
     }
     get_state = getattr(sim.solver, "get_state", lambda: {})
-    run = RunRecord(out, info, _time.perf_counter())
-    store = TrajectoryStore(out, n)
-    try:
-        writer = FrameWriter(out, model.mesh, springs=model.springs,
+    read_back = folder.begin(info, model, fps, frames=frames,
                              pinned=lambda t: pinned_mask(sim.effects, n, t),
-                             compression=scene.data["output"]["frame_compression"])
-        run.info["frame_compression"] = writer.compression_reason
-        if resuming:
-            for j in range(start + 1):
-                x, v = read_frame(out / writer.filename(j))
-                store.append(x, v)
-            writer.adopt({j: j / fps for j in range(start + 1)})
-            run.records = [r for r in previous.get("frames", [])
-                           if isinstance(r, dict) and 1 <= r.get("frame", 0) <= start]
-            saved = previous.get("solver_state")
-            if saved:
-                getattr(sim.solver, "set_state", lambda state: None)(saved)
-            log.info("resuming %s from frame %d", scene.name, start)
-        else:
-            run.write("running", None)  # the folder is a run folder before any frame exists
-            x, v = sim.state.positions, sim.state.velocities
-            writer.write(0, 0.0, x, v)
-            store.append(x, v)
-        obstacles = write_obstacles(out / OBSTACLES_NAME, sim.effects, model.mesh.vertices)
-        if obstacles is not None:
-            writer.add_static(OBSTACLES_NAME)  # trajectory.pvd shows the whole scene
-        run.done = start
-        # the factorization mode weighs the run's solves: the first run's count, kept by a
-        # resumed run so that it factors in the same mode (and repeats it bit for bit)
-        sim.expect_steps(frames * substeps)
-        if resuming and isinstance(previous.get("expected_solves"), int):
-            sim.solver.expected_solves = previous["expected_solves"]
-        run.info["expected_solves"] = getattr(sim.solver, "expected_solves", None)
-        run.info["solver_state"] = get_state()
-        run.save_npz(store, model, fps, force=True)
-        run.write("running", None)
-        for k in range(start + 1, frames + 1):
-            # canonical start time of the frame: identical in fresh and resumed runs
-            sim.state = State(x.copy(), v.copy(), (k - 1) / fps, (k - 1) * substeps)
-            steps = _advance(sim, substeps, k)
-            x, v = sim.state.positions, sim.state.velocities
-            record = _frame_record(k, fps, steps, sim.solver.tolerance)
-            backend = getattr(sim.solver, "backend", None)
-            with signals_deferred():
-                run.info["backend"] = run.info["solver"]["backend"] = backend
-                run.info["factorization"] = getattr(sim.solver, "factorization", None)
-                writer.write(k, k / fps, x, v)
-                store.append(x, v)
-                run.records.append(record)
-                run.done = k
-                run.info["solver_state"] = get_state()
-                run.save_npz(store, model, fps)
-                run.write("running", None)
-            if progress is not None:
-                progress(k, frames)
-        status = "completed"
+                             compression=scene.data["output"]["frame_compression"],
+                             start=start)
+    if resuming:
+        x, v = read_back
+        saved = previous.get("solver_state")
+        if saved:
+            getattr(sim.solver, "set_state", lambda state: None)(saved)
+        log.info("resuming %s from frame %d", scene.name, start)
+    else:
+        x, v = sim.state.positions, sim.state.velocities
+        folder.write_frame(0, x, v)
+    obstacles = write_obstacles(folder.path / OBSTACLES_NAME, sim.effects, model.mesh.vertices)
+    if obstacles is not None:
+        folder.add_static(OBSTACLES_NAME)  # trajectory.pvd shows the whole scene
+    # the factorization mode weighs the run's solves: the first run's count, kept by a
+    # resumed run so that it factors in the same mode (and repeats it bit for bit)
+    sim.expect_steps(frames * substeps)
+    if resuming and isinstance(previous.get("expected_solves"), int):
+        sim.solver.expected_solves = previous["expected_solves"]
+    info["expected_solves"] = getattr(sim.solver, "expected_solves", None)
+    info["solver_state"] = get_state()
+    folder.save_npz(force=True)
+    folder.mark("writing")
+    for k in range(start + 1 if resuming else 1, frames + 1):
+        # canonical start time of the frame: identical in fresh and resumed runs
+        sim.state = State(x.copy(), v.copy(), (k - 1) / fps, (k - 1) * substeps)
+        steps = _advance(sim, substeps, k)
+        x, v = sim.state.positions, sim.state.velocities
+        record = _frame_record(k, fps, steps, sim.solver.tolerance)
         with signals_deferred():
-            run.finish(store, model, fps, status, None)
-        files = [out / writer.filename(j) for j in range(frames + 1)]
-        files += [out / PVD_NAME, out / "trajectory.npz", out / "run.json"]
-        files += [obstacles] if obstacles is not None else []
-        if preview:
-            files += _previews(out, scene, sim, store, fps, run.done)
-        return RunResult(out, status, run.done, run.records, files)
-    except BaseException as exc:
-        if run.status in ("completed", "interrupted", "failed"):
-            raise  # the record is final already (an error in the previews)
-        # an interruption can be resumed as is; an error (a blow-up, a full disk) failed
-        status = "interrupted" if isinstance(exc, KeyboardInterrupt) else "failed"
-        error = f"{type(exc).__name__}: {' '.join(str(exc).split())}".rstrip(": ")
-        log.info("run of %s stopped at frame %d: %s", scene.name, run.done + 1, error)
-        if run.done >= 0 or not resuming:  # else the earlier run.json stays as it was
-            try:
-                with signals_deferred():
-                    run.finish(store, model, fps, status, error)
-            except OSError as again:  # e.g. still no space: the first error is the news
-                log.warning("could not record the %s run in %s: %s", status, out,
-                            again.strerror or again)
-        raise
-    finally:
-        store.close()
-
-
-def _recorded_through(previous: dict, start: int) -> int:
-    """The last frame k <= start with records for frames 1..k in ``previous`` (run.json):
-    after SIGKILL, a full disk or ``--frames`` down then up, frames on disk may lack one."""
-    recorded = {r.get("frame") for r in previous.get("frames", []) if isinstance(r, dict)}
-    k = 0
-    while k < start and k + 1 in recorded:
-        k += 1
-    if k < start:
-        log.info("frames %d..%d have no record in run.json; recomputing them", k + 1, start)
-    return k
+            info["backend"] = info["solver"]["backend"] = getattr(sim.solver, "backend", None)
+            info["factorization"] = getattr(sim.solver, "factorization", None)
+            info["solver_state"] = get_state()
+            folder.write_frame(k, x, v, record)
+        if progress is not None:
+            progress(k, frames)
+    with signals_deferred():
+        folder.end("complete", None)
+    files = folder.frame_files()
+    files += [folder.path / PVD_NAME, folder.path / "trajectory.npz", folder.path / "run.json"]
+    files += [obstacles] if obstacles is not None else []
+    if preview:
+        files += _previews(folder, scene, sim, fps)
+    return RunResult(folder.path, "completed", folder.done, folder.records, files)
 
 
 def _advance(sim, substeps: int, k: int) -> list:
@@ -345,8 +275,9 @@ def _frame_record(k: int, fps: float, steps: list, tolerance) -> dict:
             "residual_history": [float(r) for r in steps[-1].residual_history]}
 
 
-def _previews(out: Path, scene, sim, store: TrajectoryStore, fps: float, done: int) -> list:
-    positions = store.view("positions", done + 1)  # memory-mapped: only drawn frames load
+def _previews(folder: RunFolder, scene, sim, fps: float) -> list:
+    out, done = folder.path, folder.done
+    positions = folder.trajectory("positions", done + 1)  # memory-mapped: drawn frames load
     times = np.arange(done + 1) / fps
     mesh = sim.model.mesh
     return [write_preview(out / "preview.gif", positions, mesh, times=times,

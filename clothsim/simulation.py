@@ -15,7 +15,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from .effects.base import HOOKS, Effect, overrides
+from .effects.base import HOOKS, BoundEffects, Effect, overrides
 from .effects.pins import Pin
 from .errors import InputError, NonFiniteStateError, check_finite
 from .model import Model
@@ -148,16 +148,17 @@ class Simulation:
         self._solver_options = dict(iterations=self.solver.iterations,
                                     tolerance=self.solver.tolerance, backend=backend,
                                     **solver_options)
-        self.effects: list[Effect] = list(effects)
-        for i, e in enumerate(self.effects):
+        effects = list(effects)
+        for i, e in enumerate(effects):
             if not isinstance(e, Effect):
                 raise InputError(f"effects[{i}]: expected an Effect, got {type(e).__name__}")
-            if e._simulation is not None or any(e is o for o in self.effects[:i]):
+            if e._simulation is not None or any(e is o for o in effects[:i]):
                 raise InputError(f"effects[{i}] ({e.kind}): already bound to another "
                                  f"simulation; create one effect per simulation")
-        for e in self.effects:
+        for e in effects:
             e.bind(model, self.h)
-        self._hooks = {hook: [e for e in self.effects if overrides(e, hook)] for hook in HOOKS}
+        self._effects = BoundEffects(effects)
+        self._hooks = {hook: [e for e in effects if overrides(e, hook)] for hook in HOOKS}
         t1 = (0.0 if state is None else float(getattr(state, "time", 0.0))) + self.h
         massless = np.setdiff1d(model.massless_vertices, self._pin_list(t1))
         if len(massless):  # mass 0 means pinned (an inverse mass of 0, as the engines read it)
@@ -165,8 +166,8 @@ class Simulation:
                      len(massless))
             pin = Pin(massless)
             pin.bind(model, self.h)
-            self.effects.insert(0, pin)
-            self._hooks = {hook: [e for e in self.effects if overrides(e, hook)]
+            self._effects = BoundEffects([pin, *effects])
+            self._hooks = {hook: [e for e in self._effects if overrides(e, hook)]
                            for hook in HOOKS}
         for e in self._hooks["connect_pins"]:  # effects that must not move pinned vertices
             e.connect_pins(self.pinned_vertices)
@@ -183,6 +184,16 @@ class Simulation:
         for e in self.effects:
             e._simulation = self
         self._check_initial_overlap()
+
+    @property
+    def effects(self) -> BoundEffects:
+        """The effects this simulation runs, in the order their hooks are called: fixed when
+        it is built (an :class:`~clothsim.errors.InputError` on ``append`` and the like)."""
+        return self._effects
+
+    @effects.setter
+    def effects(self, value) -> None:
+        self._effects._refuse()
 
     @property
     def effects_built(self) -> list[str]:
@@ -292,23 +303,29 @@ class Simulation:
             return self.solver
         solver = make_solver(self.solver.name, self.step_model(state), **self._solver_options)
         if hasattr(solver, "expected_solves"):   # its factor serves this one step
-            solver.expected_solves = solver.iterations
+            solver.expected_solves, solver.expected_final = solver.iterations, True
         return solver
 
-    def expect_steps(self, steps: int | None) -> None:
+    def expect_steps(self, steps: int | None, *, final: bool = True) -> None:
         """Tell the solver how many steps follow, so that its next factorization's mode
-        (:func:`clothsim.factorization.choose_cholmod_mode`) weighs the solves ahead:
-        ``steps`` × iterations (at most, with a tolerance). :meth:`run` and
-        :func:`clothsim.run_scene` call it; solvers without a factorization ignore it.
+        (:func:`clothsim.factor_mode.choose_cholmod_mode`) weighs the solves ahead:
+        ``steps`` × iterations (at most, with a tolerance). :func:`clothsim.run_scene`
+        passes the whole run (``final``); :meth:`run` passes its steps as a lower bound,
+        since more may follow. Solvers without a factorization ignore it.
 
         Parameters
         ----------
         steps : int or None
             Steps of length h still to come; None: unknown.
+        final : bool, default True
+            Whether ``steps`` is the whole run. When False, the mode is chosen for at least
+            that many, and a factor whose solves are the slower ones is refactored in the
+            other mode once it has served the break-even count.
         """
         if hasattr(self.solver, "expected_solves"):
             self.solver.expected_solves = (None if steps is None
                                            else max(int(steps), 1) * self.solver.iterations)
+            self.solver.expected_final = bool(final) and steps is not None
 
     def step(self) -> StepRecord:
         """Advance one time step h.
@@ -352,6 +369,9 @@ class Simulation:
     def run(self, steps: int, callback=None) -> list[StepRecord]:
         """Take several steps.
 
+        More steps may follow (another :meth:`run`, :meth:`step`): the solver's factor is
+        chosen for at least these steps, not for these alone (:meth:`expect_steps`).
+
         Parameters
         ----------
         steps : int
@@ -365,7 +385,7 @@ class Simulation:
             One record per step.
         """
         records = []
-        self.expect_steps(steps)
+        self.expect_steps(steps, final=False)
         for _ in range(int(steps)):
             rec = self.step()
             records.append(rec)

@@ -60,3 +60,19 @@ def test_iteration_cost_ratios_are_complete(monkeypatch):
     assert res["ratios"]["local-global"] == 1.0 == res["cpu_ratios"]["local-global"]
     assert all(np.isfinite(v) and v > 0 for v in res["ratios"].values())
     assert len(iteration_cost.commit()) >= 7
+
+
+def test_factor_modes_rows_compare_the_automatic_mode_with_both(capsys):
+    """benchmarks/factor_modes.py: per size, a short-run and a long-run row with the three
+    modes' CPU seconds and the automatic mode's choice (timings never asserted)."""
+    from benchmarks import factor_modes
+
+    with threadpool_limits(1):
+        lines = factor_modes.table([9], 5)
+    rows = [line for line in lines if line.startswith("| 9² |")]
+    assert len(rows) == 2 and "`run(3)`: 30 solves" in rows[0] and "50 solves" in rows[1]
+    for row in rows:
+        cells = [c.strip() for c in row.strip("|").split("|")]
+        assert all(c.endswith(" s") and float(c[:-2]) >= 0 for c in cells[2:5]), row
+        assert cells[5] == "simplicial"
+    assert any("auto's reason | simplicial: " in line for line in lines)

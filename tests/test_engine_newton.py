@@ -91,3 +91,15 @@ def test_unconverged_solvers_fail_but_head_for_clothsims_minimizer(nv, solver, i
     assert report.steps[0].gradient_port > 1e-3  # far from optimal for g
     assert report.steps[0].error > report.steps[0].tolerance
     assert gap < 1e-9  # Newton from newton's answer lands on clothsim's answer
+
+
+def test_float32_tolerance_is_the_converged_floor_vbd_200_fails_1000_passes(nv):
+    """VBD at 200 iterations stops about 1e-5 m short of the minimizer, VBD at 1000 reaches
+    1e-7 m: the float32 tolerance of a Newton scene (the converged floor, below 1e-6 m)
+    separates them; clothsim's own float32 iterations (5.8e-5 m) did not."""
+    short, _ = nv.check("vbd", 200, steps=3)
+    assert not short.passed, short.summary()
+    assert {s.status for s in short.steps} == {"not converged"}, short.summary()
+    assert max(s.tolerance for s in short.steps) < 1e-6
+    converged, _ = nv.check("vbd", 1000, steps=3)
+    assert converged.passed, converged.summary()

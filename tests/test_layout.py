@@ -22,7 +22,7 @@ STAGES = [
     {"mesh", "polygon", "mesh_checks", "voronoi"},
     {"springs"},
     {"model"},
-    {"matrices", "reference", "energy", "factorization"},
+    {"matrices", "reference", "energy", "factorization", "factor_mode"},
     {"problem", "objective"},
     {"solvers"},
     {"effects"},

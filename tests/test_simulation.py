@@ -23,6 +23,44 @@ def test_a_pin_shared_by_two_simulations_is_an_error():
     np.testing.assert_array_equal(first.state.positions[top], model.mesh.vertices[top])
 
 
+def test_effects_are_fixed_when_the_simulation_is_built():
+    """A later change to Simulation.effects would be ignored (issues 34, 35): every way a
+    list allows one is refused by name, and the simulation runs exactly what it was built
+    with."""
+    model, (gravity, pin) = hanging_cloth(5)
+    sim = cs.Simulation(model, h=1 / 30, effects=[pin])
+    ref = cs.Simulation(model, h=1 / 30, effects=[cs.Pin([20, 24])])
+    wind = cs.Force((1.0, 0.0, 0.0))
+    attempts = [lambda: sim.effects.append(gravity), lambda: sim.effects.extend([gravity]),
+                lambda: sim.effects.insert(0, gravity), lambda: sim.effects.remove(pin),
+                lambda: sim.effects.pop(), lambda: sim.effects.clear(),
+                lambda: sim.effects.__setitem__(0, gravity),
+                lambda: sim.effects.__delitem__(0)]
+    for attempt in attempts:
+        with pytest.raises(InputError, match=r"^Simulation\.effects: fixed when the simulation "
+                                             r"is built .* pass every effect to Simulation"):
+            attempt()
+    with pytest.raises(InputError, match=r"^Simulation\.effects: fixed"):
+        sim.effects += [wind]
+    with pytest.raises(InputError, match=r"^Simulation\.effects: fixed"):
+        sim.effects = [pin, gravity]
+    assert list(sim.effects) == [pin] and sim.effects_built == ["pin"]
+    # read access is a tuple's: indexing, iteration, len, equality, concatenation
+    assert sim.effects[0] is pin and len(sim.effects) == 1 and sim.effects == (pin,)
+    assert isinstance(sim.effects, tuple) and sim.effects + (wind,) == (pin, wind)
+    sim.run(3)                             # no gravity: the cloth stays at rest, as built
+    ref.run(3)
+    np.testing.assert_array_equal(sim.state.positions, model.mesh.vertices)
+    np.testing.assert_array_equal(sim.state.positions, ref.state.positions)
+    # the massless pin clothsim adds is in the tuple too, first
+    massless = cs.Model.build(model.mesh, model.springs,
+                              vertex_mass=np.r_[0.0, model.vertex_mass[1:]])
+    auto = cs.Simulation(massless, h=1 / 30, effects=[cs.Gravity()])
+    assert auto.effects_built == ["pin", "gravity"] and isinstance(auto.effects, tuple)
+    with pytest.raises(InputError, match=r"^Simulation\.effects"):
+        auto.effects.append(cs.Gravity())
+
+
 def test_failed_construction_does_not_claim_the_effects():
     model = grid_cloth(4)
     pin = cs.Pin([0, 3])

@@ -20,7 +20,7 @@ import numpy as np
 from ..errors import InputError
 from ..factorization import cholmod_available
 from ..io.common import write_text
-from ..io.folders import FolderLock, claim_folder, folder_kind
+from ..io.outfolder import OutputFolder
 from .answer import answer_table, short_answer
 from .converged import warm_started
 from .dominance import MARGIN as DOMINANCE_MARGIN
@@ -35,7 +35,6 @@ from .report import (
     rows,
     steps_table,
     write_csv,
-    write_sidecar,
 )
 from .study import (
     BUDGETS,
@@ -111,7 +110,9 @@ def run_accuracy(scene, out, *, methods: Sequence[str] = ITERATIVE_METHODS,
     scene : clothsim.scene.Scene
     out : path
         Output folder (created): missing, empty or an earlier accuracy study's
-        (:func:`clothsim.io.folders.claim_folder`); locked while the study runs.
+        (:class:`clothsim.io.outfolder.OutputFolder`); locked while the study runs;
+        ``accuracy.json`` says ``running`` while it runs, then ``complete``, or
+        ``interrupted`` / ``failed`` with the error.
     methods : sequence of str
         Solver names (see :data:`clothsim.solvers.SOLVERS`).
     problems : int
@@ -169,23 +170,23 @@ def run_accuracy(scene, out, *, methods: Sequence[str] = ITERATIVE_METHODS,
                          + ", ".join(ITERATIVE_METHODS))
     if frames is not None and frames < 1:
         raise InputError(f"accuracy.frames: must be >= 1 (a study needs a step), got {frames}")
+    if steps_file is not None:  # a file that is no problem set: refused before any writing
+        load_problems(steps_file)
     if scheduler is not None:
         check_scheduler(scheduler)  # the slowest check, last; before anything is written
     if quick:
         problems, repeats = min(problems, QUICK["problems"]), min(repeats, QUICK["repeats"])
         budgets, tolerances = QUICK["budgets"], QUICK["tolerances"]
-    out = claim_folder(out, "accuracy", force=force)  # before anything is written there
-    out.mkdir(parents=True, exist_ok=True)
     commit = source_commit()  # of the code that runs (HEAD may move while it runs)
     cholmod_available()  # load CHOLMOD's BLAS and OpenMP first, so that their pools are limited
     # one BLAS/OpenMP thread throughout: reproducible, and on a shared machine faster than
-    # idle worker threads
-    with FolderLock(out, "accuracy"), _limited_threads(threads):
-        claim_folder(out, "accuracy", force=force)  # again, now that no other study can write
-        if folder_kind(out) != "accuracy":  # mark the folder as a study's from the start
-            _begin(out, scene)
-        return _run(scene, out, methods, problems, frames, repeats, jobs, scheduler, target,
-                    budgets, tolerances, time_steps, plots, threads, steps_file, quick, commit)
+    # idle worker threads; an interruption or an error marks the study so (OutputFolder)
+    with OutputFolder(out, "accuracy", force=force) as folder, _limited_threads(threads):
+        if folder.earlier.kind != "accuracy":  # mark the folder as a study's from the start
+            _begin(folder, scene)
+        return _run(scene, folder, methods, problems, frames, repeats, jobs, scheduler,
+                    target, budgets, tolerances, time_steps, plots, threads, steps_file, quick,
+                    commit)
 
 
 #: what a study writes besides accuracy.json and problems.npz (removed when a new one begins)
@@ -193,18 +194,18 @@ FIGURE = "fixed_budget.png"
 OUTPUTS = ("accuracy.csv", "steps.md", FIGURE)
 
 
-def _begin(out, scene) -> None:
-    """Mark ``out`` as a study in progress: accuracy.json says ``running`` (the study's own
+def _begin(folder: OutputFolder, scene) -> None:
+    """Mark the folder as a study in progress: accuracy.json says ``running`` (the study's own
     record replaces it at the end) and an earlier study's other files are removed, so that
     what the folder holds is, at every instant, one study's (maybe unfinished) work."""
-    write_sidecar({"clothsim": installed_version(), "scene": scene.name, "status": "running"},
-                  out / "accuracy.json")
+    folder.mark("writing", {"clothsim": installed_version(), "scene": scene.name})
     for name in OUTPUTS:
-        (out / name).unlink(missing_ok=True)
+        (folder.path / name).unlink(missing_ok=True)
 
 
-def _run(scene, out, methods, problems, frames, repeats, jobs, scheduler, target, budgets,
+def _run(scene, folder, methods, problems, frames, repeats, jobs, scheduler, target, budgets,
          tolerances, time_steps, plots, threads, steps_file, quick, commit) -> str:
+    out = folder.path
     factory, model, frame_time = scene_factory(scene)
     frames = scene.frames if frames is None else frames
     h = scene.h
@@ -216,7 +217,7 @@ def _run(scene, out, methods, problems, frames, repeats, jobs, scheduler, target
         with phases.phase("recording", max(1, frames * scene.substeps), "step"):
             recorded = record_problems(sim, steps=max(1, frames * scene.substeps),
                                        count=problems)
-    _begin(out, scene)  # an earlier study's files go now that this one has its steps
+    _begin(folder, scene)  # an earlier study's files go now that this one has its steps
     save_problems(recorded, out / "problems.npz", model)
     with phases.phase("references", len(recorded), "step"):
         steps = prepare_steps(model, recorded, jobs=jobs)
@@ -282,7 +283,7 @@ def _run(scene, out, methods, problems, frames, repeats, jobs, scheduler, target
              "frames": frames, "repeats": repeats,
              "chebyshev_rho": options.get("chebyshev", {}).get("rho"),
              "phase_seconds": phases.seconds}
-    write_sidecar(info, out / "accuracy.json")
+    folder.mark("complete", info)
     write_text(out / "steps.md", steps_table(steps) + "\n")
     kinds = [s.kind for s in steps]
     missed = sum(1 for r in recorded if r.converged is False)

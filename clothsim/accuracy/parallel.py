@@ -10,16 +10,109 @@ wrong one is a one-line error at once instead of a failure after the recording.
 
 from __future__ import annotations
 
+import socket
+import struct
+import time
 from collections.abc import Callable, Iterable, Sequence
 
 from ..errors import InputError
 
 #: seconds a study waits for its Dask scheduler to answer before it gives up
 CONNECT_TIMEOUT = 10
+#: largest first message accepted from a scheduler [bytes] (its handshake is ~100 bytes)
+MAX_HANDSHAKE = 1 << 20
+
+
+class _NotDask(Exception):
+    """The peer at a ``tcp://`` address is not a Dask scheduler (the reason)."""
+
+
+def _read_exactly(sock: socket.socket, count: int, deadline: float) -> bytes:
+    buf = bytearray()
+    while len(buf) < count:
+        sock.settimeout(max(deadline - time.monotonic(), 0.001))
+        try:
+            chunk = sock.recv(count - len(buf))
+        except TimeoutError:
+            raise _NotDask(f"it accepted the connection but sent no Dask handshake within "
+                           f"{CONNECT_TIMEOUT} s (is it a Dask scheduler? an HTTP server or "
+                           f"the dashboard's port waits for a request)") from None
+        if not chunk:
+            raise _NotDask("it closed the connection without a Dask handshake")
+        buf += chunk
+    return bytes(buf)
+
+
+def probe_scheduler(host: str, port: int, timeout: float = CONNECT_TIMEOUT) -> dict:
+    """Read the handshake a Dask scheduler sends first on a new TCP connection.
+
+    A scheduler writes its handshake (a msgpack map with ``python``, ``compression``,
+    ``pickle-protocol``) as soon as it accepts a connection, in Dask's framing: the byte
+    count (uint64), the frame count and lengths (uint64 each), then the frames. Any other
+    listener either sends nothing (an HTTP server waits for a request) or bytes that do not
+    parse as that; both are told apart here within ``timeout`` seconds and before any
+    allocation a peer could choose (dask.distributed itself would wait for ever, or trust
+    a garbage length and run out of memory).
+
+    Parameters
+    ----------
+    host : str
+    port : int
+    timeout : float
+        Seconds for the whole exchange [s].
+
+    Returns
+    -------
+    dict
+        The scheduler's handshake.
+
+    Raises
+    ------
+    OSError
+        The connection cannot be made (refused, unreachable, timed out).
+    _NotDask
+        The peer is not a Dask scheduler (the reason).
+    """
+    import msgpack  # a dependency of dask.distributed
+
+    deadline = time.monotonic() + timeout
+    with socket.create_connection((host, port), timeout=timeout) as sock:
+        (total,) = struct.unpack("<Q", _read_exactly(sock, 8, deadline))
+        if not 16 <= total <= MAX_HANDSHAKE:
+            raise _NotDask(f"its first bytes do not frame a Dask message (a length of "
+                           f"{total} bytes)")
+        body = _read_exactly(sock, total, deadline)
+    (count,) = struct.unpack_from("<Q", body)
+    if not 1 <= count <= 64 or 8 * (1 + count) > total:
+        raise _NotDask(f"its first message does not frame a Dask handshake ({count} frames)")
+    lengths = struct.unpack_from(f"<{count}Q", body, 8)
+    if 8 * (1 + count) + sum(lengths) != total:
+        raise _NotDask("its first message's frame lengths do not add up")
+    start = 8 * (1 + count)
+    for length in lengths:
+        try:
+            msg = msgpack.unpackb(body[start:start + length], raw=False,
+                                  strict_map_key=False)
+        except (ValueError, TypeError, msgpack.ExtraData, msgpack.FormatError,
+                msgpack.StackError):
+            msg = None
+        if isinstance(msg, dict) and "python" in msg:
+            return msg
+        start += length
+    raise _NotDask("its first message is not a Dask handshake")
+
+
+def _refusal(address: str, text: str) -> InputError:
+    return InputError(f"accuracy.scheduler: cannot use {address!r}: "
+                      + (" ".join(str(text).split()) or "no reason given"))
 
 
 def check_scheduler(address: str) -> None:
     """Connect to the Dask scheduler at ``address`` once, or say in one line why not.
+
+    A ``tcp://`` address (or ``host:port``) is first probed with :func:`probe_scheduler`,
+    so that a listener that is not a Dask scheduler is named within
+    :data:`CONNECT_TIMEOUT` seconds instead of hanging or exhausting memory.
 
     Parameters
     ----------
@@ -30,19 +123,30 @@ def check_scheduler(address: str) -> None:
     ------
     InputError
         ``accuracy.scheduler: …`` when dask.distributed is not installed (the extra
-        ``cluster``) or the scheduler does not answer within :data:`CONNECT_TIMEOUT`.
+        ``cluster``), the address is malformed, nothing listens there, the listener is not
+        a Dask scheduler, or the scheduler does not answer within :data:`CONNECT_TIMEOUT`.
     """
     try:
         from dask.distributed import Client
+        from distributed.comm.addressing import parse_address, parse_host_port
     except ImportError:
         raise InputError("accuracy.scheduler: needs dask.distributed: pip install "
                          "'clothsim[cluster]'") from None
+
+    try:
+        scheme, location = parse_address(address)
+        if scheme == "tcp":
+            probe_scheduler(*parse_host_port(location), timeout=CONNECT_TIMEOUT)
+    except _NotDask as exc:
+        raise _refusal(address, f"not a Dask scheduler: {exc}") from None
+    except (OSError, ValueError, TypeError) as exc:   # refused, unreachable, malformed
+        why = exc.strerror if isinstance(exc, OSError) and exc.strerror else str(exc)
+        raise _refusal(address, why or type(exc).__name__) from None
     try:
         with Client(address, timeout=f"{CONNECT_TIMEOUT}s"):
             pass
-    except (OSError, ValueError, TypeError) as exc:   # TimeoutError is an OSError
-        text = " ".join(str(exc).split()) or type(exc).__name__
-        raise InputError(f"accuracy.scheduler: cannot use {address!r}: {text}") from None
+    except (OSError, ValueError, TypeError, MemoryError) as exc:   # TimeoutError: OSError
+        raise _refusal(address, str(exc) or type(exc).__name__) from None
 
 
 def map_jobs(func: Callable, items: Iterable[Sequence], *, jobs: int = 1,

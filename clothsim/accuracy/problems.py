@@ -29,6 +29,7 @@ import copy
 import hashlib
 import logging
 import warnings
+import zipfile
 from dataclasses import dataclass
 from pathlib import Path
 
@@ -36,7 +37,7 @@ import numpy as np
 
 from ..errors import InputError
 from ..factorization import single_threaded
-from ..io.common import atomic_path
+from ..io.common import atomic_path, special_file
 from ..model import Model
 from ..simulation import Simulation
 from ..solvers import LocalGlobalSolver, StepProblem, objective_gradient
@@ -161,8 +162,7 @@ def load_problems(path, model: Model | None = None,
         ``model`` and ``h``.
     """
     path = Path(path)
-    if not path.is_file():
-        raise InputError(f"accuracy.steps: no such file {str(path)!r}")
+    check_steps_file(path)
     try:
         with np.load(path, allow_pickle=False) as z:
             data = {k: z[k] for k in z.files}
@@ -173,9 +173,11 @@ def load_problems(path, model: Model | None = None,
             c = int(data["converged"][i])
             out.append(RecordedStep(int(data["index"][i]), float(data["time"][i]), problem,
                                     None if c < 0 else bool(c)))
-    except (KeyError, ValueError, OSError) as exc:
+    except (KeyError, ValueError, OSError, EOFError, zipfile.BadZipFile) as exc:
+        why = " ".join(str(exc).split())[:200] or ("the file is empty" if isinstance(
+            exc, EOFError) else type(exc).__name__)
         raise InputError(f"accuracy.steps: {str(path)!r} is not a saved problem set "
-                         f"({exc})") from None
+                         f"({why})") from None
     where = f"accuracy.steps: {str(path)!r}"
     if model is not None:
         n = model.vertex_count
@@ -195,6 +197,30 @@ def load_problems(path, model: Model | None = None,
             raise InputError(f"{where} was recorded at h = {other[0]:.6g} s; this scene "
                              f"steps at h = {h:.6g} s")
     return out
+
+
+def check_steps_file(path) -> None:
+    """Refuse, in one line, a ``--steps`` path that is no regular file (before anything runs).
+
+    Parameters
+    ----------
+    path : str or Path
+
+    Raises
+    ------
+    InputError
+        ``accuracy.steps: …``: missing, a folder, a FIFO or device (a FIFO would block the
+        reader, ``/dev/zero`` never ends), or empty.
+    """
+
+    path = Path(path)
+    what = special_file(path) or ("a folder" if path.is_dir() else None)
+    if what:
+        raise InputError(f"accuracy.steps: {str(path)!r} is {what}, not a regular file")
+    if not path.is_file():
+        raise InputError(f"accuracy.steps: no such file {str(path)!r}")
+    if path.stat().st_size == 0:
+        raise InputError(f"accuracy.steps: {str(path)!r} is empty, not a saved problem set")
 
 
 def record_problems(sim: Simulation, *, steps: int, count: int = 8) -> list[RecordedStep]:

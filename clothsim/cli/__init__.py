@@ -27,7 +27,11 @@ far stay readable; run.json says ``interrupted``); ``run`` stopped by a blow-up:
 
 Warnings (ill-conditioning, missed tolerances, …) go through :mod:`logging`: each kind is
 logged once when it first occurs (with ``-v``) and summarised at the end of the command as
-one line with its count. Progress bars are shown only when stderr is a terminal.
+one line with its count. Progress bars are shown only when stderr is a terminal; off a
+terminal ``run`` prints a progress line every few seconds instead
+(:class:`clothsim.cli.logs.ProgressLines`). Before it writes, ``run`` estimates the disk the
+run will use: above 1 GB it says so with a warning, and a run the disk cannot hold is
+refused (exit 2) naming ``--frames`` and how many frames fit.
 """
 
 
@@ -41,6 +45,7 @@ from pathlib import Path
 
 from .. import __version__
 from ..errors import InputError
+from ..interrupts import SIGNALS, handle_signals
 from ..scene.schema import MAX_FRAMES, MAX_VERTICES
 from .common import (
     PROG,
@@ -49,11 +54,19 @@ from .common import (
     _UsageError,
     add_set_option,
     count,
+    interrupted,
     log,
     os_error_line,
     other_output,
+    stopped,
 )
-from .logs import _configure_logging, _no_progress_bars_off_terminal, _warnings_to_log
+from .logs import (
+    ProgressLines,
+    _configure_logging,
+    _isatty,
+    _no_progress_bars_off_terminal,
+    _warnings_to_log,
+)
 from .ports import (
     _add_port_commands,
     _cmd_check,
@@ -62,6 +75,9 @@ from .ports import (
     _cmd_diff_model,
     _cmd_export,
 )
+
+#: exit statuses of a command stopped by SIGHUP, SIGINT or SIGTERM (128 + the signal)
+INTERRUPTED = {128 + s for s in SIGNALS}
 
 
 def build_parser() -> argparse.ArgumentParser:
@@ -195,7 +211,7 @@ def _cmd_validate(args) -> int:
 
 
 def _cmd_run(args) -> int:
-    from ..runner import NonFiniteStateError, handle_signals, run_scene
+    from ..runner import NonFiniteStateError, run_scene
     from ..scene import DEFAULT_SCENE, load_scene
 
     if args.frames is not None and args.frames < 0:
@@ -223,22 +239,22 @@ def _cmd_run(args) -> int:
         tqdm = None
     bar = None if tqdm is None else tqdm(total=frames, unit="frame", desc=scene.name,
                                          disable=None, leave=False)
+    lines = None if _isatty(sys.stderr) else ProgressLines(scene.name)  # make, nohup, a pipe
 
     def progress(k, total):
         if bar is not None:
             bar.n = k
             bar.refresh()
+        if lines is not None:
+            lines(k, total)
 
     try:
-        with handle_signals():
-            result = run_scene(scene, out, frames=frames, progress=progress,
-                               resume=args.resume, preview=not args.no_preview,
-                               force=args.force)
+        result = run_scene(scene, out, frames=frames, progress=progress,
+                           resume=args.resume, preview=not args.no_preview, force=args.force)
     except KeyboardInterrupt as exc:  # Ctrl-C, SIGTERM, SIGHUP: exit 128 + signal number
-        signum = getattr(exc, "signum", signal.SIGINT)
-        name = signal.Signals(signum).name
-        return _fail(f"interrupted ({name}); complete frames and run.json are in {out}",
-                     128 + signum)
+        if bar is not None:
+            bar.close()  # before the message: the bar's line is cleared when it closes
+        return interrupted(exc, f"complete frames and run.json are in {out}")
     except NonFiniteStateError as exc:
         return _fail(f"{exc}; run.json (status failed) is in {out}", 1)
     except OSError as exc:  # full disk, read-only folder, file too large, ...
@@ -263,12 +279,9 @@ def _cmd_accuracy(args) -> int:
     scene = load_scene(args.scene, args.set)
     out = args.out if args.out is not None else "accuracy-out"
     if args.out is None and not args.force:
-        import json
+        from ..io.folders import folder_record
 
-        try:
-            previous = json.loads((Path(out) / "accuracy.json").read_text()).get("scene")
-        except (OSError, ValueError, AttributeError):
-            previous = None
+        previous = (folder_record(out, "accuracy") or {}).get("scene")
         if previous is not None and previous != scene.name:
             return _fail(f"{out} holds the accuracy study of {previous!r}, not of "
                          f"{scene.name!r}: choose --out DIR to keep both, or --force to "
@@ -276,11 +289,15 @@ def _cmd_accuracy(args) -> int:
     kw = {}
     if args.methods:
         kw["methods"] = tuple(m.strip() for m in args.methods.split(",") if m.strip())
-    print(accuracy.run_accuracy(
-        scene, out, problems=args.problems, frames=args.frames, quick=args.quick,
-        repeats=args.repeats, jobs=args.jobs, scheduler=args.scheduler, target=args.target,
-        time_steps=not args.no_time_steps, plots=not args.no_plots, steps_file=args.steps,
-        force=args.force, **kw))
+    try:
+        report = accuracy.run_accuracy(
+            scene, out, problems=args.problems, frames=args.frames, quick=args.quick,
+            repeats=args.repeats, jobs=args.jobs, scheduler=args.scheduler,
+            target=args.target, time_steps=not args.no_time_steps, plots=not args.no_plots,
+            steps_file=args.steps, force=args.force, **kw)
+    except (KeyboardInterrupt, OSError) as exc:
+        return stopped(exc, out)
+    print(report)
     return 0
 
 
@@ -312,13 +329,28 @@ def main(argv: list[str] | None = None) -> int:
     except SystemExit as exc:  # --help
         return int(exc.code or 0)
     undo_logging = _configure_logging(args.verbose + getattr(args, "verbose_after", 0))
+    # SIGINT, SIGTERM and SIGHUP interrupt every command alike, and a second one while it
+    # cleans up and says so is ignored (it would end the process with no message)
+    try:
+        with handle_signals():
+            code = _dispatch(args)
+    finally:
+        undo_logging()
+    if argv is None and code in INTERRUPTED:  # the process ends now, interrupted: a further
+        for signum in SIGNALS:                # signal must not turn the exit into -2 or -15
+            signal.signal(signum, signal.SIG_IGN)
+    return code
+
+
+def _dispatch(args) -> int:
+    """Run the command; every error becomes one line and an exit status."""
     try:
         with _warnings_to_log(), _no_progress_bars_off_terminal():
             return COMMANDS[args.command](args)
     except InputError as exc:  # SceneError included: bad input, exit status 2
         return _fail(str(exc), 2)
-    except KeyboardInterrupt:
-        return _fail("interrupted", 130)
+    except KeyboardInterrupt as exc:
+        return interrupted(exc)
     except BrokenPipeError:  # the reader went away (`clothsim scenes | head`): stop quietly
         sys.stdout = open(os.devnull, "w")  # noqa: SIM115 - no flush error at exit
         return 141
@@ -330,8 +362,6 @@ def main(argv: list[str] | None = None) -> int:
     except Exception as exc:  # one line, no traceback; -vv logs it in full
         log.debug("unhandled error", exc_info=True)
         return _fail(f"{type(exc).__name__}: {exc}", 1)
-    finally:
-        undo_logging()
 
 
 __all__ = ["main", "build_parser"]

@@ -54,8 +54,8 @@ def add_set_option(parser) -> None:
     """
     parser.add_argument("--set", action="append", default=[], metavar="KEY=VALUE",
                         help="change a scene key, e.g. springs.structural=50, "
-                        "solver.iterations=20, effects[1].strength=2 (a TOML value; "
-                        "repeatable; validated like the file)")
+                        "solver.iterations=20, 'effects[0].acceleration=[0, -1.62, 0]' (a TOML "
+                        "value; repeatable; validated like the file)")
 
 
 def count(low: int, high: int):
@@ -110,6 +110,82 @@ def os_error_line(exc: OSError, where=None) -> str:
     return f"{where}: {cause}{detail}"
 
 
+def interrupted(exc: BaseException, detail: str | None = None, out=None) -> int:
+    """Say that a command was interrupted, in one line; exit 128 + the signal's number.
+
+    Parameters
+    ----------
+    exc : KeyboardInterrupt
+        Ctrl-C, or a :class:`clothsim.interrupts.SignalInterrupt` (SIGTERM, SIGHUP).
+    detail : str, optional
+        What was left, e.g. where the complete frames are.
+    out : path, optional
+        The output folder: its status is reported (:func:`folder_note`).
+
+    Returns
+    -------
+    int
+        130 for SIGINT, 143 for SIGTERM, 129 for SIGHUP.
+    """
+    import signal
+
+    signum = getattr(exc, "signum", signal.SIGINT)
+    if detail is None and out is not None:
+        detail = folder_note(out)
+    line = f"interrupted ({signal.Signals(signum).name})" + (f"; {detail}" if detail else "")
+    return _fail(line, 128 + signum)
+
+
+def folder_note(out) -> str | None:
+    """What an output folder holds after its writer stopped, and how to complete it.
+
+    Parameters
+    ----------
+    out : path
+        The folder.
+
+    Returns
+    -------
+    str or None
+        E.g. ``"DIR is marked interrupted (its manifest.json says so): write it again with
+        clothsim export"``; None when it is not clothsim's.
+    """
+    from ..io.folders import REMEDY, folder_state
+
+    try:
+        state = folder_state(out)
+    except OSError:
+        return None
+    if state.kind is None:
+        return None
+    if state.status == "complete":
+        return f"{out} still holds the earlier complete output, unchanged"
+    return (f"{out} is marked {state.status} (its {state.record} says {state.word!r}): "
+            f"{REMEDY[state.kind]}")
+
+
+def stopped(exc: BaseException, out) -> int:
+    """One line for a writing command stopped by a signal or an I/O error: the cause, the
+    file and what the folder holds now.
+
+    Parameters
+    ----------
+    exc : KeyboardInterrupt or OSError
+    out : path
+        The command's output folder.
+
+    Returns
+    -------
+    int
+        The exit status: 128 + the signal's number, or 1.
+    """
+    if isinstance(exc, KeyboardInterrupt):
+        return interrupted(exc, out=out)
+    log.debug("I/O error", exc_info=True)
+    note = folder_note(out)
+    return _fail(os_error_line(exc, out) + (f"; {note}" if note else ""), 1)
+
+
 def _where(source) -> str:
     """A scene source as an absolute path where it names a file (run.json keeps it as given)."""
     p = Path(str(source))
@@ -137,11 +213,10 @@ def other_output(out: Path, scene, record: str = "run.json") -> str | None:
     """
     import json
 
-    try:
-        previous = json.loads((out / record).read_text())
-    except (OSError, ValueError):
-        return None
-    if not isinstance(previous, dict) or not previous.get("source"):
+    from ..io.folders import folder_record
+
+    previous = folder_record(out, "run" if record == "run.json" else "export")
+    if previous is None or not previous.get("source"):
         return None
     mine = json.loads(json.dumps(scene.to_dict(), default=str))
     theirs = previous.get("scene")

@@ -6,6 +6,7 @@ import logging
 import os
 import re
 import sys
+import time
 import warnings
 from contextlib import contextmanager
 
@@ -79,3 +80,49 @@ def _isatty(stream) -> bool:
         return bool(stream.isatty())
     except (AttributeError, ValueError):
         return False
+
+
+#: Seconds between two progress lines of ``run`` when stderr is not a terminal.
+PROGRESS_SECONDS = 5.0
+
+
+def _duration(seconds: float) -> str:
+    seconds = max(0, round(seconds))
+    if seconds < 60:
+        return f"{seconds} s"
+    if seconds < 3600:
+        return f"{seconds // 60} min {seconds % 60} s"
+    return f"{seconds // 3600} h {seconds // 60 % 60} min"
+
+
+class ProgressLines:
+    """``run``'s progress off a terminal (make, a pipe, nohup, a log file): one line on
+    stderr every :data:`PROGRESS_SECONDS`, e.g. ``clothsim: hanging: frame 12 of 90 (13 %),
+    2.1 s a frame, about 2 min 44 s left``. A run shorter than that prints none.
+
+    Parameters
+    ----------
+    name : str
+        The scene's name.
+    stream : file, optional
+        Default: ``sys.stderr`` when called.
+    clock : callable
+        Seconds (monotonic).
+    """
+
+    def __init__(self, name: str, stream=None, clock=time.monotonic):
+        self.name, self.stream, self.clock = name, stream, clock
+        self.start = self.last = clock()
+        self.first: int | None = None
+
+    def __call__(self, k: int, total: int) -> None:
+        now = self.clock()
+        if self.first is None:
+            self.first = k - 1  # frames done before this process (a resumed run)
+        if now - self.last < PROGRESS_SECONDS or k >= total:
+            return
+        self.last = now
+        rate = (now - self.start) / max(k - self.first, 1)
+        print(f"{PROG}: {self.name}: frame {k} of {total} ({100 * k // max(total, 1)} %), "
+              f"{rate:.2g} s a frame, about {_duration(rate * (total - k))} left",
+              file=self.stream or sys.stderr, flush=True)

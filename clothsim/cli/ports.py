@@ -7,7 +7,7 @@ import math
 from pathlib import Path
 
 from ..scene.schema import MAX_FRAMES, MAX_VERTICES
-from .common import _fail, add_set_option, count, other_output
+from .common import _fail, add_set_option, count, other_output, stopped
 
 
 def _add_port_commands(sub) -> None:
@@ -73,7 +73,8 @@ def _add_port_commands(sub) -> None:
     chk.add_argument("--tolerance", type=float, default=None,
                      help="allowed per-vertex distance [m] (default from --precision)")
     chk.add_argument("--steps", type=count(0, MAX_FRAMES), default=None,
-                     help="check only the first N steps")
+                     help="check only the first N steps (default: all the scene's frames; "
+                     "an output with fewer fails)")
     chk.add_argument("--optimality", type=float, default=1e-6,
                      help="largest relative gradient |grad g(x)| / |grad g(x0)| of a port's "
                      "answer counted as a minimizer (1e-6)")
@@ -117,6 +118,19 @@ def _refuse_special(*paths) -> None:
             refuse_special(p, inside=True)
 
 
+def _bad_plot_path(path: Path) -> str | None:
+    """Why ``compare --plot PATH`` cannot write an image there, or None."""
+    from matplotlib.backend_bases import FigureCanvasBase
+
+    kinds = FigureCanvasBase.get_supported_filetypes()
+    if path.is_dir():
+        return f"{path} is a folder; give an image file name, e.g. {path / 'deviation.png'}"
+    if path.suffix.lower().lstrip(".") not in kinds:
+        return (f"{path}: cannot tell the image format from {path.suffix or 'no suffix'!r}; "
+                f"end the name with one of {', '.join('.' + k for k in sorted(kinds))}")
+    return None
+
+
 def _cmd_export(args) -> int:
     from ..ports.export import export_port
     from ..scene import load_scene
@@ -133,8 +147,11 @@ def _cmd_export(args) -> int:
         if other:
             return _fail(other, 2)
     frames = scene.frames if args.frames is None else args.frames
-    manifest = export_port(scene, out, frames=frames, iterate_steps=args.iterate_steps,
-                           force=args.force)
+    try:
+        manifest = export_port(scene, out, frames=frames, iterate_steps=args.iterate_steps,
+                               force=args.force)
+    except (KeyboardInterrupt, OSError) as exc:
+        return stopped(exc, out)
     print(f"{scene.name}: {len(manifest['files'])} files for n = {manifest['vertex_count']}, "
           f"s = {manifest['spring_count']}, h = {manifest['h']:.6g} s, {frames} frames, "
           f"κ(M + h²L) = {manifest['condition_number']:.4g} written to {out}")
@@ -148,6 +165,8 @@ def _cmd_compare(args) -> int:
     if bad:
         return _fail(bad, 2)
     _refuse_special(args.trajectory, args.reference, args.scene)
+    if args.plot and (bad := _bad_plot_path(Path(args.plot))):
+        return _fail(f"--plot: {bad}", 2)  # before the comparison, not after its report
     if Path(args.trajectory).suffix == ".mtx":
         from ..ports.matrices import compare_matrices
 
@@ -192,7 +211,8 @@ def _cmd_check(args) -> int:
     x = read_trajectory(args.port)
     v = read_velocities(args.port)
     report = check_steps(scene, x, v, precision=args.precision, tolerance=args.tolerance,
-                         steps=args.steps, optimality=args.optimality)
+                         steps=args.steps, optimality=args.optimality,
+                         expected_steps=None if args.steps is not None else scene.frames)
     if args.verbose_steps:
         for step in report.steps:
             print(step.line())
@@ -226,7 +246,10 @@ def _cmd_conformance(args) -> int:
 
     out = args.out if args.out is not None else (
         "coursework" if args.profile == "coursework" else "conformance")
-    names = write(out, force=args.force)
+    try:
+        names = write(out, force=args.force)
+    except (KeyboardInterrupt, OSError) as exc:
+        return stopped(exc, out)
     print(f"{len(names)} {args.profile} conformance cases written to {out} "
           f"(read {out}/README.md)")
     return 0

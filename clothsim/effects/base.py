@@ -20,7 +20,8 @@ the model from ``self.model``; they never change the model. Arrays are (n, 3), o
 vertex, in the model's vertex order, float64.
 
 An effect instance belongs to one simulation: binding it to a second one is an
-:class:`~clothsim.errors.InputError` (it keeps per-run data such as contacts).
+:class:`~clothsim.errors.InputError` (it keeps per-run data such as contacts). A
+simulation's effects are fixed when it is built (:class:`BoundEffects`).
 """
 
 from __future__ import annotations
@@ -29,6 +30,7 @@ from collections.abc import Callable
 
 import numpy as np
 
+from ..errors import InputError
 from ..problem import PinSet
 
 #: Every hook an effect may override, in the order a step calls them (``connect_pins``
@@ -235,4 +237,34 @@ def overrides(effect: Effect, hook: str) -> bool:
     return getattr(type(effect), hook) is not getattr(Effect, hook)
 
 
-__all__ = ["HOOKS", "Effect", "PinSet", "overrides"]
+class BoundEffects(tuple):
+    """The effects a :class:`~clothsim.simulation.Simulation` runs: a tuple, fixed when it
+    is built.
+
+    The simulation binds its effects, sets up its hooks, its pins and the checks between
+    them once, so an effect added afterwards would be silently ignored: the changes a list
+    allows (``append``, ``extend``, ``insert``, ``remove``, ``pop``, ``clear``, item
+    assignment and deletion, ``+=``) raise an :class:`~clothsim.errors.InputError` naming
+    ``Simulation.effects`` and what to do instead.
+    """
+
+    __slots__ = ()
+
+    def _refuse(self, *args, **kwargs):
+        """Refuse a change: every method by which a list changes is this one.
+
+        Raises
+        ------
+        InputError
+            Always, naming ``Simulation.effects`` and what to do instead.
+        """
+        raise InputError("Simulation.effects: fixed when the simulation is built (its hooks and "
+                         "pins are set up from them, so a later change would be ignored); pass "
+                         "every effect to Simulation(..., effects=[...]) or build a new "
+                         "Simulation")
+
+    append = extend = insert = remove = pop = clear = sort = reverse = _refuse
+    __setitem__ = __delitem__ = __iadd__ = __imul__ = _refuse
+
+
+__all__ = ["HOOKS", "BoundEffects", "Effect", "PinSet", "overrides"]

@@ -35,6 +35,8 @@ def read_forces(path) -> np.ndarray:
     """
     p = Path(path)
     rows = []
+    if p.exists() and not p.is_file() and not p.is_dir():  # a FIFO blocks, /dev/zero never ends
+        raise InputError(f"force.file: {p} is a FIFO or a device, not a regular file")
     try:
         lines = p.read_text(encoding="utf-8").splitlines()
     except (OSError, UnicodeDecodeError) as exc:

@@ -81,6 +81,11 @@ class Impulse(Effect):
             raise InputError(f"impulse.radius: no vertex lies within {self.radius!r} m of "
                              f"impulse.center {self.center.tolist()}")
         m = model.vertex_mass[self.vertices]
+        if not m.sum() > 0:  # shared in proportion to mass: 0/0 would be NaN forces
+            raise InputError(f"impulse.radius: every vertex within {self.radius!r} m of "
+                             f"impulse.center {self.center.tolist()} has mass 0 (pinned "
+                             f"exactly), so the force, shared in proportion to mass, has no "
+                             f"vertex to act on", field="impulse.radius")
         self.vertex_force = (m / m.sum())[:, None] * self.force
 
     def active(self, t: float) -> bool:

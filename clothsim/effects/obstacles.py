@@ -33,7 +33,9 @@ Limitations: obstacles are static and rigid; only vertices are tested (an edge o
 triangle can still pass over a sharp box corner or a sphere smaller than the mesh spacing
 between vertices); several obstacles are applied one after another, so a vertex squeezed
 between two overlapping ones may end inside the first. Pinned vertices are moved like any
-other vertex if they lie inside an obstacle.
+other vertex if they lie inside an obstacle, except a vertex of mass 0 (pinned exactly): one
+that starts inside an obstacle is an :class:`~clothsim.errors.InputError` when the obstacle
+is bound.
 """
 
 from __future__ import annotations
@@ -207,6 +209,15 @@ class Obstacle(Effect):
         super().bind(model, h)
         self.contact_vertices = np.zeros(0, np.int64)
         self.contact_normals = np.zeros((0, 3))
+        massless = model.massless_vertices
+        inside = massless[self.inside(model.mesh.vertices[massless])] if len(massless) else []
+        if len(inside):  # mass 0 means exactly pinned: the contact response would move it
+            key = {"sphere": "center", "box": "min", "plane": "point"}.get(self.kind, "kind")
+            raise InputError(f"{self.kind}.{key}: vertex {inside[0]} has mass 0, which pins it "
+                             f"exactly at its initial position, but it starts inside the "
+                             f"{self.kind}, whose contact response would move it; move the "
+                             f"obstacle or give the vertex a mass",
+                             field=f"{self.kind}.{key}")
 
 
 class Plane(Obstacle):

@@ -25,6 +25,17 @@ from .base import Effect, PinSet
 PIN_METHODS = ("constraint", "penalty")
 
 
+def _box(region, name: str) -> tuple[np.ndarray, np.ndarray]:
+    """(min, max) [m] of one region box ``{"min": [x, y, z], "max": [x, y, z]}``."""
+    if not isinstance(region, dict) or set(region) != {"min", "max"}:
+        raise InputError(f"{name}: expected a table with keys 'min' and 'max'")
+    lo = check_finite(f"{name}.min", region["min"]).reshape(-1)
+    hi = check_finite(f"{name}.max", region["max"]).reshape(-1)
+    if lo.shape != (3,) or hi.shape != (3,):
+        raise InputError(f"{name}: 'min' and 'max' need 3 numbers each")
+    return lo, hi
+
+
 class Pin(Effect):
     """Pin vertices to their initial positions (or to a prescribed motion).
 
@@ -32,9 +43,11 @@ class Pin(Effect):
     ----------
     vertices : array_like of int, optional
         Indices of the pinned vertices (0-based).
-    region : dict, optional
+    region : dict or list of dict, optional
         ``{"min": [x, y, z], "max": [x, y, z]}``: pin every vertex whose initial position
-        lies in this box (inclusive). Give ``vertices`` or ``region``, not both.
+        lies in this box (inclusive); a list of such boxes pins the vertices of any of them
+        (e.g. two tiny boxes for two corners, which stay the corners at any resolution), and
+        each box must hold a vertex. Give ``vertices`` or ``region``, not both.
     method : {"constraint", "penalty"}
     stiffness : float, default 1e5
         Penalty spring stiffness k [N/m] (``method="penalty"`` only).
@@ -55,13 +68,12 @@ class Pin(Effect):
             raise InputError("pin: give exactly one of 'vertices' or 'region'")
         self.region = None
         if region is not None:
-            if not isinstance(region, dict) or set(region) != {"min", "max"}:
-                raise InputError("pin.region: expected a table with keys 'min' and 'max'")
-            lo = check_finite("pin.region.min", region["min"]).reshape(-1)
-            hi = check_finite("pin.region.max", region["max"]).reshape(-1)
-            if lo.shape != (3,) or hi.shape != (3,):
-                raise InputError("pin.region: 'min' and 'max' need 3 numbers each")
-            self.region = (lo, hi)
+            many = isinstance(region, (list, tuple))
+            if many and not region:
+                raise InputError("pin.region: an empty array of boxes pins nothing")
+            self.region = [_box(b, f"pin.region[{i}]" if many else "pin.region")
+                           for i, b in enumerate(region if many else [region])]
+            self._many = many
             vertices = []
         v = np.asarray(vertices)
         if v.size and not np.issubdtype(v.dtype, np.integer):
@@ -88,12 +100,16 @@ class Pin(Effect):
         super().bind(model, h)
         n = model.vertex_count
         if self.region is not None:
-            lo, hi = self.region
             x0 = model.mesh.vertices
-            self.vertices = np.flatnonzero(np.all((x0 >= lo) & (x0 <= hi), axis=1))
-            if len(self.vertices) == 0:
-                raise InputError(f"pin.region: no vertex lies in the box min={lo.tolist()} "
-                                 f"max={hi.tolist()}")
+            inside = np.zeros(len(x0), bool)
+            for i, (lo, hi) in enumerate(self.region):
+                box = np.all((x0 >= lo) & (x0 <= hi), axis=1)
+                if not box.any():  # every box must hold a vertex (else a corner hangs free)
+                    name = f"pin.region[{i}]" if self._many else "pin.region"
+                    raise InputError(f"{name}: no vertex lies in the box min={lo.tolist()} "
+                                     f"max={hi.tolist()}", field=name)
+                inside |= box
+            self.vertices = np.flatnonzero(inside)
         bad = np.flatnonzero((self.vertices < 0) | (self.vertices >= n))
         if len(bad):
             raise InputError(f"pin.vertices[{bad[0]}]: vertex {self.vertices[bad[0]]} out of "
@@ -101,6 +117,23 @@ class Pin(Effect):
         uniq, counts = np.unique(self.vertices, return_counts=True)
         if np.any(counts > 1):
             raise InputError(f"pin.vertices: vertex {uniq[counts > 1][0]} is listed twice")
+        if self.method == "penalty":  # mass 0 means exactly pinned: a spring would let it move
+            massless = self.vertices[model.vertex_mass[self.vertices] == 0]
+            if len(massless):
+                raise InputError(f"pin.method: vertex {massless[0]} has mass 0, which pins it "
+                                 f"exactly at its initial position, but this penalty pin "
+                                 f"would let it move by its spring's stretch; use method "
+                                 f"'constraint' (cloth.pin_method for the pins a cloth's files "
+                                 f"declare) or give the vertex a mass", field="pin.method")
+        if self.method == "penalty" and len(self.vertices):  # lost in M + h²L's rounding?
+            m = model.vertex_mass[self.vertices]
+            held = h * h * self.stiffness / m
+            if held.min() <= np.finfo(np.float64).eps:
+                i = int(np.argmin(held))
+                raise InputError(f"pin.stiffness: {self.stiffness!r} N/m is lost in the rounding "
+                                 f"of vertex {self.vertices[i]}'s mass {m[i]:.3g} kg with h = "
+                                 f"{h:.3g} s (h²k/m = {held[i]:.3g}, below ε = 2.2e-16): the pin "
+                                 f"would hold nothing", field="pin.stiffness")
         self._rest = model.mesh.vertices[self.vertices].copy()
         self._empty = PinSet()
 

@@ -11,6 +11,13 @@ module                  what it reads or writes
 ``io.cells``            a mesh as the cell blocks mesh files store
 ``io.frames``           one ``.vtu`` per frame and ``trajectory.pvd``
                         (:class:`FrameWriter`, :func:`read_frame`, :func:`read_pvd`)
+``io.runfolder``        a run's folder, its one owner (:class:`RunFolder`): frames,
+                        trajectory store, run.json, status, resume point
+``io.outfolder``        any output folder from claim to final status (:class:`OutputFolder`)
+``io.folders``          which folders clothsim may write, their kinds and statuses
+``io.lock``             the folder lock ``.clothsim.lock`` (never followed, then removed)
+``io.resume``           where ``--resume`` continues
+``io.diskspace``        the disk a run needs, estimated before it writes
 ``io.runfiles``         ``run.json`` and ``trajectory.npz`` of a run, streamed to disk
 ``io.matrices``         Matrix Market matrices and text vectors for other implementations
 ``io.assignment``       the scene format of A. Jacobson's mass-spring assignment

@@ -41,6 +41,7 @@ import numpy as np
 from ..errors import InputError, SceneError
 from ..mesh import Mesh, fan_triangles
 from ..voronoi import voronoi_areas
+from .common import file_stamp
 from .obj import read_obj_cells
 
 
@@ -159,7 +160,8 @@ def read_assignment(path) -> Assignment:
     -------
     Assignment
         Mesh [m], springs, stiffness [N/m], vertex masses [kg] and pins (read-only
-        arrays; cached by path and modification time).
+        arrays; cached by the JSON's and the OBJ's path and :func:`~clothsim.io.common.file_stamp`:
+        an edit of either is read again).
 
     Raises
     ------
@@ -167,12 +169,18 @@ def read_assignment(path) -> Assignment:
         ``"<file>: <key>: <what is wrong>"`` for any problem in the JSON or the OBJ.
     """
     p = Path(path).resolve()
-    stamp = p.stat().st_mtime_ns if p.is_file() else 0
-    return _read_cached(str(p), stamp)
+    files = [p]
+    try:  # the key covers every file read: the JSON and the OBJ it names
+        obj = json.loads(p.read_text(encoding="utf-8")).get("obj")
+        if isinstance(obj, str):
+            files.append(p.parent / obj)
+    except (OSError, ValueError, AttributeError):
+        pass  # reported, naming the key, by _read_cached
+    return _read_cached(str(p), tuple((str(f), file_stamp(f)) for f in files))
 
 
 @lru_cache(maxsize=4)
-def _read_cached(path: str, stamp: int) -> Assignment:
+def _read_cached(path: str, stamps: tuple) -> Assignment:
     p = Path(path)
     data = _load_json(p)
     k = _number(p, "k", data["k"])

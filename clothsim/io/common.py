@@ -67,6 +67,28 @@ def refuse_special(path, *, inside: bool = False) -> None:
             refuse_special(entry.path)
 
 
+def file_stamp(path) -> tuple | None:
+    """What changes whenever a file's content may have: a cache key for what was read from it.
+
+    Parameters
+    ----------
+    path : str or path-like
+
+    Returns
+    -------
+    tuple or None
+        ``(st_mtime_ns, st_size, st_ctime_ns, st_ino, st_dev)`` (a rewrite in the same
+        nanosecond, even one that keeps the size and restores the modification time, changes
+        ``st_ctime_ns``; a file replaced by another changes the inode), or None when ``path``
+        cannot be examined.
+    """
+    try:
+        st = os.stat(path)
+    except (OSError, ValueError):
+        return None
+    return st.st_mtime_ns, st.st_size, st.st_ctime_ns, st.st_ino, st.st_dev
+
+
 def load_meshio():
     """The meshio module (imported here, so ``import clothsim`` stays light).
 
@@ -147,7 +169,9 @@ def quietly(call, *args, **kwargs):
 @contextmanager
 def atomic_path(path):
     """Yield a temporary name beside ``path``; on success move it onto ``path``
-    (:func:`os.replace`, atomic), otherwise delete it. Readers never see a partial file.
+    (:func:`os.replace`, atomic), otherwise delete it. Readers never see a partial file, an
+    :class:`OSError` names ``path`` (a full disk's names no file), and a link at the
+    temporary name is removed first, never written through.
 
     Parameters
     ----------
@@ -164,10 +188,11 @@ def atomic_path(path):
     path = Path(path)
     tmp = path.with_name(f".{path.name}.{os.getpid()}.tmp{path.suffix}")
     try:
+        tmp.unlink(missing_ok=True)  # a link planted there is removed, never written through
         yield tmp
         os.replace(tmp, path)
-    except OSError as exc:   # the error names the file the caller asked for
-        if exc.filename is not None and Path(os.fsdecode(exc.filename)) == tmp:
+    except OSError as exc:   # the error names the file the caller asked for (a full disk's
+        if exc.filename is None or Path(os.fsdecode(exc.filename)) == tmp:  # has no name)
             exc.filename = str(path)
         raise
     finally:

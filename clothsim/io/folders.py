@@ -8,20 +8,23 @@ accuracy study (``clothsim accuracy``), a ``README.md`` headed as a conformance 
 coursework profile's for those (``clothsim conformance``, ``--profile coursework``): one
 folder, one profile. Anything else is refused with an
 :class:`~clothsim.errors.InputError` naming the folder and its first foreign file, unless
-``force`` is given. :class:`FolderLock` is an exclusive :func:`fcntl.flock` on
-``<folder>/.clothsim.lock``, taken by every kind alike.
+``force`` is given. :class:`FolderLock` (:mod:`clothsim.io.lock`) is an exclusive
+:func:`fcntl.flock` on ``<folder>/.clothsim.lock``, taken by every kind alike.
+
+Each record also holds the folder's status (:data:`STATUSES`), written by
+:meth:`clothsim.io.outfolder.OutputFolder.mark` and read by :func:`folder_state`;
+:func:`require_complete` is what readers call before they read a folder.
 """
 
 from __future__ import annotations
 
-import fcntl
 import json
-import os
+from dataclasses import dataclass
 from pathlib import Path
 
 from ..errors import InputError
+from .lock import LOCK_NAME, FolderLock
 
-LOCK_NAME = ".clothsim.lock"
 RUN_RECORD = "run.json"
 EXPORT_RECORD = "manifest.json"
 ACCURACY_RECORD = "accuracy.json"
@@ -77,13 +80,22 @@ def folder_kind(folder) -> str | None:
 
 def _first_line(path: Path) -> str | None:
     """The first line of a small text file (None when missing or unreadable)."""
+    return _line(path, 0)
+
+
+def _line(path: Path, index: int) -> str | None:
+    """Line ``index`` (0-based, at most 200 bytes) of a text file (None when missing,
+    unreadable or shorter)."""
     try:
         if not path.is_file():
             return None
         with open(path, "rb") as fh:
-            return fh.readline(200).decode("utf-8", "replace").rstrip("\r\n")
+            for _ in range(index):
+                fh.readline(200)
+            line = fh.readline(200)
     except OSError:
         return None
+    return line.decode("utf-8", "replace").rstrip("\r\n") if line else None
 
 
 def _foreign_entries(p: Path) -> list[str]:
@@ -146,67 +158,154 @@ def claim_folder(folder, kind: str, *, force: bool = False) -> Path:
                      f"{kind} folder (choose another --out, or --force to write into it)")
 
 
-class FolderLock:
-    """Exclusive lock on an output folder, held from :meth:`acquire` to :meth:`release`.
+STATUSES = ("writing", "complete", "interrupted", "failed")
+"""A folder's status, kept in its record: ``writing`` from before its first file until its
+writer ends, then ``complete``, ``interrupted`` (a signal) or ``failed`` (an error)."""
+RECORDS = {"run": RUN_RECORD, "export": EXPORT_RECORD, "accuracy": ACCURACY_RECORD,
+           "conformance": CONFORMANCE_RECORD, "coursework": CONFORMANCE_RECORD}
+#: the word a kind's record stores for a status where it is not the status itself:
+#: run.json and accuracy.json said "running" and "completed" before the statuses were one
+#: set, and scripts read them
+WORDS = {"run": {"writing": "running", "complete": "completed"},
+         "accuracy": {"writing": "running"}}
+#: the line a conformance README carries below its heading while it is not complete
+STATUS_PREFIX = "status: "
+#: how to complete a folder of each kind that is not complete
+REMEDY = {"run": "finish it with clothsim run --resume, or run it again",
+           "export": "write it again with clothsim export",
+           "accuracy": "run the study again with clothsim accuracy",
+           "conformance": "write the set again with clothsim conformance",
+           "coursework": "write the set again with clothsim conformance --profile coursework"}
+_MEANING = {"writing": "still being written, or its writer was killed",
+            "interrupted": "its writer was interrupted", "failed": "its writer failed"}
+
+
+def folder_record(folder, kind: str) -> dict | None:
+    """The JSON record of ``kind`` in ``folder`` (``run.json``, ``manifest.json``,
+    ``accuracy.json``), whatever it says.
 
     Parameters
     ----------
-    folder : Path
-        The output folder (exists).
-    kind : {"run", "export", "accuracy", "conformance", "coursework"}, default "run"
-        What this process writes there (written into the lock file beside its id, so that
-        a process refused the lock is told what holds it).
+    folder : str or Path
+    kind : {"run", "export", "accuracy"}
+
+    Returns
+    -------
+    dict or None
+        None when it is missing, unreadable or not a JSON object.
+    """
+    return _record(Path(folder) / RECORDS[kind])
+
+
+def status_word(kind: str, status: str) -> str:
+    """The word ``kind``'s record stores for ``status`` (e.g. run.json's ``"completed"``).
+
+    Parameters
+    ----------
+    kind : {"run", "export", "accuracy", "conformance", "coursework"}
+    status : {"writing", "complete", "interrupted", "failed"}
+
+    Returns
+    -------
+    str
+    """
+    if status not in STATUSES:
+        raise ValueError(f"status: must be one of {', '.join(STATUSES)}, got {status!r}")
+    return WORDS.get(kind, {}).get(status, status)
+
+
+@dataclass(frozen=True)
+class FolderState:
+    """What an output folder's record says about it (:func:`folder_state`).
+
+    Attributes
+    ----------
+    kind : str or None
+        As :func:`folder_kind`; None for a folder clothsim did not write.
+    status : {"writing", "complete", "interrupted", "failed"} or None
+        None when ``kind`` is None.
+    word : str or None
+        The record's own word for it (``"running"`` in run.json for ``"writing"``).
+    error : str or None
+        The one-line error an interrupted or failed writer recorded.
+    """
+
+    kind: str | None
+    status: str | None = None
+    word: str | None = None
+    error: str | None = None
+
+    @property
+    def record(self) -> str | None:
+        """The record's file name, e.g. ``manifest.json`` (None for a foreign folder)."""
+        return RECORDS.get(self.kind)
+
+
+def folder_state(folder) -> FolderState:
+    """The kind and status of an output folder, read from its record.
+
+    An export manifest without a status (written before statuses) is complete when it lists
+    its files; a conformance README without a ``status:`` line below its heading is
+    complete.
+
+    Parameters
+    ----------
+    folder : str or Path
+
+    Returns
+    -------
+    FolderState
+    """
+    p = Path(folder)
+    kind = folder_kind(p)
+    if kind is None:
+        return FolderState(None)
+    if kind in ("conformance", "coursework"):
+        line = _line(p / CONFORMANCE_RECORD, 2) or ""
+        word, _, error = line.removeprefix(STATUS_PREFIX).partition(" ")
+        word = word if line.startswith(STATUS_PREFIX) else "complete"
+        error = error.strip("() ") or None
+    else:
+        record = _record(p / RECORDS[kind]) or {}
+        legacy = "complete" if kind == "export" and "files" in record else "writing"
+        word = str(record.get("status", legacy))
+        error = record.get("error") if isinstance(record.get("error"), str) else None
+    words = {status_word(kind, s): s for s in STATUSES}
+    return FolderState(kind, words.get(word, "writing"), word, error)
+
+
+def require_complete(path) -> None:
+    """Refuse to read an output folder of clothsim (or a file directly in one) whose status
+    is not ``complete``: what it holds may be half of one output and half of an earlier.
+
+    Parameters
+    ----------
+    path : str or Path
+        A folder, or a file in a folder, about to be read (a folder clothsim did not write
+        passes).
+
+    Returns
+    -------
+    None
 
     Raises
     ------
     InputError
-        From :meth:`acquire`, when another process holds the lock: names the folder, what
-        that process writes and its id.
+        Naming the folder, its record's status and how to complete it, in one line.
     """
-
-    def __init__(self, folder, kind: str = "run"):
-        if kind not in KINDS:
-            raise ValueError(f"kind: must be one of {', '.join(KINDS)}, got {kind!r}")
-        self.path = Path(folder) / LOCK_NAME
-        self.kind = kind
-        self._fd: int | None = None
-
-    def acquire(self) -> FolderLock:
-        """Take the lock (without waiting) and write this process's id and kind into the
-        lock file.
-
-        Returns
-        -------
-        FolderLock
-            ``self``.
-        """
-        fd = os.open(self.path, os.O_RDWR | os.O_CREAT, 0o644)
-        try:
-            fcntl.flock(fd, fcntl.LOCK_EX | fcntl.LOCK_NB)
-        except OSError:
-            words = os.pread(fd, 64, 0).decode("ascii", "replace").split()
-            os.close(fd)
-            holder = words[0] if words else "unknown"
-            what = KINDS.get(words[1], "a clothsim run") if len(words) > 1 else "a clothsim run"
-            raise InputError(f"{self.path.parent}: another {what.split(' ', 1)[1]} (pid "
-                             f"{holder}) is writing into this folder; wait for it or choose "
-                             "another --out") from None
-        os.ftruncate(fd, 0)
-        os.pwrite(fd, f"{os.getpid()} {self.kind}\n".encode("ascii"), 0)
-        self._fd = fd
-        return self
-
-    def release(self) -> None:
-        """Release the lock (no-op when not held); the lock file stays."""
-        if self._fd is not None:
-            os.close(self._fd)  # closing the descriptor releases the flock
-            self._fd = None
-
-    def __enter__(self) -> FolderLock:
-        return self.acquire()
-
-    def __exit__(self, *exc) -> None:
-        self.release()
+    p = Path(path)
+    folder = p if p.is_dir() else p.parent
+    try:
+        state = folder_state(folder)
+    except OSError:
+        return  # the reader names the unreadable file itself
+    if state.kind is None or state.status == "complete":
+        return
+    why = _MEANING[state.status] + (f": {state.error}" if state.error else "")
+    raise InputError(f"{folder}: {KINDS[state.kind]} whose {state.record} says "
+                     f"{state.word!r}, not complete ({why}); refusing to read it: "
+                     f"{REMEDY[state.kind]}")
 
 
-__all__ = ["FolderLock", "LOCK_NAME", "claim_folder", "folder_kind"]
+__all__ = ["FolderLock", "FolderState", "LOCK_NAME", "STATUSES", "claim_folder",
+           "folder_kind", "folder_record", "folder_state", "require_complete", "status_word"]

@@ -27,6 +27,8 @@ from .common import MeshioFailure, atomic_path, load_meshio, one_line, quietly
 logger = logging.getLogger(__name__)
 
 PVD_NAME = "trajectory.pvd"
+#: File name of the obstacle surfaces in a run folder (beside ``trajectory.pvd``).
+OBSTACLES_NAME = "obstacles.vtu"
 FRAME_COMPRESSIONS = ("auto", "zlib", "none")
 #: Vertices up to which "auto" compresses frames. meshio's zlib (level 6, one core) costs
 #: about 4 µs of CPU per vertex and frame and shrinks the file to about a third, while the
@@ -36,6 +38,10 @@ FRAME_COMPRESSIONS = ("auto", "zlib", "none")
 #: small; above, it costs a second or more a frame, as much as a step, for files that are
 #: large either way.
 ZLIB_UP_TO = 100_000
+#: Size of a zlib frame over a raw one, at most: 0.48 measured at 129² and 257² with
+#: random velocities (nothing to compress there); a smooth cloth's frames shrink more
+#: (0.12 for hanging at 21²), so a zlib run's estimate is an upper bound.
+ZLIB_RATIO = 0.5
 
 
 def choose_frame_compression(vertex_count: int, requested: str = "auto") -> tuple[str, str]:
@@ -163,6 +169,26 @@ class FrameWriter:
             ``<basename>_<index:06d>.vtu`` (a name, not a path).
         """
         return f"{self.basename}_{index:06d}.vtu"
+
+    def estimated_bytes(self) -> int:
+        """Bytes of one frame file, estimated before any is written: within a few % for
+        raw frames, an upper bound for zlib ones.
+
+        Raw frames hold per vertex 24 bytes of positions, 24 of velocities, 4 of
+        ``stretch`` and 1 of ``pinned``, per cell its vertex indices, an offset and a type
+        (8 bytes each) and 4 of ``area_ratio``, base64-encoded (4/3); zlib frames are
+        counted at :data:`ZLIB_RATIO` of that (``benchmarks/scale_ladder.py`` measures
+        both).
+
+        Returns
+        -------
+        int
+        """
+        per_vertex = 48 + (4 if self._fields_of is not None else 0) + (
+            1 if self.pinned is not None else 0)
+        per_cells = sum(len(c) * (8 * c.shape[1] + 20) for _, c in self._cells)
+        data = (per_vertex * self.mesh.vertex_count + per_cells) * 4 / 3
+        return int(data * (ZLIB_RATIO if self.compression == "zlib" else 1.0)) + 1024
 
     def write(self, index: int, time: float, positions, velocities) -> Path:
         """Write frame ``index`` at ``time`` [s]; return its path.

@@ -2,8 +2,8 @@
 
 :class:`TrajectoryStore` appends positions and velocities frame by frame to two raw float64
 files (a run never holds its trajectory in memory) and assembles ``trajectory.npz`` from
-them in chunks. The folder lock (:class:`FolderLock`) and the ownership checks are in
-:mod:`clothsim.io.folders`.
+them in chunks. The folder that holds them, its lock and its status are
+:class:`clothsim.io.runfolder.RunFolder`'s.
 :func:`write_json` writes ``run.json`` atomically (strict JSON: non-finite floats become
 strings); :func:`read_json` reads it.
 """
@@ -12,10 +12,9 @@ from __future__ import annotations
 
 import json
 import math
+import os
 import platform
-import time as _time
 import zipfile
-from datetime import UTC, datetime
 from pathlib import Path
 
 import numpy as np
@@ -32,9 +31,7 @@ def _json_default(obj):
         return obj.tolist()
     if isinstance(obj, np.generic):
         return obj.item()
-    if isinstance(obj, Path):
-        return str(obj)
-    raise TypeError(f"not JSON serializable: {type(obj).__name__}")
+    return str(obj)  # a Path, a version, ...: as text
 
 
 def _clean(value):
@@ -102,7 +99,7 @@ class TrajectoryStore:
         self.folder = Path(folder)
         self.n = int(vertex_count)
         self.paths = {name: self.folder / f".{name}.f64" for name in self.NAMES}
-        self._files = {name: open(p, "wb") for name, p in self.paths.items()}
+        self._files = {name: _create(p) for name, p in self.paths.items()}
         self.count = 0
 
     @property
@@ -122,8 +119,12 @@ class TrajectoryStore:
             a = np.ascontiguousarray(a, dtype="<f8")
             if a.shape != (self.n, 3):
                 raise InputError(f"{name}: expected shape ({self.n}, 3), got {a.shape}")
-            self._files[name].write(a.tobytes())
-            self._files[name].flush()
+            try:
+                self._files[name].write(a.tobytes())
+                self._files[name].flush()
+            except OSError as exc:  # a full disk's error names no file
+                exc.filename = exc.filename or str(self.paths[name])
+                raise
         self.count += 1
 
     def view(self, name: str, count: int | None = None) -> np.ndarray:
@@ -196,6 +197,14 @@ class TrajectoryStore:
                 p.unlink(missing_ok=True)
 
 
+def _create(path: Path):
+    """A new file opened for writing: an earlier one (or a link) at ``path`` is removed
+    first, and the file is created exclusively, never through a link."""
+    path.unlink(missing_ok=True)
+    fd = os.open(path, os.O_WRONLY | os.O_CREAT | os.O_EXCL | os.O_NOFOLLOW, 0o644)
+    return os.fdopen(fd, "wb")
+
+
 def package_versions() -> dict[str, str | None]:
     """Versions of python and of the packages a run depends on (None if not installed).
 
@@ -256,88 +265,5 @@ def model_arrays(model) -> dict[str, np.ndarray]:
                 vertex_mass=np.asarray(model.vertex_mass, np.float64))
 
 
-class RunRecord:
-    """``run.json`` and ``trajectory.npz`` of a run in progress.
-
-    Parameters
-    ----------
-    out : Path
-        The run folder.
-    info : dict
-        What run.json says besides the status, the last frame and the records.
-    wall : float
-        :func:`time.perf_counter` at the start of the run.
-    """
-
-    def __init__(self, out: Path, info: dict, wall: float):
-        self.out, self.info, self.wall = out, info, wall
-        self.records: list[dict] = []
-        self.done = -1
-        self.status = "running"
-        self.npz_frames: int | None = None
-        self._npz_at = -np.inf   # perf_counter when trajectory.npz was last written
-        self._npz_cost = 0.0     # seconds that took
-
-    def save_npz(self, store: TrajectoryStore, model, fps: float, force: bool = False) -> None:
-        """Rebuild trajectory.npz from the store when forced, or when the time since the last
-        rebuild exceeds both 2 s and 20 × its cost (at most ~5 % of the run's time).
-
-        Parameters
-        ----------
-        store : TrajectoryStore
-            The frames so far; frames ``0..done`` are written.
-        model : Model
-            Its :func:`model_arrays` are stored too.
-        fps : float
-            Frames per second [1/s]; frame k is at time k / fps [s].
-        force : bool
-
-        Returns
-        -------
-        None
-        """
-        now = _time.perf_counter()
-        if not force and now - self._npz_at < max(2.0, 20 * self._npz_cost):
-            return
-        count = self.done + 1
-        store.write_npz(self.out / "trajectory.npz", count,
-                        dict(time=np.arange(count) / fps, **model_arrays(model)))
-        self.npz_frames = count
-        self._npz_at = _time.perf_counter()
-        self._npz_cost = self._npz_at - now
-
-    def write(self, status: str, error: str | None) -> None:
-        """Write ``run.json`` atomically: info, status, error, wall time [s], frame records.
-
-        Parameters
-        ----------
-        status : str
-            ``"running"``, or how the run ended.
-        error : str or None
-            One-line error message, if the run failed.
-        """
-        self.status = status
-        data = dict(self.info)
-        data.update(status=status, last_frame=self.done if self.done >= 0 else None,
-                    trajectory_frames=self.npz_frames, error=error,
-                    wall_seconds=_time.perf_counter() - self.wall,
-                    finished=(datetime.now(UTC).isoformat(timespec="seconds")
-                              if status != "running" else None),
-                    frames=self.records)
-        write_json(self.out / "run.json", data)
-
-    def finish(self, store, model, fps: float, status: str, error: str | None) -> None:
-        """Write trajectory.npz one last time (if any frame is done), then ``run.json``.
-
-        Parameters
-        ----------
-        store, model, fps, status, error
-            As for :meth:`save_npz` and :meth:`write`.
-        """
-        if self.done >= 0:
-            self.save_npz(store, model, fps, force=True)
-        self.write(status, error)
-
-
-__all__ = ["TrajectoryStore", "FolderLock", "RunRecord", "write_json", "read_json",
+__all__ = ["TrajectoryStore", "FolderLock", "write_json", "read_json",
            "write_trajectory", "model_arrays", "package_versions", "LOCK_NAME"]

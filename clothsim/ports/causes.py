@@ -32,13 +32,12 @@ from .hypotheses import (
     REPLACING,
     StepData,
     applicable,
-    approach,
     columns,
     fit,
     fit_vertex_force,
     relative,
-    replay,
 )
+from .replays import approach, replay
 
 log = logging.getLogger(__name__)
 

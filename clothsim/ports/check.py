@@ -19,8 +19,14 @@ from ..simulation import State
 from ..solvers import make_solver
 from .causes import FITTED, StepData, name_cause
 from .compare import EPS32, RTOL64, cloth_size, condition_number
-from .judge import gradient_scale, judge, pin_role, pinned_moved
-from .rounding import float32_deviation, float32_tolerance
+from .judge import gradient_scale, judge, pin_role, pinned_moved, refine
+from .precision import Printed
+from .rounding import (
+    converged_float32_floor,
+    float32_deviation,
+    float32_newton_stagnation,
+    float32_tolerance,
+)
 from .verdicts import PASSING, CheckReport, StepCheck
 
 #: Failing steps whose settings are searched for along clothsim's iterations (the rest
@@ -55,8 +61,10 @@ def as_simulation(source):
 def step_tolerance(sim, x: np.ndarray, precision: str = "float64") -> float:
     """Allowed per-vertex distance of one step [m] (docs/ports.md derives it).
 
-    float64: 1e-9 of the cloth size. float32: the next step's measured float32 bound
-    (:func:`clothsim.ports.rounding.float32_tolerance`), at least the float64 tolerance.
+    float64: 1e-9 of the cloth size. float32: the next step's float32 bound
+    (:func:`clothsim.ports.rounding.float32_tolerance`), at least the float64 tolerance:
+    measured on its local/global iterations, or for a Newton scene the converged floor at
+    the step's minimizer.
 
     Parameters
     ----------
@@ -76,8 +84,11 @@ def step_tolerance(sim, x: np.ndarray, precision: str = "float64") -> float:
         raise InputError(f"precision: must be 'float32' or 'float64', got {precision!r}")
     tol = RTOL64 * cloth_size(x)
     if precision == "float32":
-        problem = sim.problem(sim.state)
-        tol = float32_tolerance(sim.step_model(), problem, sim.solver.iterations, tol)
+        problem, model = sim.problem(sim.state), sim.step_model()
+        iterated = sim.solver.name != "newton"
+        x_min = None if iterated else refine(model, problem, problem.initial_guess())
+        tol = float32_tolerance(model, problem, sim.solver.iterations, tol, x=x_min,
+                                iterated=iterated)
     return tol
 
 
@@ -100,7 +111,7 @@ def system_condition_number(sim) -> float:
 
 def check_steps(simulation, positions, velocities=None, *, precision: str = "float64",
                 tolerance: float | None = None, optimality: float = 1e-6,
-                steps: int | None = None) -> CheckReport:
+                steps: int | None = None, expected_steps: int | None = None) -> CheckReport:
     """Check every step k → k + 1 of a port's trajectory against clothsim's step.
 
     Parameters
@@ -122,20 +133,31 @@ def check_steps(simulation, positions, velocities=None, *, precision: str = "flo
         of ‖∇g‖, ε₃₂-based for float32).
     steps : int, optional
         Check only the first this many steps.
+    expected_steps : int, optional
+        The steps a whole output holds (``clothsim check`` passes the scene's frames unless
+        ``--steps`` is given): a port that wrote fewer fails, naming both counts (the
+        steps it did write are still judged). Default: any number.
 
     Returns
     -------
     CheckReport
     """
     sim = as_simulation(simulation)
+    if expected_steps is not None and expected_steps < 0:
+        raise InputError(f"expected_steps: must be >= 0, got {expected_steps}")
     xs, vs, notes = _frames(sim, positions, velocities, steps)
     if precision not in ("float32", "float64"):
         raise InputError(f"precision: must be 'float32' or 'float64', got {precision!r}")
     h = sim.h
     tol64 = tolerance if tolerance is not None else step_tolerance(sim, xs[0])
     count = len(xs) - 1 if steps is None else min(int(steps), len(xs) - 1)
+    printed = Printed(xs[:count + 1], None if velocities is None else vs[:count + 1], h,
+                      tol64) if tolerance is None else None
+    if printed is not None and printed.note:
+        notes.append(printed.note)
     projected = [e.kind for e in sim.effects if overrides(e, "correct_positions")]
     iterations = sim.solver.iterations
+    iterated = sim.solver.name != "newton"   # a converged method: the converged floor only
     out, searches, unexplained, others = [], 0, [], []
 
     def replay(model, problem):   # clothsim's step of another model, the same settings
@@ -156,14 +178,15 @@ def check_steps(simulation, positions, velocities=None, *, precision: str = "flo
         err = np.where(np.isfinite(err), err, np.inf)
         worst = int(np.argmax(err))
 
-        def bound32(model=model, problem=problem):
-            return float32_tolerance(model, problem, iterations, tol64)
+        def bound32(model=model, problem=problem, x_cs=x_cs):
+            return float32_tolerance(model, problem, iterations, tol64, x=x_cs,
+                                     iterated=iterated)
 
-        tol = tol64
-        if precision == "float32" and tolerance is None and err[worst] > tol64:
-            tol = bound32()
+        tol = tol_k = tol64 if printed is None else float(printed.tolerances[k])
+        if precision == "float32" and tolerance is None and err[worst] > tol_k:
+            tol = max(tol_k, bound32())
         moved = pinned_moved(problem, x_port, tol if precision == "float64"
-                             else max(tol64, 4 * EPS32 * float(np.abs(x_port).max())))
+                             else max(tol_k, 4 * EPS32 * float(np.abs(x_port).max())))
         if moved is not None:
             v, dist = moved
             step = StepCheck(k, "pinned vertex moved", float(err[worst]), v, role=pin_role(
@@ -179,22 +202,16 @@ def check_steps(simulation, positions, velocities=None, *, precision: str = "flo
                                      note=f"|v_clothsim - v_port| = {verr.max():.3e} m/s")
         else:
             step = judge(sim, model, problem, k, x_cs, x_port, err, tol, optimality, precision,
-                         search=searches < MAX_SEARCHES)
+                         search=searches < MAX_SEARCHES, unit=printed and printed.unit)
             searches += 1
             if step.status in FITTED + ("start-dependent",) and not step.settings:
-                g0, opt = gradient_scale(model, problem, x_port, optimality, precision)
+                g0, opt = gradient_scale(model, problem, x_port, optimality, precision,
+                                         printed and printed.unit)
                 (unexplained if step.status in FITTED else others).append(StepData(
                     k, model, problem, x_port, g0, opt, step.gradient_clothsim,
                     float(err[worst]), tol, replay))
-            if (precision == "float64" and tolerance is None and not step.passed
-                    and _float32_data(x_port)):
-                b32 = bound32()
-                if err[worst] <= b32 and not step.settings:
-                    step.status = "float32 rounding"
-                    step.note = (f"the error is within float32 rounding of this step "
-                                 f"({b32:.3e} m, measured by running clothsim's step in "
-                                 f"float32): if the port computes in float32, check with "
-                                 f"precision float32")
+            if precision == "float64" and printed is not None and not step.passed:
+                printed.hint32(step, float(err[worst]), lambda b=bound32, t=tol_k: max(t, b()))
             if projected:
                 step.note += (f"; positions are corrected after the solve by "
                               f"{', '.join(projected)}, so optimality for g alone is only "
@@ -203,11 +220,14 @@ def check_steps(simulation, positions, velocities=None, *, precision: str = "flo
             step.role = pin_role(problem, step.vertex)
         out.append(step)
     name_cause({s.k: s for s in out}, unexplained, others)   # a model the port solves?
-    return CheckReport(out, float(tol64), precision, notes)
+    return CheckReport(out, float(tol64), precision, notes, expected_steps=expected_steps,
+                       printed=printed.text if printed is not None else "")
 
 
 def float32_report(scenes=("hanging", "jacobson-net", "jacobson-flag", "drop-on-square")) -> None:
-    """Print, per scene, the first step's float32 deviation, tolerance and the κ bound.
+    """Print, per scene, the first step's float32 deviation, tolerance and κ bound, and the
+    converged float32 floor beside where a float32 Newton iteration from the minimizer
+    stagnates (a converged step's tolerance is ``MARGIN`` × the floor).
 
     The numbers of docs/ports.md ("float32 ports") are this function's output.
 
@@ -219,26 +239,20 @@ def float32_report(scenes=("hanging", "jacobson-net", "jacobson-flag", "drop-on-
     from ..scene import load_scene
 
     print(f"{'scene':16} {'n':>5} {'K':>4} {'deviation':>10} {'tolerance':>10} "
-          f"{'kappa bound':>11}")
+          f"{'kappa bound':>11} {'floor':>9} {'stagnation':>10}")
     for name in scenes:
         sim = as_simulation(load_scene(name))
         x = sim.state.positions
         problem = sim.problem(sim.state)
         K = sim.solver.iterations
         dev = float32_deviation(sim.step_model(), problem, K)
-        tol = float32_tolerance(sim.step_model(), problem, K, RTOL64 * cloth_size(x))
+        tol = step_tolerance(sim, x, "float32")
         kappa = system_condition_number(sim) * EPS32 * float(np.abs(x).max())
+        x_min = refine(sim.step_model(), problem, problem.initial_guess())
+        floor = converged_float32_floor(sim.step_model(), problem, x_min)
+        stag = float32_newton_stagnation(sim.step_model(), problem, x_min)
         print(f"{name:16} {sim.model.vertex_count:5d} {K:4d} {dev:10.2e} {tol:10.2e} "
-              f"{kappa:11.2e}")
-
-
-def _float32_data(x: np.ndarray) -> bool:
-    """True when (nearly) every coordinate is a float32 number: data a float32 port wrote.
-
-    A float64 port's answer is not; its differences are not float32 rounding however small
-    (a pin of another stiffness moves a vertex by as little as rounding would).
-    """
-    return float(np.mean(x.astype(np.float32).astype(np.float64) == x)) > 0.99
+              f"{kappa:11.2e} {floor:9.2e} {stag:10.2e}")
 
 
 def _frames(sim, positions, velocities, steps):

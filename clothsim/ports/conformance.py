@@ -10,12 +10,12 @@ checkable step by step because each scene file is a complete clothsim scene.
 from __future__ import annotations
 
 import json
-from pathlib import Path
 
 import numpy as np
 
 from ..io.common import atomic_path, write_text
-from ..io.folders import CONFORMANCE_HEADING, FolderLock, claim_folder
+from ..io.folders import CONFORMANCE_HEADING
+from ..io.outfolder import OutputFolder
 from ..scene import Scene
 from ..simulation import State
 from .export import export_port
@@ -187,14 +187,15 @@ def write_conformance(out_dir, *, frames: int = 20, iterate_steps: int = 2,
     list of str
         The case names written, one folder each.
     """
-    out = claim_folder(out_dir, "conformance", force=force)
-    out.mkdir(parents=True, exist_ok=True)
-    with FolderLock(out, "conformance"):
-        return _write_cases(out, frames, iterate_steps,
+    with OutputFolder(out_dir, "conformance", force=force) as folder:
+        folder.mark("writing")  # its README says so until every case is written
+        return _write_cases(folder, frames, iterate_steps,
                             list(CASES) if cases is None else list(cases))
 
 
-def _write_cases(out: Path, frames: int, iterate_steps: int, names: list[str]) -> list[str]:
+def _write_cases(folder: OutputFolder, frames: int, iterate_steps: int,
+                 names: list[str]) -> list[str]:
+    out = folder.path
     lines = []
     for name in names:
         doc = CASES[name]
@@ -207,5 +208,5 @@ def _write_cases(out: Path, frames: int, iterate_steps: int, names: list[str]) -
             with atomic_path(d / "initial-state.txt") as tmp:
                 np.savetxt(tmp, np.load(d / "trajectory.npz")["positions"][0], fmt="%.17g")
         lines.append(f"- `{name}`: {doc['scene']['description']}")
-    write_text(out / "README.md", README + "\n".join(lines) + "\n")
+    folder.mark("complete", README + "\n".join(lines) + "\n")
     return names

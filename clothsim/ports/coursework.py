@@ -31,7 +31,8 @@ import numpy as np
 
 from ..io.assignment import scene_dict
 from ..io.common import write_text
-from ..io.folders import COURSEWORK_HEADING, FolderLock, claim_folder
+from ..io.folders import COURSEWORK_HEADING, claim_folder
+from ..io.outfolder import OutputFolder
 from ..scene import Scene
 from .conformance import to_toml
 from .export import export_port
@@ -132,14 +133,14 @@ def write_coursework(out_dir, *, frames: int = 30, cases=None,
     list of str
         The case names written, one folder each.
     """
-    out = claim_folder(out_dir, "coursework", force=force)
-    out.mkdir(parents=True, exist_ok=True)
-    with FolderLock(out, "coursework"):
-        return _write_cases(out, frames, list(CASES) if cases is None else list(cases))
+    with OutputFolder(out_dir, "coursework", force=force) as folder:
+        folder.mark("writing")  # its README says so until every case is written
+        return _write_cases(folder, frames, list(CASES) if cases is None else list(cases))
 
 
-def _write_cases(out: Path, frames: int, names: list[str]) -> list[str]:
+def _write_cases(folder: OutputFolder, frames: int, names: list[str]) -> list[str]:
     table = _cases()
+    out = folder.path
     lines = []
     for name in names:
         (x, faces), spec, description = table[name]
@@ -155,5 +156,5 @@ def _write_cases(out: Path, frames: int, names: list[str]) -> list[str]:
         scene = Scene.from_dict(scene_doc, source=str(d / "scene.toml"), base_dir=d)
         export_port(scene, d, frames=frames, iterate_steps=0, force=True)  # beside case.*
         lines.append(f"- `{name}`: {description}")
-    write_text(out / "README.md", README + "\n".join(lines) + "\n")
+    folder.mark("complete", README + "\n".join(lines) + "\n")
     return names

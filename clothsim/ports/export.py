@@ -34,6 +34,8 @@ import numpy as np
 import scipy.sparse as sp
 
 from .. import io, matrices
+from ..io.outfolder import OutputFolder
+from ..io.runfiles import read_json
 from ..solvers.local_global import LocalGlobalSolver
 from .check import as_simulation, system_condition_number
 from .model_folder import damping_text
@@ -245,21 +247,32 @@ def export_port(source, out_dir, *, frames: int = 60, iterate_steps: int = 3,
         The folder is not clothsim's export folder (and not ``force``), or another clothsim
         process (a run, an export) holds its lock.
     """
-    from ..io.folders import FolderLock, claim_folder
-
     sim = as_simulation(source)
-    out = claim_folder(out_dir, "export", force=force)
-    out.mkdir(parents=True, exist_ok=True)
-    with FolderLock(out, "export"):
-        claim_folder(out, "export", force=force)
-        # the folder is an export folder before any other file is written
-        (out / "manifest.json").write_text(json.dumps({"layout": LAYOUT, "status": "writing"}))
-        return _export_locked(source, sim, out, frames, iterate_steps)
+    with OutputFolder(out_dir, "export", force=force) as folder:
+        stale = _earlier_export(folder)
+        # the folder is an export folder being written before any file is removed or written
+        folder.mark("writing", {"layout": LAYOUT})
+        for p in stale:  # no file of another scene's export stays beside this one's
+            p.unlink(missing_ok=True)
+        manifest = _export_locked(source, sim, folder, frames, iterate_steps)
+        manifest["status"] = "complete"
+        folder.mark("complete", manifest)
+        return manifest
 
 
-def _export_locked(source, sim, out: Path, frames: int, iterate_steps: int) -> dict:
+def _earlier_export(folder: OutputFolder) -> list[Path]:
+    """The files an earlier export there listed in its manifest, and its iterates."""
+    if folder.earlier.kind != "export":
+        return []
+    listed = (read_json(folder.path / "manifest.json") or {}).get("files", {})
+    names = [n for n in listed if isinstance(n, str) and "/" not in n and n != "manifest.json"]
+    stale = [folder.path / n for n in names] + sorted(folder.path.glob("iterates/step_*.npz"))
+    return [p for p in stale if p.is_file() and not p.is_symlink()]
+
+
+def _export_locked(source, sim, folder: OutputFolder, frames: int, iterate_steps: int) -> dict:
     model, h = sim.model, sim.h
-    (out / "iterates").mkdir(parents=True, exist_ok=True)
+    (folder.path / "iterates").mkdir(parents=True, exist_ok=True)
     p = sim.problem(sim.state)
     kappa = system_condition_number(sim)  # of the first step's system, pins included
     n = model.vertex_count
@@ -271,8 +284,12 @@ def _export_locked(source, sim, out: Path, frames: int, iterate_steps: int) -> d
     files = {}
     pins = pin_table(sim)
 
+    def put(name, write, *args, **kwargs):  # atomically, an error naming the file
+        with folder.file(name) as tmp:
+            write(tmp, *args, **kwargs)
+
     def mtx(name, A, desc):
-        io.write_matrix(out / name, sp.csr_matrix(A))
+        put(name, io.write_matrix, sp.csr_matrix(A))
         files[name] = desc
 
     mtx("M.mtx", matrices.mass_matrix(model), "M = diag(m) kron I3, 3n x 3n [kg]")
@@ -282,16 +299,15 @@ def _export_locked(source, sim, out: Path, frames: int, iterate_steps: int) -> d
     mtx("A.mtx", matrices.expand3(A_s), "M + h^2 L (penalty pins in), 3n x 3n [kg]")
     mtx("A_scalar.mtx", A_s, "M_s + h^2 L_s (penalty pins in), n x n [kg]")
     x0 = model.mesh.vertices
-    np.savetxt(out / "vertices.txt", x0, fmt="%.17g")
-    np.savetxt(out / "x0.txt", x0.reshape(1, -1), fmt="%.17g")
-    np.savetxt(out / "triangles.txt", model.mesh.triangles, fmt="%d")
-    write_springs(out / "springs.txt", model.springs)
-    io.write_vector(out / "masses.txt", model.vertex_mass)
-    np.savetxt(out / "pins.txt", pins, fmt=["%d", "%d", "%.17g", "%.17g", "%.17g",
-                                                      "%.17g"],
-               header="vertex method(0 exact, 1 penalty) stiffness x y z")
-    np.savetxt(out / "forces.txt", np.zeros((n, 3)) if p.f_ext is None else p.f_ext,
-               fmt="%.17g", header="external force at t = 0 [N], one vertex a line")
+    put("vertices.txt", np.savetxt, x0, fmt="%.17g")
+    put("x0.txt", np.savetxt, x0.reshape(1, -1), fmt="%.17g")
+    put("triangles.txt", np.savetxt, model.mesh.triangles, fmt="%d")
+    put("springs.txt", write_springs, model.springs)
+    put("masses.txt", io.write_vector, model.vertex_mass)
+    put("pins.txt", np.savetxt, pins, fmt=["%d", "%d", "%.17g", "%.17g", "%.17g", "%.17g"],
+        header="vertex method(0 exact, 1 penalty) stiffness x y z")
+    put("forces.txt", np.savetxt, np.zeros((n, 3)) if p.f_ext is None else p.f_ext,
+        fmt="%.17g", header="external force at t = 0 [N], one vertex a line")
     files.update({
         "vertices.txt": "initial positions, n lines x y z [m]",
         "x0.txt": "initial positions, one line of 3n [m]",
@@ -302,10 +318,10 @@ def _export_locked(source, sim, out: Path, frames: int, iterate_steps: int) -> d
         "forces.txt": "external force per vertex at t = 0 [N]",
         "settings.txt": "key value lines: h, iterations, tolerance, initial_guess, method, "
                         "frames, precision, damping"})
-    write_settings(out / "settings.txt", sim, frames)
+    put("settings.txt", write_settings, sim, frames)
     steps = record_iterates(sim, min(iterate_steps, frames))
     for k, it in enumerate(steps):
-        np.savez(out / "iterates" / f"step_{k:04d}.npz", **it)
+        put(f"iterates/step_{k:04d}.npz", lambda tmp, it=it: np.savez(tmp, **it))
     files["iterates/step_KKKK.npz"] = ("x (K+1, n, 3) iterates, d (K+1, s, 3) local steps, "
                                        "gradient_norm, y, f_ext of step K -> K+1")
     xs, vs = [None] * (frames + 1), [None] * (frames + 1)
@@ -316,10 +332,11 @@ def _export_locked(source, sim, out: Path, frames: int, iterate_steps: int) -> d
         sim.step()
         xs[f], vs[f] = sim.state.positions.copy(), sim.state.velocities.copy()
     X, V = np.stack(xs), np.stack(vs)
-    np.savez(out / "trajectory.npz", positions=X, velocities=V, time=h * np.arange(frames + 1))
+    put("trajectory.npz", lambda tmp: np.savez(tmp, positions=X, velocities=V,
+                                               time=h * np.arange(frames + 1)))
     for name, arr in (("positions", X), ("velocities", V)):
-        np.savetxt(out / f"{name}.txt", arr.reshape(len(arr), -1), fmt="%.17g")
-        arr.astype("<f8").tofile(out / f"{name}.f64")
+        put(f"{name}.txt", np.savetxt, arr.reshape(len(arr), -1), fmt="%.17g")
+        put(f"{name}.f64", arr.astype("<f8").tofile)
         files[f"{name}.txt"] = f"{name}, one frame a line of 3n numbers"
         files[f"{name}.f64"] = f"{name}, raw little-endian float64 (frames, n, 3)"
     files["trajectory.npz"] = "positions, velocities (frames, n, 3), time (frames,)"
@@ -341,5 +358,4 @@ def _export_locked(source, sim, out: Path, frames: int, iterate_steps: int) -> d
         "iterate_steps": len(steps),
         "files": files,
     }
-    (out / "manifest.json").write_text(json.dumps(manifest, indent=2, default=float))
     return manifest

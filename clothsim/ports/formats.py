@@ -33,6 +33,7 @@ import numpy as np
 from .. import io
 from ..errors import InputError
 from ..io.common import is_number, refuse_special
+from ..io.folders import require_complete
 
 TEXT_SUFFIXES = (".txt", ".csv", ".dat")
 RAW_SUFFIXES = (".bin", ".raw", ".f64", ".f32")
@@ -152,6 +153,7 @@ def read_trajectory(path, *, key: str = "positions", fmt: str | None = None,
 
 def _read_trajectory(path, key, fmt, dtype, vertex_count) -> np.ndarray:
     p = Path(path)
+    require_complete(p)  # never half of one export and half of an earlier one
     if not p.exists():
         raise InputError(f"{path}: file not found")
     refuse_special(p, inside=True)  # a FIFO would block the read forever

@@ -22,6 +22,7 @@ from ..objective import gradient_noise_floor, objective, objective_gradient
 from ..solvers.local_global import LocalGlobalSolver
 from ..solvers.newton import NewtonSolver
 from .compare import EPS32, cloth_size
+from .flat import flat_evidence
 from .verdicts import StepCheck
 
 #: Longest iteration path searched for the port's answer (start y and x_n each).
@@ -157,7 +158,7 @@ def _settings_text(start, k) -> str:
     return f'[solver] initial_guess = "{start}" and iterations = {k}'
 
 
-def gradient_scale(model, problem, x_port, optimality, precision):
+def gradient_scale(model, problem, x_port, optimality, precision, unit=None):
     """‖∇g(x₀)‖ of the step (what relative gradients refer to) and the optimality tolerance.
 
     Parameters
@@ -169,23 +170,25 @@ def gradient_scale(model, problem, x_port, optimality, precision):
     optimality : float
         The relative gradient asked for.
     precision : {"float64", "float32"}
+    unit : float, optional
+        Relative rounding of the port's printed numbers when coarser than its precision.
 
     Returns
     -------
     (float, float)
         ‖∇g(x₀)‖ [N·s²] (1 when it is 0) and max(optimality, 10 × the rounding floor of
-        ‖∇g‖ relative to it, ε₃₂-based for float32).
+        ‖∇g‖ relative to it: ε₆₄-, ε₃₂- or ``unit``-based).
     """
     g0 = float(np.linalg.norm(objective_gradient(model, problem, problem.initial_guess())))
     g0 = g0 if g0 > 0 else 1.0
     floor = gradient_noise_floor(model, problem, x_port) / g0
-    if precision == "float32":
-        floor *= EPS32 / float(np.finfo(np.float64).eps)
+    eps64 = float(np.finfo(np.float64).eps)
+    floor *= max(unit or 0.0, EPS32 if precision == "float32" else eps64) / eps64
     return g0, max(optimality, 10 * floor)
 
 
 def judge(sim, model, problem, k, x_cs, x_port, err, tol, optimality, precision,
-          search: bool = True) -> StepCheck:
+          search: bool = True, unit: float | None = None) -> StepCheck:
     """Classify a step whose answers differ by more than ``tol`` somewhere.
 
     Parameters
@@ -208,12 +211,16 @@ def judge(sim, model, problem, k, x_cs, x_port, err, tol, optimality, precision,
     precision : {"float64", "float32"}
     search : bool, default True
         Search clothsim's iterations for the port's settings (:func:`match_settings`).
+    unit : float, optional
+        Relative rounding of the port's numbers when they are printed coarser than its
+        precision (:class:`clothsim.ports.precision.Printed`): the gradient's rounding
+        floor scales with it.
 
     Returns
     -------
     StepCheck
     """
-    g0, opt = gradient_scale(model, problem, x_port, optimality, precision)
+    g0, opt = gradient_scale(model, problem, x_port, optimality, precision, unit)
     grad_p = objective_gradient(model, problem, x_port)
     grad_c = objective_gradient(model, problem, x_cs)
     rp = float(np.linalg.norm(grad_p)) / g0
@@ -228,7 +235,8 @@ def judge(sim, model, problem, k, x_cs, x_port, err, tol, optimality, precision,
     if not np.isfinite(rp):
         return verdict("not a minimizer", worst, "the port's positions are not finite")
     if rp <= opt:
-        return _optimal(model, problem, x_cs, x_port, tol, verdict, worst)
+        return _optimal(model, problem, x_cs, x_port, tol, verdict, worst,
+                        (rp, optimality, opt, g0))
     hint = match_settings(sim, model, problem, x_port, tol) if search else None
     if hint is not None and hint[1] == 0:   # iterations = 0 is no setting clothsim takes
         return verdict("not a minimizer", worst, f"the port's answer is its start point "
@@ -309,8 +317,15 @@ def _descends(model, problem, x_port) -> bool:
                 < objective(model, problem, problem.initial_guess()))
 
 
-def _optimal(model, problem, x_cs, x_port, tol, verdict, worst) -> StepCheck:
-    """The port's answer is optimal: same minimizer, two certified minima, or a saddle."""
+def _optimal(model, problem, x_cs, x_port, tol, verdict, worst, gradient) -> StepCheck:
+    """The port's answer is optimal: same minimizer, two certified minima, or a saddle.
+
+    ``gradient`` is (the port's relative gradient, the stated optimality, the optimality
+    raised to the rounding floor, ‖∇g(x_0)‖). Off the minimizer by more than ``tol``, an
+    answer that meets the stated optimality is "ill-conditioned" (undecided, with the
+    evidence of :mod:`clothsim.ports.flat`); one that meets only the rounding floor of ∇g
+    (a float32 port, whose gradient cannot resolve the distance) is "not converged".
+    """
     xp, xc = refine(model, problem, x_port), refine(model, problem, x_cs)
     gap = float(np.linalg.norm(xp - xc, axis=1).max())
     off = float(np.linalg.norm(x_port - xp, axis=1).max())
@@ -319,8 +334,15 @@ def _optimal(model, problem, x_cs, x_port, tol, verdict, worst) -> StepCheck:
             return verdict("agrees", worst, "the port's answer is within the tolerance of the "
                            "minimizer of g that clothsim's answer converges to (another "
                            "stopping rule)")
-        return verdict("not converged", worst, f"optimal by its gradient, yet {off:.3e} m from "
-                       f"the minimizer (an ill-conditioned step): tighten the port's tolerance")
+        rp, stated, opt, g0 = gradient
+        if rp <= stated:
+            return verdict("ill-conditioned", worst,
+                           flat_evidence(model, problem, x_port, xp, g0, rp, tol))
+        return verdict("not converged", worst, f"its relative gradient {rp:.1e} is within the "
+                       f"rounding floor of the gradient at this precision ({opt:.1e}), which "
+                       f"therefore cannot judge it; it is {off:.3e} m from the minimizer, "
+                       f"beyond the tolerance {tol:.3e} m: raise its iterations or tighten its "
+                       f"tolerance")
     if not is_minimum(model, problem, xp):
         return verdict("not a minimizer", worst, "the port's answer leads to a saddle point of "
                        "g (an indefinite Hessian), not a minimum")

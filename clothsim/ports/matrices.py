@@ -14,6 +14,7 @@ import scipy.sparse as sp
 
 from .. import io
 from ..errors import InputError
+from ..io.folders import require_complete
 
 
 @dataclass
@@ -67,6 +68,9 @@ def compare_matrices(path, reference, *, rtol: float = 1e-12, atol: float = 0.0,
     -------
     MatrixComparison
     """
+    for p in (path, reference):
+        if not sp.issparse(p):
+            require_complete(p)  # an export being written may hold an earlier one's matrices
     A = sp.csr_matrix(io.read_matrix(path) if not sp.issparse(path) else path)
     B = sp.csr_matrix(io.read_matrix(reference) if not sp.issparse(reference) else reference)
     dropped = 0

@@ -35,6 +35,7 @@ import numpy as np
 
 from ..errors import InputError
 from ..io.common import is_number
+from ..io.folders import require_complete
 from .check import as_simulation
 
 #: The step settings diff-model compares, with their units.
@@ -201,6 +202,7 @@ def _count_check(path: Path, rows: np.ndarray, n: int) -> None:
 
 
 def _from_folder(d: Path) -> ModelTables:
+    require_complete(d)  # an export being written may hold an earlier one's model files
     if (d / "vertices.txt").is_file():
         x0 = read_table(d / "vertices.txt", 3, "x y z")
     elif (d / "x0.txt").is_file():

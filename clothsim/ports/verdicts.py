@@ -18,6 +18,11 @@ Verdicts that fail:
     Neither answer is a minimizer (a fixed iteration count stops short): the answer depends
     on where the iteration starts and how many iterations it takes, so the step cannot be
     judged. Not the port's error: match the settings named in the note.
+``ill-conditioned``
+    The port's answer meets the optimality criterion but is farther than the tolerance
+    from the minimizer: g is too flat there for the criterion to place it
+    (:mod:`clothsim.ports.flat` gives the evidence and what would decide).
+    Undecided, like ``start-dependent``.
 ``not converged``
     The port's answer is heading for clothsim's minimizer but is not there yet.
 ``not a minimizer``
@@ -40,6 +45,9 @@ from dataclasses import dataclass, field
 import numpy as np
 
 PASSING = ("agrees", "non-unique")
+#: Failing verdicts that are not the port's error: a check whose failing steps all have one
+#: of these is UNDECIDED, not FAIL.
+UNDECIDED = ("start-dependent", "ill-conditioned")
 
 
 @dataclass
@@ -119,16 +127,29 @@ class CheckReport:
         The port's floating-point precision.
     notes : list of str
         Remarks on the whole check.
+    expected_steps : int or None
+        The steps the port's output had to hold (the scene's frames); when it holds fewer,
+        the check fails naming both counts.
+    printed : str
+        How the port's numbers are printed, when that widened the tolerance (e.g. "printed
+        with 6 significant digits"), else "".
     """
 
     steps: list[StepCheck]
     tolerance: float
     precision: str
     notes: list[str] = field(default_factory=list)
+    expected_steps: int | None = None
+    printed: str = ""
+
+    @property
+    def short(self) -> bool:
+        """True when the port's output holds fewer steps than :attr:`expected_steps`."""
+        return self.expected_steps is not None and len(self.steps) < self.expected_steps
 
     @property
     def passed(self) -> bool:
-        return all(s.passed for s in self.steps)
+        return all(s.passed for s in self.steps) and not self.short
 
     @property
     def first_failure(self) -> StepCheck | None:
@@ -143,7 +164,7 @@ class CheckReport:
 
         A PASS whose largest error is above the tolerance says which steps passed by
         optimality and why. UNDECIDED: every failing step is start-dependent (the settings
-        differ; not the port's error).
+        differ) or ill-conditioned (g too flat for the criterion): not the port's error.
 
         Returns
         -------
@@ -165,11 +186,19 @@ class CheckReport:
         if nu:
             extra += (f"; {len(nu)} non-unique step(s) (two certified minima of g): "
                       f"{_steps_text(nu)}")
+        if self.printed:
+            extra += f"; the output is {self.printed}: judged at that precision"
         failing = [s for s in self.steps if not s.passed]
+        head = ""
+        if self.short:
+            head = (f"FAIL: the port's output has {n + 1} frames ({n} steps), the scene "
+                    f"asks for {self.expected_steps} (--steps N checks only the first N); "
+                    f"of the {n} steps written, ")
         if not failing:
-            return (f"PASS: {n} steps agree within {tol:.3e} m ({self.precision}), "
+            return (f"{head or 'PASS: '}{n} steps agree within {tol:.3e} m ({self.precision}), "
                     f"max error {worst:.3e} m{extra}")
         counts = Counter(s.status for s in failing)
         tally = ", ".join(f"{c} {status}" for status, c in counts.most_common())
-        word = "UNDECIDED" if set(counts) == {"start-dependent"} else "FAIL"
-        return f"{word} at {failing[0].line()}; {len(failing)} of {n} steps fail: {tally}{extra}"
+        word = "UNDECIDED" if set(counts) <= set(UNDECIDED) else "FAIL"
+        return (f"{head + 'the first fails' if head else word} at {failing[0].line()}; "
+                f"{len(failing)} of {n} steps fail: {tally}{extra}")

@@ -27,6 +27,7 @@ Examples
 
 from __future__ import annotations
 
+import copy
 import dataclasses
 import re
 
@@ -46,7 +47,7 @@ from .files import (
     list_builtin_scenes,
     parse_toml,
 )
-from .overrides import apply_overrides, rename_error
+from .overrides import apply_overrides, blame, moved_indices
 from .schema import SHAPES, schema_markdown
 
 
@@ -88,12 +89,23 @@ def load_scene(path_or_name, overrides=()) -> Scene:
 
 
 def _validated(doc: dict, source: str, base_dir, overrides) -> Scene:
+    before = copy.deepcopy(doc) if overrides else None
     done = apply_overrides(doc, overrides)
+    base = None
+    if done:  # the file as it is: to tell the errors its --set changes cause
+        try:
+            base = Scene.from_dict(copy.deepcopy(before), source=source, base_dir=base_dir)
+        except SceneError:
+            base = None
     try:
         scene = Scene.from_dict(doc, source=source, base_dir=base_dir)
     except SceneError as exc:
-        raise rename_error(exc, done) from None
-    return dataclasses.replace(scene, overrides=tuple(done)) if done else scene
+        raise blame(exc, done, lambda: base is not None) from None
+    if not done:
+        return scene
+    if (moved := moved_indices(before, scene.data, done)) is not None:
+        raise moved
+    return dataclasses.replace(scene, overrides=tuple(done), base=base)
 
 
 __all__ = ["Scene", "SceneError", "load_scene", "list_builtin_scenes", "builtin_scene_path",

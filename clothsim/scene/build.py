@@ -26,13 +26,12 @@ from ..simulation import Simulation
 from ..springs import FAMILIES, Springs, grid_springs, mesh_springs, springs_from_pairs
 from .checks import Invalid, integer, locate
 from .effects import constructor_params
+from .overrides import blame, builds
 from .pins import declared_pins
-from .scale import lost_mass, overflow_problem, scene_key
+from .scale import check_extent, force_problem, overflow_problem, scene_key, stiffness_problem
 from .schema import MAX_SUBSTEPS
 from .tables import read_index_list, read_spring_table, read_triangles, read_values, read_vertices
 from .validate import validate, validate_solver
-
-EPS = float(np.finfo(np.float64).eps)
 
 
 @dataclass(frozen=True, eq=False)
@@ -51,12 +50,16 @@ class Scene:
     overrides : tuple of str
         The ``--set KEY=VALUE`` changes applied to the file's document before validation
         (:mod:`clothsim.scene.overrides`), recorded with a run.
+    base : Scene or None
+        The file's scene without those changes (when it is valid): an error it does not
+        have is attributed to the ``--set`` changes.
     """
 
     data: dict
     source: str = "<dict>"
     base_dir: Path = field(default_factory=Path.cwd)
     overrides: tuple = ()
+    base: Scene | None = field(default=None, repr=False)
 
     @classmethod
     def from_dict(cls, d: dict, *, source: str = "<dict>", base_dir=None) -> Scene:
@@ -136,7 +139,8 @@ class Scene:
         return copy.deepcopy(self.data)
 
     def _error(self, path: str, detail: str) -> SceneError:
-        return SceneError(self.source, path, detail)
+        return blame(SceneError(self.source, path, detail), self.overrides,
+                     lambda: builds(self.base))
 
     # -- building
     def _files_mesh(self):
@@ -204,7 +208,7 @@ class Scene:
                 mesh = self._files_mesh()
             springs = mesh_springs(mesh, structural=sp.get("structural"),
                                    bending=sp.get("bending"))
-        _check_extent(mesh.vertices, shape)
+        check_extent(mesh.vertices, shape)
         table = self._spring_table(mesh.vertex_count)
         if table is not None and len(table.pairs):
             x = mesh.vertices
@@ -256,8 +260,11 @@ class Scene:
         SceneError
             On an effect that cannot be built (naming its key).
         """
+        return [e for _, e in self._checked_effects(model)]
+
+    def _checked_effects(self, model=None) -> list[tuple[str, object]]:
         try:
-            return [e for _, e in self._effects(model)]
+            return self._effects(model)
         except Invalid as exc:
             raise self._error(exc.path, exc.detail) from None
 
@@ -322,14 +329,16 @@ class Scene:
         self._check_stiffness(model, h)
         if (problem := overflow_problem(model, h)) is not None:  # no silent freeze
             raise self._error(scene_key(problem[0], self.data), problem[1])
-        effects = self.build_effects(model)
+        pairs = self._checked_effects(model)
         try:
-            sim = Simulation(model, h=h, effects=effects, solver=solver["method"],
+            sim = Simulation(model, h=h, effects=[e for _, e in pairs], solver=solver["method"],
                              iterations=solver["iterations"], tolerance=solver["tolerance"],
                              backend=solver["backend"],
                              initial_guess=solver["initial_guess"])
         except InputError as exc:
             raise self._locate(exc, model, h) from None
+        if (problem := force_problem(pairs, model, h)) is not None:  # no silent freeze
+            raise self._error(*problem)
         if solver["cholmod_mode"] != "auto":
             if not hasattr(sim.solver, "cholmod_mode"):
                 raise self._error("solver.cholmod_mode", f"applies to the local/global family "
@@ -338,27 +347,11 @@ class Scene:
         return sim
 
     def _check_stiffness(self, model, h: float) -> None:
-        """Reject springs so stiff that M + h²L cannot be factored in float64.
-
-        When a vertex's mass is at or below the rounding of h² L_ii (m_i ≤ ε h² L_ii), M is
-        lost in M + h²L, which is then as singular as L (free translations): the
-        factorization fails or its answer is noise. The key of the stiffest spring at the
-        worst vertex is named.
-        """
-        found = lost_mass(model, h)
-        if found is None:
-            return
-        v, i, ratio = found
-        n, m, k = model.vertex_count, model.vertex_mass, model.springs.spring_stiffness
-        shape = self.data["cloth"]["shape"]
-        generated = model.spring_count - (len(self._spring_table(n).pairs)
-                                          if "table" in self.data["springs"] else 0)
-        key = ("cloth.file" if shape == "jacobson" else "springs.table" if i >= generated
-               else f"springs.{FAMILIES[model.springs.spring_family[i]]}")
-        raise self._error(key, f"stiffness {float(k[i]):.3g} N/m is too large for h = {h:.3g} s "
-                               f"and vertex {v}'s mass {float(m[v]):.3g} kg: h²L_ii/m_i = "
-                               f"{ratio:.3g} is beyond 1/ε = {1 / EPS:.3g}, so the "
-                               f"mass is lost in M + h²L, which cannot be factored in float64")
+        """Reject springs so stiff that M + h²L cannot be factored (:func:`stiffness_problem`)."""
+        table = len(self._spring_table(model.vertex_count).pairs) if "table" in self.data[
+            "springs"] else 0
+        if (problem := stiffness_problem(model, h, self.data, table)) is not None:
+            raise self._error(*problem)
 
     def _locate(self, exc: InputError, model, h: float) -> SceneError:
         """Name the effect whose binding failed (bind each one alone to find it)."""
@@ -367,6 +360,8 @@ class Scene:
                 effect.bind(model, h)
             except InputError as err:
                 if not path.startswith("effects["):  # a pin the cloth's files declare
+                    if err.field == "pin.stiffness" and "pin_stiffness" in self.data["cloth"]:
+                        return self._error("cloth.pin_stiffness", str(err).split(": ", 1)[1])
                     label = "b" if path == "cloth.file" else "attachments"
                     return self._error(path, f"{label}: {err}")
                 return self._error(*locate(err, path, effect.kind, path))
@@ -378,19 +373,6 @@ class Scene:
         if rest and fld.startswith("effects."):
             return self._error("effects", rest)
         return self._error("", msg)
-
-
-def _check_extent(x: np.ndarray, shape: str) -> None:
-    """A cloth whose size is below the rounding of its coordinates is meaningless."""
-    if len(x) < 2:
-        return
-    scale = float(np.max(np.abs(x)))
-    extent = float(np.max(np.ptp(x, axis=0)))
-    if extent <= 1e3 * EPS * scale:
-        key = {"grid": "cloth.center", "polygon": "cloth.center", "mesh": "cloth.mesh",
-               "files": "cloth.vertices"}.get(shape, "cloth")
-        raise Invalid(key, f"the cloth's extent {extent:.3g} m is below the rounding of its "
-                           f"coordinates near {scale:.3g} m; move it nearer the origin")
 
 
 __all__ = ["Scene"]

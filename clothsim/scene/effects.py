@@ -31,7 +31,7 @@ MAX_LENGTH = 1e100  # [m]: coordinates and radii whose squares stay finite
 
 PARAMETERS = {kind: {key: t for key, (t, _unit) in keys.items()}
               for kind, keys in EFFECT_KEYS.items()}  # kind -> key -> type word
-_SCENE_ONLY = {"pin": ("index_base",), "force": ("index_base",)}  # read by the scene only
+_SCENE_ONLY = {"pin": ("index_base", "grid"), "force": ("index_base",)}  # read by the scene
 _PYTHON_ONLY_KEYS = {"pin": ("motion",)}     # callables: Python API only, not in scene files
 
 
@@ -46,6 +46,15 @@ def _vec3(v, path: str, *, point=False) -> list[float]:
             if abs(x) > MAX_LENGTH:
                 raise Invalid(f"{path}[{i}]", f"must be within ±{MAX_LENGTH:g} m, got {x!r}")
     return out
+
+
+def _region(v, path: str) -> dict:
+    r = table(v, path)
+    check_keys(r, path, ("min", "max"))
+    for corner in ("min", "max"):
+        if corner not in r:
+            raise Invalid(f"{path}.{corner}", "missing: a region needs 'min' and 'max'")
+    return {c: _vec3(r[c], f"{path}.{c}", point=True) for c in ("min", "max")}
 
 
 def check_parameter(kind: str, key: str, v, path: str, base_dir: Path):
@@ -101,14 +110,21 @@ def check_parameter(kind: str, key: str, v, path: str, base_dir: Path):
             raise Invalid(path, f"expected an array of strings, got {type_name(v)}")
         return [string(x, f"{path}[{i}]") for i, x in enumerate(v)]
     if t == "region":
-        r = table(v, path)
-        check_keys(r, path, ("min", "max"))
-        for corner in ("min", "max"):
-            if corner not in r:
-                raise Invalid(f"{path}.{corner}", "missing: a region needs 'min' and 'max'")
-        return {c: _vec3(r[c], f"{path}.{c}", point=True) for c in ("min", "max")}
+        if isinstance(v, list):  # several boxes: [{min, max}, ...]
+            if not v:
+                raise Invalid(path, "an empty array of boxes pins nothing")
+            return [_region(b, f"{path}[{i}]") for i, b in enumerate(v)]
+        return _region(v, path)
     if t == "file":
         return str(resolve_path(string(v, path), base_dir, path))
+    if t == "cells":
+        if not isinstance(v, list) or not v:
+            raise Invalid(path, f"expected an array of [row, column] pairs, got {type_name(v)}")
+        for i, rc in enumerate(v):
+            if not isinstance(rc, list) or len(rc) != 2:
+                raise Invalid(f"{path}[{i}]", f"expected [row, column], got {type_name(rc)}")
+        return [[integer(x, f"{path}[{i}][{j}]") for j, x in enumerate(rc)]
+                for i, rc in enumerate(v)]
     if t == "vertices":
         if isinstance(v, str):
             return str(resolve_path(v, base_dir, path))
@@ -178,12 +194,57 @@ def validate_effect(e, path: str, vertex_count: int | None, base_dir: Path) -> d
                 if v in seen:
                     raise Invalid(f"{path}.vertices[{i}]", f"vertex {v} is listed twice")
                 seen.add(v)
+    if "grid" in params:  # [row, column] pairs: made vertex indices by validate()
+        others = [k for k in ("vertices", "region") if k in params]
+        if others:
+            raise Invalid(f"{path}.grid", f"give one of 'vertices', 'region' or 'grid', not "
+                                          f"both 'grid' and '{others[0]}'")
+        params_for_check = {**params, "vertices": []}
+    else:
+        params_for_check = params
     if not isinstance(params.get("vertices"), str):  # a file of indices: read on build
         try:  # the constructor checks its own parameters; nothing is bound to a model here
-            EFFECTS[kind](**constructor_params(kind, params))
+            EFFECTS[kind](**constructor_params(kind, params_for_check))
         except (InputError, TypeError, ValueError) as exc:
             raise Invalid(*locate(exc, path, kind, path)) from None
     return {"kind": kind, **params}
+
+
+def grid_vertices(cells: list, resolution: list, path: str) -> list[int]:
+    """Vertex indices of ``[row, column]`` pairs of a grid cloth (negative: from the end).
+
+    Parameters
+    ----------
+    cells : list of [int, int]
+        Rows and columns; row −1 is the last (the top of an ``"xy"`` cloth), column −1 the
+        last, as Python indexes.
+    resolution : [nx, ny]
+        The grid's vertices along its two axes; vertex (row i, column j) is ``i * nx + j``.
+    path : str
+        The key path of ``cells`` (e.g. ``"effects[1].grid"``), for errors.
+
+    Returns
+    -------
+    list of int
+
+    Raises
+    ------
+    Invalid
+        At ``path[i]`` for a row or column out of range, or a vertex named twice.
+    """
+    nx, ny = resolution
+    out = []
+    for i, (r, c) in enumerate(cells):
+        if not (-ny <= r < ny and -nx <= c < nx):
+            raise Invalid(f"{path}[{i}]", f"[{r}, {c}] is outside the {nx} × {ny} grid (rows "
+                                          f"{-ny}..{ny - 1}, columns {-nx}..{nx - 1})")
+        v = (r % ny) * nx + c % nx
+        if v in out:
+            j = out.index(v)
+            raise Invalid(f"{path}[{i}]", f"[{r}, {c}] is vertex {v}, as {path}[{j}] "
+                                          f"{cells[j]} is")
+        out.append(v)
+    return out
 
 
 def constructor_params(kind: str, params: dict) -> dict:
@@ -205,4 +266,5 @@ def constructor_params(kind: str, params: dict) -> dict:
             and k not in _SCENE_ONLY.get(kind, ())}
 
 
-__all__ = ["validate_effect", "check_parameter", "constructor_params", "PARAMETERS"]
+__all__ = ["validate_effect", "check_parameter", "constructor_params", "grid_vertices",
+           "PARAMETERS"]

@@ -17,6 +17,7 @@ import tomllib
 from pathlib import Path
 
 from ..errors import SceneError
+from ..io.common import special_file
 from .checks import Invalid, shorten, suggest
 
 DEFAULT_SCENE = "drop-on-square"
@@ -121,7 +122,9 @@ def resolve_path(value: str, base_dir: Path, path: str) -> Path:
         if p.is_dir():
             raise Invalid(path, f"is a directory, not a file: {shorten(str(p), 200)}")
         if not p.is_file():
-            raise Invalid(path, f"file not found: {shorten(str(p), 200)}")
+            what = special_file(p)  # a FIFO would block the reader; /dev/zero never ends
+            raise Invalid(path, f"is {what}, not a regular file: {shorten(str(p), 200)}" if what
+                          else f"file not found: {shorten(str(p), 200)}")
     except OSError as exc:  # e.g. a name too long for the file system
         raise Invalid(path, f"cannot use {shorten(value)}: {exc.strerror}") from None
     return p.resolve()

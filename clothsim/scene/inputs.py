@@ -13,6 +13,7 @@ import hashlib
 from pathlib import Path
 
 from ..errors import InputError
+from ..io.resume import changed_input  # noqa: F401 - re-exported (its old home)
 
 
 def _paths(value, out: set) -> None:
@@ -92,37 +93,6 @@ def input_hashes(scene) -> dict[str, str]:
     dict of str to str
     """
     return {p: file_sha256(p) for p in input_files(scene)}
-
-
-def changed_input(recorded: dict, now: dict) -> str | None:
-    """The first input file whose content differs from what a run recorded.
-
-    Parameters
-    ----------
-    recorded : dict of str to str
-        ``run.json``'s ``inputs`` (path to sha256).
-    now : dict of str to str
-        :func:`input_hashes` of the scene about to resume.
-
-    Returns
-    -------
-    str or None
-        ``"<path>: ..."`` naming the file and what changed, or None when every file is as
-        recorded.
-    """
-    for path in sorted(set(recorded) | set(now)):
-        before, after = recorded.get(path), now.get(path)
-        if before == after:
-            continue
-        if after is None:
-            what = ("is missing now" if not Path(path).exists()
-                    else "is no longer read by the scene")
-        elif before is None:
-            what = "is read by the scene now but was not when the run started"
-        else:
-            what = "changed since the run started (its content hash differs)"
-        return f"{path}: {what}"
-    return None
 
 
 __all__ = ["input_files", "input_hashes", "changed_input", "file_sha256"]

@@ -1,10 +1,13 @@
 """``--set KEY=VALUE``: change one key of a scene document before it is validated.
 
 A key is a dotted path into the document, with ``[i]`` for an entry of the effects array:
-``springs.structural=50``, ``solver.iterations=20``, ``effects[1].strength=2``. The value
-is parsed as a TOML value (``50``, ``1e-3``, ``[0.0, -9.81, 0.0]``, ``"newton"``); a bare
+``springs.structural=50``, ``solver.iterations=20``, ``effects[0].acceleration=[0, -1.62, 0]``.
+The value is parsed as a TOML value (``50``, ``1e-3``, ``[0.0, -9.81, 0.0]``, ``"newton"``); a bare
 word that is not TOML (``newton``, ``x_n``) is taken as a string. The changed document is
-validated like a file, and an error about a changed key names the ``--set`` it came from.
+validated like a file, and an error about a changed key names the ``--set`` it came from,
+as does any error the file without its ``--set`` changes does not have (:func:`blame`). A
+``--set`` of a grid's resolution is refused when the scene pins or pushes vertices by index
+(:func:`moved_indices`): the same indices would name other vertices.
 
 Examples
 --------
@@ -22,7 +25,7 @@ import tomllib
 
 from ..errors import SceneError
 from .checks import suggest
-from .schema import TOP_KEYS
+from .schema import TOP_KEYS, default
 
 _PART = re.compile(r"^(?P<name>[A-Za-z_][\w-]*)(?:\[(?P<index>\d+)\])?$")
 _BARE = re.compile(r"^[\w.:/+-]+$")
@@ -110,6 +113,9 @@ def apply_overrides(doc: dict, overrides) -> list[str]:
                     seq[int(index)] = parse_value(text, item)
                     break
                 node = seq[int(index)]
+                if not isinstance(node, dict):
+                    raise SceneError(f"--set {item}", key, f"{name}[{index}] is a value, not a "
+                                     f"table")
                 continue
             if last:
                 node[name] = parse_value(text, item)
@@ -144,3 +150,109 @@ def rename_error(exc: SceneError, overrides) -> SceneError:
                          or exc.path.startswith(key + "[")):
             return SceneError(f"--set {item}", exc.path, exc.detail)
     return exc
+
+
+def set_source(overrides) -> str:
+    """The source an error caused by ``overrides`` names: ``"--set A"`` or ``"--set A, --set B"``.
+
+    Parameters
+    ----------
+    overrides : sequence of str
+
+    Returns
+    -------
+    str
+    """
+    return ", ".join(f"--set {item}" for item in overrides)
+
+
+def builds(scene) -> bool:
+    """Whether ``scene`` (a :class:`~clothsim.scene.Scene`, or None) builds a simulation.
+
+    Parameters
+    ----------
+    scene : Scene or None
+
+    Returns
+    -------
+    bool
+        False for None or on any error (a probe: the error itself is reported elsewhere).
+    """
+    try:
+        return scene is not None and scene.build_simulation() is not None
+    except Exception:  # noqa: BLE001
+        return False
+
+
+def blame(exc: SceneError, overrides, base_is_fine) -> SceneError:
+    """``exc`` attributed to the ``--set`` that caused it, if one did.
+
+    First by key (:func:`rename_error`); else, when the document without its ``--set``
+    changes has no error (``base_is_fine()``), to all of them: e.g. a resolution or a size
+    that leaves a pin region empty.
+
+    Parameters
+    ----------
+    exc : SceneError
+    overrides : sequence of str
+        The ``--set`` changes applied.
+    base_is_fine : callable
+        ``() -> bool``: whether the same step succeeds without the changes (called only
+        when needed: it may build the scene).
+
+    Returns
+    -------
+    SceneError
+    """
+    renamed = rename_error(exc, overrides)
+    if renamed is not exc or not overrides or not base_is_fine():
+        return renamed
+    return SceneError(set_source(overrides), exc.path, exc.detail)
+
+
+def moved_indices(before: dict, after: dict, overrides) -> SceneError | None:
+    """A ``--set`` of a grid's resolution under effects that name vertices by index.
+
+    Vertex (row i, column j) of an nx × ny grid is ``i * nx + j``: at another resolution
+    the same index is another vertex (``hanging``'s corners 420 and 440 at 21 × 21 are in
+    mid-cloth at 31 × 31). Pins given by ``grid`` ([row, column]) or ``region`` follow the
+    cloth and are not affected.
+
+    Parameters
+    ----------
+    before : dict
+        The document as the file gives it.
+    after : dict
+        The validated document with the ``--set`` changes.
+    overrides : sequence of str
+
+    Returns
+    -------
+    SceneError or None
+        The refusal, naming the ``--set`` and the effect's key; None when nothing moved.
+    """
+    cloth = after.get("cloth", {})
+    file_cloth = before.get("cloth") if isinstance(before.get("cloth"), dict) else {}
+    old = file_cloth.get("resolution", default("cloth", "resolution"))
+    new = cloth.get("resolution")
+    if (cloth.get("shape") != "grid" or new == old or not isinstance(old, list)
+            or len(old) != 2 or not all(isinstance(r, int) and r > 0 for r in old)):
+        return None  # (a file whose own resolution is invalid has no vertices to move)
+    keys = [o.partition("=")[0].strip() for o in overrides]
+    item = next((o for o, k in zip(overrides, keys) if "cloth.resolution".startswith(k)
+                 or k.startswith("cloth.resolution")), overrides[0])
+    for i, e in enumerate(after.get("effects", [])):
+        if "vertices" not in e or "grid" in e or any(k.startswith(f"effects[{i}].vertices")
+                                                      for k in keys):
+            continue
+        vs = e["vertices"]
+        shown = (f"vertex {vs[0]} is row {vs[0] // old[0]}, column {vs[0] % old[0]} at "
+                 f"{old[0]} × {old[1]} but row {vs[0] // new[0]}, column {vs[0] % new[0]} at "
+                 f"{new[0]} × {new[1]}") if isinstance(vs, list) and vs and old[0] else \
+            f"at {new[0]} × {new[1]} they name other vertices than at {old[0]} × {old[1]}"
+        return SceneError(f"--set {item}", f"effects[{i}].vertices",
+                          f"this {e['kind']} names vertices by index, which a new resolution "
+                          f"moves ({shown}); name them by grid = [[row, column], …] (−1: the "
+                          f"last) or by region, or --set the vertices too")
+    return None
+

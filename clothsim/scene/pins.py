@@ -16,6 +16,7 @@ affected.
 from __future__ import annotations
 
 from ..effects import Pin
+from .checks import Invalid
 
 #: The assignment's pin penalty w [N/m] (``main.cpp``: ``const double w = 1e10``).
 ASSIGNMENT_PIN_STIFFNESS = 1e10
@@ -38,8 +39,18 @@ def declared_pins(cloth: dict, assignment_pins, table) -> list[tuple[str, Pin]]:
     list of (str, Pin)
         ``("cloth.file", Pin)`` for the assignment's pins, then ``("springs.table", Pin)``
         per attachment stiffness (one exact Pin with ``pin_method = "constraint"``).
+
+    Raises
+    ------
+    Invalid
+        At ``cloth.pin_stiffness`` when it is given but the files declare no pin.
     """
     method, k = cloth["pin_method"], cloth.get("pin_stiffness")
+    if k is not None and not ((assignment_pins is not None and len(assignment_pins))
+                              or (table is not None and len(table.attached))):
+        raise Invalid("cloth.pin_stiffness", "the cloth's files declare no pins (a jacobson "
+                      "JSON's b, a spring table's attachment rows), so it would hold nothing; "
+                      "a pin effect has its own 'stiffness'")
     out = []
     if assignment_pins is not None:
         out.append(("cloth.file", Pin(assignment_pins, method=method,

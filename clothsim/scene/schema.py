@@ -109,7 +109,9 @@ KEYS: tuple[Key, ...] = (
     Key("cloth", "vertex_mass", "number, array or file", NONE, "kg",
         "Mass of every vertex (one number > 0, or one per vertex, or a text file of n "
         "numbers, each ≥ 0). A vertex of mass 0 is pinned exactly at its initial position "
-        "(as engines read an inverse mass of 0). Replaces `mass`; give one of the two.",
+        "(as engines read an inverse mass of 0): a penalty pin on it, an obstacle it starts "
+        "inside, or an impulse on massless vertices only is refused. Replaces `mass`; give "
+        "one of the two.",
         _ALL_BUT_JACOBSON),
     Key("cloth", "mass_lumping", "string", "uniform", "",
         "`\"uniform\"`: every vertex the same. `\"area\"`: proportional to a third of the "
@@ -213,14 +215,15 @@ KEYS: tuple[Key, ...] = (
 # clothsim.scene.effects: "vec3"/"point" 3 numbers (a point within ±1e100 m), "number",
 # "nonneg" (>= 0), "positive" (> 0), "time" (>= 0), "length" (> 0, <= 1e100), "string",
 # "strings", "count" (an iteration count), "vertices" (indices or a file), "region", "base",
-# "file" (a file name, resolved against the scene's folder).
+# "file" (a file name, resolved against the scene's folder), "cells" ([row, column] pairs of a
+# grid cloth, negative from the end).
 EFFECT_KEYS: dict[str, dict[str, tuple[str, str]]] = {
     "gravity": {"acceleration": ("vec3", "m/s²")},
     "force": {"per_vertex": ("vec3", "N"), "vertices": ("vertices", ""), "file": ("file", ""),
               "index_base": ("base", "")},
     "pin": {"vertices": ("vertices", ""), "region": ("region", "m"), "method": ("string", ""),
             "stiffness": ("positive", "N/m"), "release": ("time", "s"),
-            "velocity": ("vec3", "m/s"), "index_base": ("base", "")},
+            "velocity": ("vec3", "m/s"), "index_base": ("base", ""), "grid": ("cells", "")},
     "plane": {"point": ("point", "m"), "normal": ("vec3", ""), "friction": ("nonneg", ""),
               "thickness": ("nonneg", "m")},
     "sphere": {"center": ("point", "m"), "radius": ("length", "m"), "friction": ("nonneg", "")},
@@ -237,8 +240,9 @@ _TYPE_WORDS = {"vec3": "[3] numbers", "point": "[3] numbers", "number": "number"
                "nonneg": "number ≥ 0", "positive": "number > 0", "time": "number ≥ 0",
                "length": "number > 0", "string": "string", "strings": "array of strings",
                "count": "integer ≥ 1", "vertices": "array of integers, or a file",
-               "region": "table `{min, max}`", "base": "0 or 1 (with a file)",
-               "file": "string (file)"}
+               "region": "table `{min, max}`, or an array of them", "base": "0 or 1 (with a file)",
+               "file": "string (file)",
+               "cells": "array of `[row, column]` (grid cloths; −1 is the last)"}
 
 
 def keys(table: str, shape: str | None = None) -> tuple[str, ...]:

@@ -21,6 +21,7 @@ from pathlib import Path
 
 import numpy as np
 
+from ..io.common import file_stamp
 from .checks import Invalid
 from .effects import MAX_LENGTH
 
@@ -246,15 +247,14 @@ def read_spring_table(path, key: str, columns: list[str], base: int,
     -------
     SpringTable
         Springs (s, 2), stiffness (s,) [N/m], rest lengths (s,) [m] and attachments
-        (cached by path and modification time).
+        (cached by path and :func:`~clothsim.io.common.file_stamp`: an edit is read again).
     """
     p = Path(path).resolve()
-    stamp = p.stat().st_mtime_ns if p.is_file() else 0
-    return _read_table(str(p), stamp, key, tuple(columns), base, vertex_count)
+    return _read_table(str(p), file_stamp(p), key, tuple(columns), base, vertex_count)
 
 
 @lru_cache(maxsize=8)
-def _read_table(path: str, stamp: int, key: str, columns: tuple, base: int,
+def _read_table(path: str, stamp: tuple | None, key: str, columns: tuple, base: int,
                 vertex_count: int) -> SpringTable:
     name = Path(path).name
     col = {c: i for i, c in enumerate(columns)}

@@ -34,7 +34,7 @@ from .checks import (
     type_name,
     vector,
 )
-from .effects import validate_effect
+from .effects import grid_vertices, validate_effect
 from .files import resolve_path
 from .schema import (
     MAX_FRAMES,
@@ -339,6 +339,13 @@ def validate(raw: dict, base_dir: Path, default_name: str) -> dict:
                                  f"{type_name(effects)}")
     out["effects"] = [validate_effect(e, f"effects[{i}]", vertex_count, base_dir)
                       for i, e in enumerate(effects)]
+    for i, e in enumerate(out["effects"]):
+        if "grid" in e:  # [row, column] pairs stay the same vertices at any resolution
+            if out["cloth"]["shape"] != "grid":
+                raise Invalid(f"effects[{i}].grid", f"only a grid cloth has rows and columns "
+                                                    f"(cloth.shape = '{out['cloth']['shape']}')")
+            e["vertices"] = grid_vertices(e["grid"], out["cloth"]["resolution"],
+                                          f"effects[{i}].grid")
     pinned: dict[int, int] = {}
     for i, e in enumerate(out["effects"]):
         if e["kind"] == "pin" and isinstance(e.get("vertices"), list):

@@ -15,7 +15,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from ..errors import ConvergenceWarning, InputError, check_finite
+from ..errors import ConvergenceWarning, InputError, NonFiniteStateError, check_finite
 from ..model import Model
 from ..objective import (  # noqa: F401  (re-exported: the solvers' public vocabulary)
     augmented_objective,
@@ -25,6 +25,44 @@ from ..objective import (  # noqa: F401  (re-exported: the solvers' public vocab
     relative,
 )
 from ..problem import PenaltyAnchors, PinSet, StepProblem  # noqa: F401  (re-exported)
+
+
+def overflow_cause(problem: StepProblem, x0: np.ndarray) -> str:
+    """Why ‖∇g(x_0)‖ of a step is not finite: the step's largest magnitude, named.
+
+    Parameters
+    ----------
+    problem : StepProblem
+        The step: h [s], x_n [m], v_n [m/s], y [m], f_ext [N], pins.
+    x0 : ndarray, shape (n, 3)
+        The initial guess [m].
+
+    Returns
+    -------
+    str
+        One line naming the largest of h²|f_ext| [kg·m], |x_n|, |x_0|, h|v_n| [m] and the
+        pins' targets [m], the magnitudes whose squares the gradient's norm sums.
+    """
+    h2 = problem.h ** 2
+    with np.errstate(all="ignore"):
+        parts = {"h²|f_ext| (the external forces: gravity, force, impulse, wind)":
+                 h2 * _peak(problem.f_ext),
+                 "|x_n| (the positions)": _peak(problem.x),
+                 "h|v_n| (the velocities)": problem.h * _peak(problem.v),
+                 "|x_0| (the iteration's start)": _peak(x0),
+                 "|q| (the pins' targets)": max(_peak(problem.fixed_positions),
+                                                _peak(problem.anchor_positions))}
+    name, value = max(parts.items(), key=lambda kv: kv[1] if not math.isnan(kv[1]) else math.inf)
+    return (f"the step's gradient |grad g| overflows float64 from its start: {name} reaches "
+            f"{value:.3g}, beyond what double precision can square (about 1e154); without "
+            f"this error the cloth would not move")
+
+
+def _peak(a) -> float:
+    if a is None or not np.size(a):
+        return 0.0
+    a = np.asarray(a, np.float64)
+    return float(np.nanmax(np.abs(a))) if not np.isnan(a).all() else math.nan
 
 
 class Iterate:
@@ -167,6 +205,12 @@ class Solver:
             x_{n+1} (n, 3) [m], iterations done, the relative residual and its history,
             and ``converged`` (None when no tolerance was set). A missed tolerance also
             emits a :class:`ConvergenceWarning`.
+
+        Raises
+        ------
+        NonFiniteStateError
+            When ‖∇g(x_0)‖ is not finite: a force, velocity or position of the step is
+            beyond what float64 can square (:func:`overflow_cause` names which).
         """
         history: list[float] = []
         floor = r0 = None
@@ -174,6 +218,8 @@ class Solver:
         for last in self.iterates(problem, x0):
             rn = last.gradient_norm
             if floor is None:
+                if not math.isfinite(rn):  # else 0 iterations, x = x_0: a silently frozen cloth
+                    raise NonFiniteStateError(overflow_cause(problem, last.x))
                 floor = gradient_noise_floor(self.model, problem, last.x) if self.tolerance else 0.0
                 r0 = rn
             history.append(relative(rn, r0))

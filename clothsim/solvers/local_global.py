@@ -38,6 +38,7 @@ import logging
 import numpy as np
 
 from .. import matrices
+from ..factor_mode import ModeChoice, choose_cholmod_mode, switched_reason
 from ..factorization import single_threaded
 from ..model import Model
 from .base import Iterate, Solver, StepProblem, StepResult
@@ -72,10 +73,17 @@ class LocalGlobalSolver(Solver):
         The factorization backend that ran last.
     cholmod_mode : {"auto", "simplicial", "supernodal"}
         CHOLMOD's mode for the next factorization (``[solver] cholmod_mode``); "auto"
-        chooses by predicted cost (:func:`clothsim.factorization.choose_cholmod_mode`).
+        chooses by predicted cost (:func:`clothsim.factor_mode.choose_cholmod_mode`).
     expected_solves : int or None
         Solves the next factorization is expected to serve, for "auto" (set by
         :meth:`clothsim.Simulation.expect_steps`); None: unknown.
+    expected_final : bool
+        True when ``expected_solves`` is the whole run's count (``clothsim run``); False
+        when it is a lower bound or unknown: then a factor whose solves are the slower ones
+        is refactored in the other mode once it has served the break-even count of solves
+        (:class:`~clothsim.factor_mode.ModeChoice`).
+    solve_count : int
+        Solves served by this solver's factors (one per iteration of :meth:`solve`).
     factorization : str or None
         The mode of the last factorization and why, e.g. "simplicial: 439 free vertices, 600
         solves assumed (…): predicted factor … s + 600 x … ms = … s, supernodal …".
@@ -87,8 +95,12 @@ class LocalGlobalSolver(Solver):
     name = "local-global"
     cholmod_mode = "auto"
     expected_solves: int | None = None
+    expected_final = False
     factorization: str | None = None
     analysis_count = 0
+    solve_count = 0
+    _factored_at = 0
+    _switch_to: str | None = None
 
     def __init__(self, model: Model, *, iterations: int = 10, tolerance: float | None = None,
                  backend: str = "auto", check_conditioning: bool = True):
@@ -140,13 +152,33 @@ class LocalGlobalSolver(Solver):
             sysf = factor_system(self.model, problem, self._Js, self._a, self._b,
                                  backend=self.backend_requested,
                                  check_conditioning=self.check_conditioning,
-                                 cholmod_mode=self.cholmod_mode, previous=self._cache,
-                                 expected_solves=self.expected_solves)
+                                 choose_mode=self._choose_mode, previous=self._cache)
+        self._switch_to, self._factored_at = None, self.solve_count
         self.factor_count += 1
         self.analysis_count += sysf.A_FF_factor.analyzed
         self.backend = sysf.A_FF_factor.backend
         self.factorization = sysf.A_FF_factor.mode_reason
         return sysf
+
+    def _choose_mode(self, free: int) -> ModeChoice:
+        """CHOLMOD's mode for a factorization over ``free`` unknowns (:attr:`expected_final`)."""
+        if self._switch_to is not None:
+            served = self.solve_count - self._factored_at
+            return ModeChoice(self._switch_to, switched_reason(free, self._switch_to, served))
+        return choose_cholmod_mode(free, self.cholmod_mode, self.expected_solves,
+                                   final=self.expected_final, served=self.solve_count)
+
+    def _count_solves(self, iterations: int) -> None:
+        """Count a step's solves; past the factor's break-even, refactor in the other mode."""
+        self.solve_count += iterations
+        mode = None if self._cache is None else self._cache.mode
+        if (mode is not None and mode.switch_after is not None
+                and self.solve_count - self._factored_at >= mode.switch_after):
+            log.info("the %s factor served %d solves, past its break-even (%d): refactoring in "
+                     "%s mode", mode.mode, self.solve_count - self._factored_at,
+                     mode.switch_after, mode.switch_to)
+            self.invalidate()
+            self._switch_to = mode.switch_to
 
     # -- the two half steps ---------------------------------------------------------------
     def local_step(self, x: np.ndarray) -> np.ndarray:
@@ -295,7 +327,9 @@ class LocalGlobalSolver(Solver):
         StepResult
         """
         with single_threaded():
-            return super().solve(problem, x0)
+            result = super().solve(problem, x0)
+        self._count_solves(result.iterations)
+        return result
 
     def iterates(self, problem: StepProblem, x0: np.ndarray | None = None):
         """Local/global iterates from ``x0`` (default: y, pins applied).

@@ -48,6 +48,8 @@ class StabilityWarning(ClothsimWarning):
 def stable_time_step(model: Model, *, anchor_vertices=None, anchor_stiffness=None) -> float:
     """The explicit stability limit h_max = 2 / ω_max [s], ω_max² = λ_max(M⁻¹ L).
 
+    Over the vertices of positive mass: one of mass 0 is pinned (it does not move).
+
     Parameters
     ----------
     model : Model
@@ -66,8 +68,11 @@ def stable_time_step(model: Model, *, anchor_vertices=None, anchor_stiffness=Non
     if anchor_vertices is not None and len(anchor_vertices):
         k = np.broadcast_to(np.asarray(anchor_stiffness, np.float64), np.shape(anchor_vertices))
         Ls = Ls + sp.csr_matrix((k, (anchor_vertices, anchor_vertices)), shape=(n, n))
-    s = 1.0 / np.sqrt(model.vertex_mass)
-    K = sp.diags(s) @ Ls @ sp.diags(s)
+    m = np.asarray(model.vertex_mass, np.float64)
+    massive = np.flatnonzero(m > 0)  # a vertex of mass 0 is pinned: it does not oscillate
+    s = 1.0 / np.sqrt(m[massive])
+    K = sp.diags(s) @ Ls[massive][:, massive] @ sp.diags(s)
+    n = len(massive)
     if K.nnz == 0:
         return float("inf")
     if n <= 50:
@@ -106,7 +111,9 @@ class SymplecticEulerSolver(Solver):
         self.check_stability = check_stability
         self.stable_h: float | None = None
         self._checked = None
-        self._inv_mass = 1.0 / model.vertex_mass
+        m = np.asarray(model.vertex_mass, np.float64)
+        # mass 0 means pinned exactly (the simulation pins it): an inverse mass of 0
+        self._inv_mass = np.divide(1.0, m, out=np.zeros_like(m), where=m > 0)
 
     def _check(self, problem: StepProblem) -> None:
         key = (problem.h, problem.anchor_vertices.tobytes(), problem.anchor_stiffness.tobytes())

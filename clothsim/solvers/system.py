@@ -15,7 +15,8 @@ import numpy as np
 import scipy.sparse as sp
 
 from .. import matrices
-from ..factorization import Factor, choose_cholmod_mode
+from ..factor_mode import ModeChoice
+from ..factorization import Factor
 from ..model import Model
 from ..problem import StepProblem
 
@@ -36,6 +37,8 @@ class SystemFactor:
         Exactly pinned vertices.
     A_FF_factor : Factor
         Factorization of A restricted to free rows and columns.
+    mode : ModeChoice or None
+        CHOLMOD's mode, why, and when to change it (None: SuperLU).
     A_FP : csr_matrix, shape (f, p)
         Coupling of free to fixed vertices (moves fixed positions to the right-hand side).
     h2J_F : csr_matrix, shape (f, s)
@@ -58,13 +61,13 @@ class SystemFactor:
     free_runs: list | None = None
     pinned_springs: np.ndarray | None = None
     work: np.ndarray | None = None
+    mode: ModeChoice | None = None
 
 
 def factor_system(model: Model, problem: StepProblem, Js: sp.csr_matrix, a: np.ndarray,
                   b: np.ndarray, *, backend: str = "auto",
-                  check_conditioning: bool = True, cholmod_mode: str = "auto",
-                  previous: SystemFactor | None = None,
-                  expected_solves: int | None = None) -> SystemFactor:
+                  check_conditioning: bool = True,
+                  choose_mode=None, previous: SystemFactor | None = None) -> SystemFactor:
     """Assemble and factor M_s + h² (L_s + K_anchor) for this problem's h and pins.
 
     Parameters
@@ -81,14 +84,12 @@ def factor_system(model: Model, problem: StepProblem, Js: sp.csr_matrix, a: np.n
         Factorization backend (:class:`clothsim.factorization.Factor`).
     check_conditioning : bool
         Warn when the condition estimate passes the threshold.
-    cholmod_mode : {"auto", "simplicial", "supernodal"}
-        CHOLMOD's mode; "auto" by predicted cost
-        (:func:`clothsim.factorization.choose_cholmod_mode`).
+    choose_mode : callable, optional
+        ``choose_mode(free_vertex_count) -> ModeChoice``: CHOLMOD's mode and why
+        (:func:`clothsim.factor_mode.choose_cholmod_mode`); default simplicial.
     previous : SystemFactor, optional
         The factor this one replaces: with the same free vertices (h or the penalty pins
         changed) its symbolic analysis is reused.
-    expected_solves : int, optional
-        Solves the run expects (None: unknown), for "auto".
 
     Returns
     -------
@@ -102,11 +103,12 @@ def factor_system(model: Model, problem: StepProblem, Js: sp.csr_matrix, a: np.n
     A_csr = A.tocsr()
     A_FF = A_csr[free][:, free]
     A_FP = A_csr[free][:, fixed]
-    mode, reason = choose_cholmod_mode(len(free), cholmod_mode, expected_solves)
+    mode = (ModeChoice("simplicial", "simplicial") if choose_mode is None
+            else choose_mode(len(free)))
     factor = Factor(A_FF, backend=backend, check_conditioning=check_conditioning,
-                    cholmod_mode=mode,
+                    cholmod_mode=mode.mode,
                     reuse=None if previous is None else previous.A_FF_factor)
-    factor.mode_reason = reason if factor.backend == "cholmod" else "SuperLU (no CHOLMOD)"
+    factor.mode_reason = mode.reason if factor.backend == "cholmod" else "SuperLU (no CHOLMOD)"
     log.info("factored M + h^2 L: %d free of %d vertices, h=%g, backend=%s (%s)",
              len(free), n, problem.h, factor.backend, factor.mode_reason)
     h2J_F = (problem.h ** 2 * Js[free]).tocsr()
@@ -119,4 +121,5 @@ def factor_system(model: Model, problem: StepProblem, Js: sp.csr_matrix, a: np.n
                 if j > i]
     pinned_springs = np.flatnonzero(np.isin(a, fixed) | np.isin(b, fixed))
     return SystemFactor(A, free, fixed, factor, A_FP.tocsr(), h2J_F, runs, pinned_springs,
-                        np.empty((3, 3, len(free))))
+                        np.empty((3, 3, len(free))),
+                        mode if factor.backend == "cholmod" else None)

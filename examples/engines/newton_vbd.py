@@ -270,9 +270,38 @@ def check(solver: str = "vbd", iterations: int = 1000, steps: int = 10, kd: floa
     return report, gap
 
 
+def save(folder, iterations=(200, 1000), steps: int = 10) -> Path:
+    """Write the exported scene and VBD's trajectories, so they can be checked without newton.
+
+    ``folder/scene.toml`` (with its data files) and ``folder/vbd-K.npz`` per iteration count
+    K, holding newton's float32 ``positions`` and ``velocities`` (steps + 1 frames). The copy
+    in examples/engines/newton-springs is this function's output; tests/ports checks it.
+
+    Parameters
+    ----------
+    folder : str or Path
+    iterations : sequence of int
+        VBD's iterations per step, one trajectory each.
+    steps : int
+        Steps per trajectory.
+
+    Returns
+    -------
+    Path
+        The scene file.
+    """
+    model = build_model()
+    path = export_scene(model, folder)
+    for k in iterations:
+        xs, vs = simulate(model, "vbd", k, steps)
+        np.savez_compressed(Path(folder) / f"vbd-{k}.npz", positions=xs, velocities=vs)
+    return path
+
+
 CASES = [  # (label, solver, iterations, spring damping kd [N·s/m], colouring)
     ("VBD, 1000 iterations", "vbd", 1000, 0.0, "springs"),
     ("VBD, 1000 iterations, kd = 2", "vbd", 1000, 2.0, "springs"),
+    ("VBD, 200 iterations", "vbd", 200, 0.0, "springs"),
     ("VBD, 10 iterations", "vbd", 10, 0.0, "springs"),
     ("VBD, 1000 iterations, ModelBuilder.color()", "vbd", 1000, 0.0, "newton"),
     ("VBD, 10 iterations, ModelBuilder.color()", "vbd", 10, 0.0, "newton"),
@@ -290,7 +319,12 @@ def main(argv=None) -> None:
 
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--steps", type=int, default=10, help="steps per case (default 10)")
+    ap.add_argument("--save", metavar="DIR", default=None,
+                    help="only write the scene and VBD's 200- and 1000-iteration runs to DIR")
     args = ap.parse_args(argv)
+    if args.save:
+        print(f"written: {save(args.save, steps=args.steps)}")
+        return
     warnings.simplefilter("ignore", ClothsimWarning)  # Newton from a diverged XPBD answer
     colours = spring_colouring(GRID * GRID, grid_springs())
     print(f"newton {newton.__version__}, warp {wp.__version__}; {GRID}x{GRID} particles, "

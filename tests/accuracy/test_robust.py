@@ -72,7 +72,8 @@ def test_a_crash_keeps_the_measured_errors(tmp_path, monkeypatch):
     assert len(rows) == 6 and all(math.isfinite(float(r["solver_error_max"])) for r in rows)
     assert (tmp_path / "problems.npz").exists()
     monkeypatch.undo()
-    assert json.loads((tmp_path / "accuracy.json").read_text())["status"] == "running"
+    record = json.loads((tmp_path / "accuracy.json").read_text())
+    assert record["status"] == "failed" and "the machine went away" in record["error"]
     study(tmp_path)  # the crashed study's folder is still a study's: re-run in place
     assert json.loads((tmp_path / "accuracy.json").read_text())["status"] == "complete"
 
@@ -92,7 +93,7 @@ def test_a_new_study_removes_the_earlier_one_before_it_writes(tmp_path, monkeypa
     # never the old table beside the new steps: the new study's record and steps only
     assert sorted(p for p in os.listdir(tmp_path) if not p.startswith(".")) == [
         "accuracy.json", "problems.npz"]
-    assert json.loads((tmp_path / "accuracy.json").read_text())["status"] == "running"
+    assert json.loads((tmp_path / "accuracy.json").read_text())["status"] == "failed"
     assert len(load_problems(tmp_path / "problems.npz")) == 2
 
 

@@ -132,15 +132,20 @@ def test_cli_check_on_a_scene_file(tmp_path, capsys):
     port.mkdir()
     write_trajectory(port / "positions.txt", np.stack(xs))
     write_trajectory(port / "velocities.txt", np.stack(vs))
-    assert main(["check", "hanging", str(port)]) == 0
+    assert main(["check", "hanging", str(port), "--steps", "3"]) == 0
     assert capsys.readouterr().out.strip().startswith("PASS: 3 steps agree")
+    # a whole output is checked: 3 of the scene's 90 steps fail, naming both counts
+    assert main(["check", "hanging", str(port)]) == 1
+    assert capsys.readouterr().out.strip().startswith(
+        "FAIL: the port's output has 4 frames (3 steps), the scene asks for 90")
     moved = np.stack(xs)
     moved[2:, 100] += 1e-3
     write_trajectory(port / "positions.txt", moved)
-    assert main(["check", "hanging", str(port)]) == 1
+    assert main(["check", "hanging", str(port), "--steps", "3"]) == 1
     assert "step 1 -> 2" in capsys.readouterr().out
     write_trajectory(tmp_path / "x.npy", np.stack(xs))
     assert main(["check", "hanging", str(tmp_path / "x.npy"), "--steps", "1"]) == 0
     assert main(["check", "hanging", str(port), "--tolerance", "-1"]) == 2
-    assert main(["check", "hanging", str(port), "--optimality", "1e-3", "--verbose-steps"]) == 1
+    assert main(["check", "hanging", str(port), "--optimality", "1e-3", "--verbose-steps",
+                 "--steps", "3"]) == 1
     assert "step 0 -> 1: agrees" in capsys.readouterr().out

@@ -42,7 +42,21 @@ def programs(tmp_path_factory) -> dict[str, Path]:
     done = subprocess.run(["make", "-s", "-j2", "-C", str(CPP), f"BUILD={build}"],
                           capture_output=True, text=True)
     assert done.returncode == 0, done.stderr[-3000:]
-    return {"port": build / "clothsim_port", "driver": build / "assignment_driver"}
+    return {"port": build / "clothsim_port", "driver": driver_path(build)}
+
+
+def driver_path(build: Path, *make_args: str) -> Path:
+    """Where the Makefile builds the assignment driver for this solution (its own folder)."""
+    done = subprocess.run(["make", "-s", "-C", str(CPP), f"BUILD={build}", *make_args,
+                           "driver-path"], capture_output=True, text=True, check=True)
+    return Path(done.stdout.strip())
+
+
+def prebuilt(programs: dict[str, Path], build: Path) -> None:
+    """Copy the session's programs where make looks for them in ``build`` (up to date)."""
+    driver_path(build).parent.mkdir(parents=True, exist_ok=True)
+    shutil.copy2(programs["port"], build / "clothsim_port")
+    shutil.copy2(programs["driver"], driver_path(build))
 
 
 def _scene(name_or_path):
@@ -114,7 +128,7 @@ def pinned(model: Path) -> set[int]:
 # -- the port in the assignment's configuration ---------------------------------------------
 def test_port_passes_check_in_the_assignments_configuration(programs, net, tmp_path, capsys):
     out = run(programs["port"], net, tmp_path / "port")
-    status = cli_main(["check", "jacobson-net", str(out)])
+    status = cli_main(["check", "jacobson-net", str(out), "--steps", "30"])  # 30 of its 90
     text = capsys.readouterr().out
     assert status == 0 and "PASS" in text, text
     report = check("jacobson-net", out)
@@ -239,7 +253,7 @@ def test_flag_run_against_a_y_start_scene_is_undecided_over_all_steps(flag_run, 
 # -- the assignment driver with the project's solution -----------------------------------------
 def test_assignment_driver_with_our_solution_passes(programs, net, tmp_path, capsys):
     out = run(programs["driver"], net, tmp_path / "a")
-    status = cli_main(["check", "jacobson-net", str(out)])
+    status = cli_main(["check", "jacobson-net", str(out), "--steps", "30"])  # 30 of its 90
     text = capsys.readouterr().out
     assert status == 0 and "PASS" in text, text
     assert max(s.error for s in check("jacobson-net", out).steps) < 1e-12
@@ -291,8 +305,7 @@ def test_the_docs_commands_run_and_give_the_verdicts_they_state(programs, tmp_pa
     block = section.split("```sh\n", 1)[1].split("```", 1)[0].splitlines()
     build = tmp_path / "b"
     build.mkdir()
-    for program in programs.values():  # already built: make finds them up to date
-        shutil.copy2(program, build / program.name)
+    prebuilt(programs, build)          # already built: make finds them up to date
     _scene("jacobson-net")
     clothsim = f"{shlex.quote(sys.executable)} -m clothsim"  # the repository's .venv may lack
     env = dict(os.environ, PYTHONPATH=str(REPO))
@@ -332,8 +345,7 @@ def test_the_coursework_section_runs_as_written(programs, tmp_path):
     block = section.split("```sh\n", 1)[1].split("```", 1)[0].splitlines()
     build = tmp_path / "b"
     build.mkdir()
-    for program in programs.values():
-        shutil.copy2(program, build / program.name)
+    prebuilt(programs, build)
     clothsim = f"{shlex.quote(sys.executable)} -m clothsim"
     env = dict(os.environ, PYTHONPATH=str(REPO))
     outputs = []
@@ -363,3 +375,91 @@ def test_too_few_iterations_are_not_converged_with_the_settings_named(programs, 
     first = check(case / "scene.toml", out).first_failure
     assert first is not None and first.k == 0 and first.status == "not converged", first
     assert first.settings == '[solver] initial_guess = "y" and iterations = 5', first.line()
+
+
+# -- a student's solution: several files, its own include folder, one build per solution ------
+def split_solution(folder: Path, *, start_from_unext: bool = False,
+                   fault: str | None = None) -> list[Path]:
+    """The project's solution as a real one is laid out: three files in src/, each including
+    its header by the assignment's name from the solution's own include/ folder (the
+    assignment's headers plus one of its own). ``start_from_unext``: the step iterates from
+    Unext as it finds it (as main.cpp passes it, a copy of the current positions), like two
+    of the published solutions. ``fault="unnormalized"``: the local step forgets to normalize."""
+    src, include = folder / "src", folder / "include"
+    src.mkdir(parents=True, exist_ok=True)
+    include.mkdir(exist_ok=True)
+    for header in (CPP / "include").glob("*.h"):
+        shutil.copy2(header, include / header.name)
+    (include / "penalty.h").write_text("#pragma once\ninline double pin_penalty() "
+                                       "{ return 1e10; }\n")
+    text = (CPP / "mass_springs_solution.cpp").read_text(encoding="utf-8")
+    text = text.replace("const double w = 1e10;", "const double w = pin_penalty();")
+    if start_from_unext:
+        assert "  Unext = Ucur;\n" in text
+        text = text.replace("  Unext = Ucur;\n", "")
+    if fault == "unnormalized":
+        text = text.replace("r(e) * p.row(e).normalized()", "r(e) * p.row(e)")
+    bodies = {}
+    for chunk in ("\n" + text).split("\n\n"):
+        for name in ("signed_incidence_matrix_sparse", "fast_mass_springs_precomputation_sparse",
+                     "fast_mass_springs_step_sparse"):
+            if chunk.lstrip().startswith(("void " + name, "bool " + name)):
+                bodies[name] = chunk.strip() + "\n"
+    assert len(bodies) == 3, list(bodies)
+    files = []
+    for name, body in bodies.items():
+        path = src / f"{name}.cpp"
+        uses = "#include \"signed_incidence_matrix_sparse.h\"\n" if "precomputation" in name else ""
+        path.write_text(f"#include \"{name}.h\"\n{uses}#include \"penalty.h\"\n"
+                        f"#include <vector>\n\n{body}")
+        files.append(path)
+    return files
+
+
+def test_a_three_file_solution_checked_as_the_howto_says_and_a_changed_one_rebuilt(programs,
+                                                                                   tmp_path):
+    """docs/howto/check-a-cpp-solution.md as written, on a solution in three files with its
+    own include folder that starts its iterations from Unext (an empty Unext aborts it):
+    PASS. The same files then changed to a wrong local step and dated before that build:
+    make builds them afresh in a folder of their own and the check fails; the first
+    build's PASS is never reprinted."""
+    text = (REPO / "docs" / "howto" / "check-a-cpp-solution.md").read_text(encoding="utf-8")
+    block = text.split("```sh\n", 1)[1].split("```", 1)[0].splitlines()
+    build = tmp_path / "b"
+    files = split_solution(tmp_path / "student", start_from_unext=True)
+    clothsim = f"{shlex.quote(sys.executable)} -m clothsim"
+    env = dict(os.environ, PYTHONPATH=str(REPO))
+
+    def run_line(line: str) -> subprocess.CompletedProcess:
+        argv = shlex.split(line.replace("$PWD", str(tmp_path))
+                           .replace("/tmp/clothsim-cpp", str(build)))
+        if argv[0] == ".venv/bin/clothsim":
+            return subprocess.run([sys.executable, "-m", "clothsim", *argv[1:]], cwd=tmp_path,
+                                  env=env, capture_output=True, text=True)
+        assert argv[:4] == ["make", "check", "-C", "examples/ports/cpp"], line
+        return subprocess.run(argv + [f"CLOTHSIM={clothsim}"], cwd=REPO, env=env,
+                              capture_output=True, text=True)
+
+    assert [run_line(line).returncode for line in block[:-1]] == [0] * (len(block) - 1)
+    done = run_line(block[-1])
+    assert done.returncode == 0, (done.stdout[-2000:], done.stderr[-2000:])
+    assert "PASS: 30 steps agree" in done.stdout, done.stdout
+    assert len(list(build.glob("assignment-*/assignment_driver"))) == 1
+    # the student's files changed (a local step that forgets to normalize), dated 2000-01-01
+    split_solution(tmp_path / "student", start_from_unext=True, fault="unnormalized")
+    for f in files:
+        os.utime(f, (946684800, 946684800))
+    done = run_line(block[-1])
+    assert done.returncode != 0 and "PASS" not in done.stdout, done.stdout
+    assert "FAIL at step 0 -> 1" in done.stdout, done.stdout
+    assert len(list(build.glob("assignment-*/assignment_driver"))) == 2
+
+
+def test_a_missing_solution_file_is_a_one_line_make_error(tmp_path):
+    if shutil.which("make") is None:
+        pytest.skip("make is not installed")
+    done = subprocess.run(["make", "-s", "-C", str(CPP), f"BUILD={tmp_path}",
+                           f"SOLUTION={tmp_path / 'nope.cpp'}", "driver-path"],
+                          capture_output=True, text=True)
+    assert done.returncode != 0
+    assert f"SOLUTION: no file {tmp_path / 'nope.cpp'}" in done.stderr, done.stderr

@@ -48,8 +48,7 @@ def test_pin_keys_are_checked(tmp_path):
 def test_a_pin_effect_keeps_its_own_method(tmp_path):
     (tmp_path / "x.txt").write_text("0 0 0\n1 0 0\n0 1 0\n")
     sim = Scene.from_dict({
-        "cloth": {"shape": "files", "vertices": "x.txt", "pin_method": "constraint",
-                  "pin_stiffness": 5.0},
+        "cloth": {"shape": "files", "vertices": "x.txt", "pin_method": "constraint"},
         "springs": {"structural": 10.0},
         "effects": [{"kind": "pin", "vertices": [2], "method": "penalty", "stiffness": 77.0}]},
         base_dir=tmp_path).build_simulation()

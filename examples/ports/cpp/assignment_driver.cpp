@@ -1,7 +1,8 @@
 // assignment_driver MODEL_DIR OUT_DIR [--frames F]: runs the CSC317 mass-spring assignment's
 // three functions (mass_springs.h) on a `clothsim export` model folder, as the assignment's
 // main.cpp does (one k, penalty pins w = 1e10 at the rest positions, y = 2 Ucur - Uprev,
-// 50 iterations from Ucur), and writes OUT_DIR/positions.txt and velocities.txt.
+// 50 iterations from Ucur; Unext holds the current positions on entry), and writes
+// OUT_DIR/positions.txt and velocities.txt.
 #include <filesystem>
 #include <iostream>
 #include <string>
@@ -41,13 +42,17 @@ int main(int argc, char** argv) {
     if (!fast_mass_springs_precomputation_sparse(m.V, E, k, m.mass, b, h, r, M, A, C, prefactorization)) refuse("the precomputation failed (the system is not positive definite)");
     std::filesystem::create_directories(argv[2]);
     TrajectoryWriter out(argv[2]);
-    Eigen::MatrixXd Ucur = m.V, Uprev = m.V - h * m.V0, Unext;
-    out.frame(Ucur, m.V0);
+    // as the assignment's main.cpp: U holds the positions, the step gets a copy of them as
+    // Ucur and U itself as Unext (so Unext holds the current positions on entry, never an
+    // empty matrix), and Uprev becomes that copy
+    Eigen::MatrixXd U = m.V, Uprev = m.V - h * m.V0;
+    out.frame(U, m.V0);
     for (int f = 0; f < frames; ++f) {
-      fast_mass_springs_step_sparse(m.V, E, k, b, h, m.force, r, M, A, C, prefactorization, Uprev, Ucur, Unext);
-      out.frame(Unext, ((Unext - Ucur) / h).eval());
-      Uprev = Ucur;
-      Ucur = Unext;
+      const Eigen::MatrixXd U_stash = U;
+      fast_mass_springs_step_sparse(m.V, E, k, b, h, m.force, r, M, A, C, prefactorization, Uprev, U_stash, U);
+      if (U.rows() != U_stash.rows() || U.cols() != 3) refuse("fast_mass_springs_step_sparse: Unext has " + std::to_string(U.rows()) + " x " + std::to_string(U.cols()) + " entries after step " + std::to_string(f + 1) + ", expected " + std::to_string(U_stash.rows()) + " x 3");
+      out.frame(U, ((U - U_stash) / h).eval());
+      Uprev = U_stash;
     }
   } catch (const std::exception& e) {
     std::cerr << "assignment_driver: " << e.what() << "\n";

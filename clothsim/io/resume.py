@@ -1,5 +1,5 @@
-"""What a run folder holds: its frames on disk, where ``--resume`` continues, and clearing
-an earlier run before a fresh one (used by :func:`clothsim.runner.run_scene`)."""
+"""Where ``--resume`` continues a run: the frames on disk, the scene and input files they
+are of, and the records run.json keeps (used by :class:`clothsim.io.runfolder.RunFolder`)."""
 
 from __future__ import annotations
 
@@ -7,17 +7,12 @@ import logging
 import re
 from pathlib import Path
 
-from .display import OBSTACLES_NAME
-from .errors import InputError
-from .io.frames import read_frame
-from .scene.inputs import changed_input
+from ..errors import InputError
+from .frames import read_frame
 
 log = logging.getLogger(__name__)
 
 FRAME_PATTERN = re.compile(r"frame_(\d{6})\.vtu")
-RESULT_FILES = ("trajectory.pvd", "trajectory.npz", "preview.gif", "final.png", "run.json")
-#: Files of an earlier run that a fresh run removes (besides its frame files).
-STALE_FILES = RESULT_FILES + (OBSTACLES_NAME,)
 
 
 def completed_frames(out_dir) -> int | None:
@@ -34,8 +29,7 @@ def completed_frames(out_dir) -> int | None:
     Returns
     -------
     int or None"""
-    out = Path(out_dir)
-    indices = {int(m.group(1)) for p in out.glob("frame_*.vtu")
+    indices = {int(m.group(1)) for p in Path(out_dir).glob("frame_*.vtu")
                if (m := FRAME_PATTERN.fullmatch(p.name))}
     k = -1
     while k + 1 in indices:
@@ -43,29 +37,60 @@ def completed_frames(out_dir) -> int | None:
     return None if k < 0 else k
 
 
+def changed_input(recorded: dict, now: dict) -> str | None:
+    """The first input file whose content differs from what a run recorded.
+
+    Parameters
+    ----------
+    recorded : dict of str to str
+        ``run.json``'s ``inputs`` (path to sha256).
+    now : dict of str to str
+        :func:`clothsim.scene.inputs.input_hashes` of the scene about to resume.
+
+    Returns
+    -------
+    str or None
+        ``"<path>: ..."`` naming the file and what changed, or None when every file is as
+        recorded.
+    """
+    for path in sorted(set(recorded) | set(now)):
+        before, after = recorded.get(path), now.get(path)
+        if before == after:
+            continue
+        if after is None:
+            what = ("is missing now" if not Path(path).exists()
+                    else "is no longer read by the scene")
+        elif before is None:
+            what = "is read by the scene now but was not when the run started"
+        else:
+            what = "changed since the run started (its content hash differs)"
+        return f"{path}: {what}"
+    return None
+
+
 def resume_point(out: Path, previous: dict | None, shash: str, frames: int,
                  inputs: dict | None = None) -> int | None:
-    """The frame ``--resume`` continues from.
+    """The last frame k <= ``frames`` such that frames 0..k are on disk and read back, once
+    the folder is checked to hold this scene's run.
 
     Parameters
     ----------
     out : Path
         The run folder.
     previous : dict or None
-        Its ``run.json`` (None when missing or unreadable).
+        Its run.json (None when missing or unreadable).
     shash : str
         :func:`clothsim.runner.scene_hash` of the scene to resume.
     frames : int
         Frames requested: the point is never beyond it.
     inputs : dict, optional
-        :func:`clothsim.scene.inputs.input_hashes` of the scene now: compared with the
-        ``inputs`` its ``run.json`` recorded at the start.
+        :func:`clothsim.scene.inputs.input_hashes` of the scene now, compared with those
+        run.json recorded at the start.
 
     Returns
     -------
     int or None
-        The last frame that reads back, of 0..min(last on disk, frames); None when no frame
-        is on disk.
+        None when no frame is on disk.
 
     Raises
     ------
@@ -103,36 +128,29 @@ def resume_point(out: Path, previous: dict | None, shash: str, frames: int,
     return k
 
 
-def clear_earlier_run(out: Path, ours: bool) -> None:
-    """A fresh run replaces an earlier one: remove its frames and result files.
+def recorded_through(previous: dict, start: int) -> int:
+    """The last frame k <= start with records for frames 1..k in ``previous`` (run.json):
+    after SIGKILL, a full disk or ``--frames`` down then up, frames on disk may lack one.
 
     Parameters
     ----------
-    out : Path
-        The run folder.
-    ours : bool
-        The folder holds a clothsim run record (or ``--force`` was given).
+    previous : dict
+        The run's run.json.
+    start : int
+        The last frame on disk that reads back.
 
     Returns
     -------
-    None
-
-    Raises
-    ------
-    InputError
-        Frame files without a clothsim run.json beside them (and not ``ours``).
+    int
     """
-    frames = [p for p in out.glob("frame_*.vtu") if FRAME_PATTERN.fullmatch(p.name)]
-    if frames and not ours:
-        raise InputError(f"{out}: holds {len(frames)} frame files and no clothsim run.json; "
-                         "refusing to delete files clothsim did not write (choose another "
-                         "--out or remove them)")
-    stale = frames + [out / name for name in STALE_FILES if (out / name).exists()]
-    for p in stale:
-        p.unlink()
-    if stale:
-        log.info("removed %d files of an earlier run in %s", len(stale), out)
+    recorded = {r.get("frame") for r in previous.get("frames", []) if isinstance(r, dict)}
+    k = 0
+    while k < start and k + 1 in recorded:
+        k += 1
+    if k < start:
+        log.info("frames %d..%d have no record in run.json; recomputing them", k + 1, start)
+    return k
 
 
-__all__ = ["completed_frames", "resume_point", "clear_earlier_run", "FRAME_PATTERN",
-           "RESULT_FILES", "STALE_FILES"]
+__all__ = ["FRAME_PATTERN", "changed_input", "completed_frames", "recorded_through",
+           "resume_point"]

@@ -1,0 +1,331 @@
+"""A run's folder: :class:`RunFolder` owns everything :func:`clothsim.runner.run_scene` puts
+on disk.
+
+It is the :class:`~clothsim.io.outfolder.OutputFolder` of kind ``run`` (claimed, locked,
+its status in ``run.json``) and holds the run's frame writer
+(:class:`~clothsim.io.frames.FrameWriter`: ``frame_%06d.vtu`` and ``trajectory.pvd``), its
+trajectory store (:class:`~clothsim.io.runfiles.TrajectoryStore`, assembled into
+``trajectory.npz``), its per-frame records, where ``--resume`` continues
+(:meth:`RunFolder.resume_point`), and the removal of an earlier run before a fresh one. The
+runner computes frames and hands them over; it never touches a file itself.
+"""
+
+from __future__ import annotations
+
+import logging
+import time as _time
+from datetime import UTC, datetime
+from pathlib import Path
+
+import numpy as np
+
+from ..errors import InputError
+from .diskspace import check_run_plan, file_bytes, run_plan
+from .folders import RUN_RECORD
+from .frames import OBSTACLES_NAME, PVD_NAME, FrameWriter, read_frame
+from .outfolder import OutputFolder
+from .resume import FRAME_PATTERN, changed_input, completed_frames, recorded_through, resume_point
+from .runfiles import TrajectoryStore, model_arrays, read_json
+
+log = logging.getLogger(__name__)
+
+RESULT_FILES = (PVD_NAME, "trajectory.npz", "preview.gif", "final.png", RUN_RECORD)
+#: Files of an earlier run that a fresh run removes (besides its frame files).
+STALE_FILES = RESULT_FILES + (OBSTACLES_NAME,)
+
+
+class RunFolder(OutputFolder):
+    """The folder of one run (see the module docstring); use it as a context manager.
+
+    Parameters
+    ----------
+    path : str or Path
+        The run folder (created when missing).
+    force : bool
+        Write into a folder clothsim does not own (files named like a run's are replaced).
+    guard : callable, optional
+        As for :class:`~clothsim.io.outfolder.OutputFolder`.
+
+    Attributes
+    ----------
+    previous : dict or None
+        The folder's ``run.json`` before this run (None when missing or unreadable).
+    info : dict
+        What run.json says besides the status, the last frame and the records.
+    records : list of dict
+        One per frame 1..done.
+    done : int
+        The last complete frame (−1 before frame 0).
+    """
+
+    def __init__(self, path, *, force: bool = False, guard=None):
+        super().__init__(path, "run", force=force, guard=guard)
+        self.previous: dict | None = None
+        self.info: dict = {}
+        self.records: list[dict] = []
+        self.done = -1
+        self.npz_frames: int | None = None
+        self.store: TrajectoryStore | None = None
+        self.writer: FrameWriter | None = None
+        self._wall = _time.perf_counter()
+        self._npz_at = -np.inf   # perf_counter when trajectory.npz was last written
+        self._npz_cost = 0.0     # seconds that took
+        self._model = None
+        self._fps = 1.0
+
+    def __enter__(self) -> RunFolder:
+        super().__enter__()
+        self.previous = read_json(self.path / RUN_RECORD)
+        return self
+
+    def __exit__(self, exc_type, exc, tb) -> None:
+        try:
+            super().__exit__(exc_type, exc, tb)
+        finally:
+            if self.store is not None:
+                self.store.close()
+
+    def resume_point(self, shash: str, frames: int, inputs: dict | None = None) -> int | None:
+        """The frame ``--resume`` continues from: :func:`clothsim.io.resume.resume_point`
+        of this folder and its run.json, cut to the frames run.json holds records of.
+
+        Parameters
+        ----------
+        shash, frames, inputs
+            As for :func:`clothsim.io.resume.resume_point`.
+
+        Returns
+        -------
+        int or None
+            None when no frame is on disk.
+        """
+        k = resume_point(self.path, self.previous, shash, frames, inputs)
+        if k is None:
+            return None
+        log.info("%s: resuming a run whose run.json says %r", self.path, self.earlier.word)
+        return recorded_through(self.previous, k)
+
+    def clear_earlier_run(self) -> None:
+        """A fresh run replaces an earlier one: remove its frames and result files.
+
+        Raises
+        ------
+        InputError
+            Frame files without a clothsim run.json beside them (and not ``force``).
+        """
+        out = self.path
+        ours = self.force or (self.previous is not None and "clothsim_run" in self.previous)
+        frames = [p for p in out.glob("frame_*.vtu") if FRAME_PATTERN.fullmatch(p.name)]
+        if frames and not ours:
+            raise InputError(f"{out}: holds {len(frames)} frame files and no clothsim "
+                             "run.json; refusing to delete files clothsim did not write "
+                             "(choose another --out or remove them)")
+        stale = frames + [out / name for name in STALE_FILES if (out / name).exists()]
+        for p in stale:
+            p.unlink()
+        if stale:
+            log.info("removed %d files of an earlier run in %s", len(stale), out)
+
+    def begin(self, info: dict, model, fps: float, *, frames: int | None = None, pinned=None,
+              compression: str = "auto",
+              start: int | None = None) -> tuple[np.ndarray, np.ndarray] | None:
+        """Open the frame writer and the trajectory store; resume from frame ``start``
+        (frames 0..start read back) or, without one, start afresh (an earlier run removed,
+        run.json marked ``writing`` before any frame).
+
+        Parameters
+        ----------
+        info : dict
+            What run.json records besides the status, last frame and frame records.
+        model : Model
+            The simulated model (its mesh and springs go into every frame).
+        fps : float
+            Frames per second; frame k is at time k / fps [s].
+        frames : int, optional
+            The last frame the run will write: the disk it needs is estimated
+            (:meth:`plan`), warned about when large and refused when the disk does not hold
+            it (:func:`clothsim.io.diskspace.check_run_plan`).
+        pinned : callable, optional
+            ``pinned(t)``: the pinned vertices at time t, written into each frame.
+        compression : {"auto", "zlib", "none"}
+            The frames' compression (:func:`clothsim.io.frames.choose_frame_compression`).
+        start : int, optional
+            The resume point (:meth:`resume_point`).
+
+        Returns
+        -------
+        (positions, velocities) or None
+            Frame ``start`` as read back when resuming, else None.
+        """
+        self.info, self._model, self._fps = info, model, fps
+        self.writer = FrameWriter(self.path, model.mesh, springs=model.springs,
+                                  pinned=pinned, compression=compression)
+        self.info["frame_compression"] = self.writer.compression_reason
+        if frames is not None:
+            self._plan(frames, start)  # before an earlier run goes: it may be refused
+        if start is None:
+            self.clear_earlier_run()
+        self.store = TrajectoryStore(self.path, model.vertex_count)
+        if start is None:
+            self.mark("writing")  # the folder is a run folder before any frame exists
+            return None
+        for j in range(start + 1):
+            x, v = read_frame(self.path / self.writer.filename(j))
+            self.store.append(x, v)
+        self.writer.adopt({j: j / fps for j in range(start + 1)})
+        self.records = [r for r in self.previous.get("frames", [])
+                        if isinstance(r, dict) and 1 <= r.get("frame", 0) <= start]
+        self.done = start
+        return x, v
+
+    def plan(self, frames: int, start: int | None = None) -> dict:
+        """The disk the run will use [bytes], estimated before anything is written
+        (:func:`clothsim.io.diskspace.run_plan`).
+
+        Parameters
+        ----------
+        frames : int
+            The last frame the run writes.
+        start : int, optional
+            The resume point (frames 0..start are on disk already).
+
+        Returns
+        -------
+        dict
+            ``frame``, ``frames``, ``trajectory``, ``end`` and ``peak`` [bytes].
+        """
+        model_bytes = sum(a.nbytes for a in model_arrays(self._model).values())
+        return run_plan(self.writer.estimated_bytes(), self._model.vertex_count, frames, start,
+                        model_bytes)
+
+    def _plan(self, frames: int, start: int | None) -> None:
+        """Warn about a large run, refuse one the disk cannot hold; run.json records the
+        estimate as ``disk_estimate``."""
+        plan = self.plan(frames, start)
+        self.info["disk_estimate"] = plan
+        reclaim = self._earlier_bytes() if start is None else 0  # a fresh run removes them
+        check_run_plan(self.path, plan, frames, reclaim, self.writer.compression)
+
+    def _earlier_bytes(self) -> int:
+        """Bytes of an earlier run's files here."""
+        paths = [p for p in self.path.glob("frame_*.vtu") if FRAME_PATTERN.fullmatch(p.name)]
+        return file_bytes(paths + [self.path / name for name in STALE_FILES])
+
+    def add_static(self, name: str) -> None:
+        """List the file ``name`` (written into the folder) beside every frame of
+        ``trajectory.pvd``.
+
+        Parameters
+        ----------
+        name : str
+            E.g. ``obstacles.vtu``.
+        """
+        self.writer.add_static(name)
+
+    def write_frame(self, k: int, positions, velocities, record: dict | None = None) -> None:
+        """Frame k: its ``.vtu`` file, the store, its record (none for frame 0) and run.json
+        with ``last_frame`` = k (trajectory.npz every few seconds, :meth:`save_npz`).
+
+        Parameters
+        ----------
+        k : int
+            The frame's index; frame k is at time k / fps.
+        positions, velocities : ndarray, shape (n, 3)
+            [m] and [m/s].
+        record : dict, optional
+            The frame's record (iterations, residual, ...).
+        """
+        self.writer.write(k, k / self._fps, positions, velocities)
+        self.store.append(positions, velocities)
+        if record is not None:
+            self.records.append(record)
+        self.done = k
+        if k > 0:
+            self.save_npz()
+            self.mark("writing")
+
+    def save_npz(self, force: bool = False) -> None:
+        """Rebuild trajectory.npz from the store when forced, or when the time since the
+        last rebuild exceeds both 2 s and 20 × its cost (at most ~5 % of the run's time).
+
+        Parameters
+        ----------
+        force : bool
+
+        Returns
+        -------
+        None
+        """
+        now = _time.perf_counter()
+        if not force and now - self._npz_at < max(2.0, 20 * self._npz_cost):
+            return
+        count = self.done + 1
+        self.store.write_npz(self.path / "trajectory.npz", count,
+                             dict(time=np.arange(count) / self._fps,
+                                  **model_arrays(self._model)))
+        self.npz_frames = count
+        self._npz_at = _time.perf_counter()
+        self._npz_cost = self._npz_at - now
+
+    def mark(self, status: str, record=None, *, error: str | None = None) -> None:
+        """Write run.json: info, status, error, wall time [s], frame records.
+
+        Parameters
+        ----------
+        status : {"writing", "complete", "interrupted", "failed"}
+            Stored as run.json's words: ``running``, ``completed``, ``interrupted``,
+            ``failed``.
+        record : None
+            Ignored: run.json is assembled from :attr:`info` and the records.
+        error : str, optional
+            One line, for interrupted and failed.
+        """
+        data = dict(self.info)
+        data.update(status=None, last_frame=self.done if self.done >= 0 else None,
+                    trajectory_frames=self.npz_frames, error=error,
+                    wall_seconds=_time.perf_counter() - self._wall,
+                    finished=(datetime.now(UTC).isoformat(timespec="seconds")
+                              if status != "writing" else None),
+                    frames=self.records)
+        super().mark(status, data, error=error)
+
+    def end(self, status: str, error: str | None) -> None:
+        """trajectory.npz one last time (when any frame is done), then run.json.
+
+        Parameters
+        ----------
+        status : {"complete", "interrupted", "failed"}
+        error : str or None
+            One line, for interrupted and failed.
+        """
+        if self.done >= 0:
+            self.save_npz(force=True)
+        self.mark(status, error=error)
+
+    def trajectory(self, name: str = "positions", count: int | None = None) -> np.ndarray:
+        """A read-only memory map of the frames in the store.
+
+        Parameters
+        ----------
+        name : {"positions", "velocities"}
+        count : int, optional
+            Frames 0..count−1 (default: all written).
+
+        Returns
+        -------
+        ndarray, shape (count, n, 3)
+        """
+        return self.store.view(name, count)
+
+    def frame_files(self) -> list[Path]:
+        """The frame files 0..done.
+
+        Returns
+        -------
+        list of Path
+        """
+        return [self.path / self.writer.filename(j) for j in range(self.done + 1)]
+
+
+__all__ = ["RunFolder", "completed_frames", "changed_input", "FRAME_PATTERN", "RESULT_FILES",
+           "STALE_FILES"]

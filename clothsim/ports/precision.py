@@ -1,0 +1,268 @@
+"""How precisely a port's numbers are written: printed digits, float32 values.
+
+A port writes its frames as text more often than not, and C++'s default (``std::cout``,
+``%g``) prints 6 significant digits: a correct float64 solution then differs from clothsim's
+step by the printing alone, about 5e-6 of |x|, far above the float64 tolerance (1e-9 of
+the cloth size). The check therefore reads the precision off the numbers themselves:
+
+:func:`significant_digits`
+    the most significant digits any value needs (its shortest decimal that reads back as
+    the same float64): 6 for ``%g``, 9 for ``%.9g``, 15 to 17 for a float64 written in full;
+:func:`float32_valued`
+    whether the values are float32 numbers, written exactly or with at least 9 digits
+    (data of a float32 port);
+:func:`printed_tolerances`
+    the per-step distance [m] that d printed digits alone can make (docs/ports.md,
+    "Printed precision").
+
+Printing with d digits rounds each coordinate by at most u |c|, u = ½ 10^(1−d). One step
+of the check sees it three times: in the port's x_{k+1} (the answer), and in x_k and v_k,
+the state clothsim restarts from. The step's answer depends on that state through the
+inertial target y = x_k + h v_k (and the start point), with a sensitivity ∂x_{k+1}/∂y =
+(M + h²∇²E)⁻¹ M whose ∞-norm is at most 1 when M + h²∇²E is an M-matrix (a spring
+Laplacian, positive pins): an error of the start moves the answer by no more than itself.
+Without stored velocities v_k = (x_k − x_{k−1}) / h, so y = 2 x_k − x_{k−1} carries 3 u |x|.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from .compare import cloth_size
+
+#: Values examined at most (evenly spaced over the data): the precision of printed numbers
+#: shows in any few thousand of them.
+SAMPLE = 20000
+#: Safety factor over the printed-rounding bound: the sensitivity bound of 1 assumes an
+#: M-matrix Hessian; compressed springs and a nonlinear step are allowed twice that.
+MARGIN = 2.0
+#: A float64 written in full needs 15 to 17 digits; fewer than this is printed precision.
+FULL = 15
+#: Fewer digits than this are too coarse to judge a step at (5e-5 of |x|): the check
+#: keeps its tolerance and says so, rather than pass anything.
+COARSEST = 5
+#: A printed precision whose step tolerance exceeds this fraction of the cloth's size is
+#: too coarse to judge a step (6 digits at |x| = 1000 m round a 1 m cloth by centimetres).
+COARSE = 1e-3
+#: Distinct values needed before their digits count as the printed precision: a handful of
+#: short numbers (a velocity of 0.01, a grid of 0.25 spacing) are exact, not rounded.
+DISTINCT = 30
+
+
+def _sample(x) -> np.ndarray:
+    flat = np.asarray(x, np.float64).ravel()
+    flat = flat[np.isfinite(flat) & (flat != 0)]
+    if len(flat) > SAMPLE:
+        flat = flat[np.linspace(0, len(flat) - 1, SAMPLE).astype(np.int64)]
+    return flat
+
+
+def _digits(value: float) -> int:
+    mantissa = repr(abs(float(value))).split("e")[0].replace(".", "")
+    return max(1, len(mantissa.strip("0")))
+
+
+def significant_digits(x) -> int:
+    """The most significant digits any value of ``x`` needs to be read back exactly.
+
+    Parameters
+    ----------
+    x : array_like
+        A port's numbers as read (float64).
+
+    Returns
+    -------
+    int
+        1 to 17: 6 for numbers printed with ``%g``, 17 (or 16) for a float64 written in
+        full; 17 when there are fewer than :data:`DISTINCT` distinct nonzero finite values
+        (too few to tell printed numbers from exact ones).
+    """
+    values = np.unique(_sample(x))
+    if len(values) < DISTINCT:
+        return 17
+    return max(_digits(v) for v in values)
+
+
+def float32_valued(x, digits: int | None = None) -> bool:
+    """True when (nearly) every value is a float32 number, written exactly or in ≥ 9 digits.
+
+    A float32 printed with ``digits`` ≥ 9 significant digits reads back, in float64, as
+    that float32 rounded to ``digits`` digits; a float64 result almost never does (float32
+    has only about 7.2 digits). Below 9 digits the two cannot be told apart: False.
+
+    Parameters
+    ----------
+    x : array_like
+        The port's numbers as read (float64).
+    digits : int, optional
+        Their :func:`significant_digits` (computed when not given).
+
+    Returns
+    -------
+    bool
+    """
+    values = _sample(x)
+    if not len(values):
+        return False
+    digits = significant_digits(values) if digits is None else int(digits)
+    as32 = values.astype(np.float32).astype(np.float64)
+    if digits >= 17:
+        same = as32 == values
+    elif digits >= 9:
+        same = np.array([float(f"{v:.{digits}g}") for v in as32]) == values
+    else:
+        return False
+    return float(np.mean(same)) > 0.99
+
+
+def unit(digits: int) -> float:
+    """Relative rounding of a number printed with ``digits`` significant digits: ½ 10^(1−d).
+
+    Parameters
+    ----------
+    digits : int
+
+    Returns
+    -------
+    float
+    """
+    return 0.5 * 10.0 ** (1 - int(digits))
+
+
+def printed_tolerances(positions, velocities, h: float, digits: int,
+                       velocity_digits: int | None = None) -> np.ndarray:
+    """Per step k → k + 1, the distance [m] by which printing alone moves a correct answer.
+
+    ``MARGIN`` · √3 · (u max|x_{k+1}| + u max|x_k| + h u_v max|v_k|), with stored
+    velocities (printed with ``velocity_digits``, unit u_v), else
+    ``MARGIN`` · √3 · (u max|x_{k+1}| + 3 u max|x_k|): the answer's own rounding plus that of
+    the inertial target the step starts from (module docstring).
+
+    Parameters
+    ----------
+    positions : ndarray, shape (frames, n, 3)
+        The port's x_k [m].
+    velocities : ndarray, shape (frames, n, 3), or None
+        The port's stored v_k [m/s]; None when they are derived from the positions.
+    h : float
+        Time step [s].
+    digits : int
+        Significant digits of the positions.
+    velocity_digits : int, optional
+        Significant digits of the velocities (default ``digits``).
+
+    Returns
+    -------
+    ndarray, shape (frames − 1,)
+        Tolerance [m] per step.
+    """
+    x = np.abs(np.asarray(positions, np.float64)).reshape(len(positions), -1).max(axis=1)
+    u = unit(digits)
+    if velocities is None:
+        start = 3 * u * x[:-1]
+    else:
+        v = np.abs(np.asarray(velocities, np.float64)).reshape(len(velocities), -1).max(axis=1)
+        uv = unit(digits if velocity_digits is None else velocity_digits)
+        start = u * x[:-1] + h * uv * v[:-1]
+    return MARGIN * np.sqrt(3.0) * (u * x[1:] + start)
+
+
+def describe(digits: int) -> str:
+    """The phrase the verdict uses: "printed with 6 significant digits".
+
+    Parameters
+    ----------
+    digits : int
+
+    Returns
+    -------
+    str
+    """
+    return f"printed with {digits} significant digit{'s' if digits != 1 else ''}"
+
+
+class Printed:
+    """The precision of a port's frames, as the check uses it.
+
+    Parameters
+    ----------
+    positions : ndarray, shape (frames, n, 3)
+        The port's x_k [m], as read.
+    velocities : ndarray, shape (frames, n, 3), or None
+        The port's stored v_k [m/s] (None: derived from the positions).
+    h : float
+        Time step [s].
+    tolerance : float
+        The float64 tolerance [m]: printing that moves a step by less is not mentioned.
+
+    Attributes
+    ----------
+    digits : int
+        Significant digits of the numbers (the fewer of positions and velocities).
+    float32 : bool
+        The positions are float32 values (:func:`float32_valued`).
+    tolerances : ndarray, shape (frames − 1,)
+        Per step, the float64 tolerance widened to the printed precision [m].
+    text : str
+        "printed with d significant digits" when that widened a tolerance, else "".
+    unit : float or None
+        Relative rounding of the numbers when :attr:`text` is set (the gradient's rounding
+        floor scales with it), else None.
+    note : str
+        Why the tolerance was not widened when the printing is too coarse to judge a step
+        (below :data:`COARSEST` digits, or a tolerance above :data:`COARSE` of the cloth's
+        size), else "".
+    """
+
+    def __init__(self, positions, velocities, h: float, tolerance: float):
+        xd = significant_digits(positions)
+        vd = None if velocities is None else significant_digits(velocities)
+        self.digits = min(xd, 17 if vd is None else vd)
+        self.float32 = float32_valued(positions, xd)
+        self.tolerances = np.full(len(positions) - 1, float(tolerance))
+        self.text, self.unit, self.note = "", None, ""
+        coarse = (f"the output is {describe(self.digits)}: too coarse to judge a step; "
+                  f"print 17 digits (float64) or 9 (float32)")
+        if self.digits < COARSEST:
+            self.note = coarse
+        elif self.digits < FULL:
+            printed = printed_tolerances(positions, velocities, h, xd, vd)
+            size = cloth_size(np.asarray(positions)[0])
+            if printed.max() > COARSE * size:
+                self.note = coarse.replace(": too coarse", f": rounding by up to "
+                                           f"{printed.max():.1e} m on a {size:.3g} m cloth, "
+                                           f"too coarse")
+            elif printed.max() > tolerance:
+                self.tolerances = np.maximum(self.tolerances, printed)
+                self.text, self.unit = describe(self.digits), unit(self.digits)
+
+    def hint32(self, step, error: float, bound) -> None:
+        """Name float32 arithmetic on a step that fails when checked as float64, in place.
+
+        float32 values (:attr:`float32`) whose error is within the step's float32 bound get
+        the status "float32 rounding" and the flag to use; beyond it, the same flag in the
+        note. Numbers of fewer than 9 digits cannot be told from float64 ones: within the
+        bound they get the status with an "if the port computes in float32" hint.
+
+        Parameters
+        ----------
+        step : StepCheck
+            A failing step of a float64 check (changed in place).
+        error : float
+            Its largest error [m].
+        bound : callable
+            () -> the step's float32 tolerance [m] (computed only when needed).
+        """
+        if not (self.float32 or self.digits < 9):
+            return None
+        b32 = bound()
+        if error <= b32 and not step.settings:
+            step.status = "float32 rounding"
+            step.note = (f"the error is within float32 rounding of this step ({b32:.3e} m): "
+                         + ("the port's numbers are float32 values; check with --precision "
+                            "float32" if self.float32 else
+                            f"the numbers carry {self.digits} digits, too few to tell float32 "
+                            f"from float64: if the port computes in float32, check with "
+                            f"--precision float32"))
+        elif self.float32:
+            step.note += "; the port's numbers are float32 values: check with --precision float32"
