@@ -55,7 +55,7 @@ APPROACH = 0.5
 REFINE = 4
 #: Failing steps fitted jointly (later ones are tested with the fitted parameters).
 JOINT = 3
-#: Steps replayed to test the fitted model on later steps (a long run stays quick).
+#: Later steps tested for "head for" (two Newton solves each: a long run stays quick).
 MAX_REPLAYS = 8
 
 
@@ -97,8 +97,8 @@ class Cause:
         ----------
         step : StepData
         replays : list of one int, optional
-            The replays of clothsim's step still allowed, decremented by one that is run
-            (at 0, only "minimizes" can explain the step); default: unlimited.
+            The "head for" tests still allowed (two Newton solves each), decremented by one
+            that is run; default: unlimited.
 
         Returns
         -------
@@ -125,16 +125,17 @@ def _explains(step, hyp, theta, gradients, evidence, replays=None, fitted=None) 
     if r <= step.optimality:
         evidence[step.k] = ("minimizes", r)
         return True
-    if (replays is not None and replays[0] <= 0) or r > GAIN * relative(step, [], ()):
+    if r > GAIN * relative(step, [], ()):
         return False
-    if replays is not None:
-        replays[0] -= 1
-    d = replay(step, hyp, theta)
+    d = replay(step, hyp, theta)   # one step's solve, as the check itself takes
     if d <= max(step.tolerance, REPLAY * step.error):
         evidence[step.k] = ("reproduces", d)
         return True
-    if len(np.atleast_1d(theta)) != 1:   # heading for: only the one-parameter causes
+    # heading for: only the one-parameter causes, on a budget of Newton solves
+    if len(np.atleast_1d(theta)) != 1 or (replays is not None and replays[0] <= 0):
         return False
+    if replays is not None:
+        replays[0] -= 1
     mine, scene = approach(step, hyp, theta)
     log.debug("step %d, %s: approach ratio %.3g (scene's %.3g)", step.k, hyp, mine, scene)
     if mine <= APPROACH and scene >= 1:   # a port heading for the scene's minimizer is
