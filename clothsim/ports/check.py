@@ -19,7 +19,7 @@ from ..simulation import State
 from ..solvers import make_solver
 from .causes import FITTED, StepData, name_cause
 from .compare import EPS32, RTOL64, cloth_size, condition_number
-from .judge import gradient_scale, judge, pin_role, pinned_moved, refine
+from .judge import CONVERGING, gradient_scale, judge, pin_role, pinned_moved, refine
 from .precision import Printed
 from .rounding import (
     converged_float32_floor,
@@ -204,12 +204,13 @@ def check_steps(simulation, positions, velocities=None, *, precision: str = "flo
             step = judge(sim, model, problem, k, x_cs, x_port, err, tol, optimality, precision,
                          search=searches < MAX_SEARCHES, unit=printed and printed.unit)
             searches += 1
-            if step.status in FITTED + ("start-dependent",) and not step.settings:
+            if (step.status in FITTED + ("start-dependent",) and not step.settings
+                    and step.gradient_port >= CONVERGING):   # not a port that only stops short
                 g0, opt = gradient_scale(model, problem, x_port, optimality, precision,
                                          printed and printed.unit)
                 (unexplained if step.status in FITTED else others).append(StepData(
                     k, model, problem, x_port, g0, opt, step.gradient_clothsim,
-                    float(err[worst]), tol, replay))
+                    float(err[worst]), tol, replay, step.status == "not converged"))
             if precision == "float64" and printed is not None and not step.passed:
                 printed.hint32(step, float(err[worst]), lambda b=bound32, t=tol_k: max(t, b()))
             if projected:

@@ -55,6 +55,9 @@ class StepData:
     solve : callable, optional
         ``solve(model, problem) -> x``: clothsim's step with the check's solver settings,
         for :func:`clothsim.ports.replays.replay`.
+    approaching : bool
+        The judge found the port's answer on its way to clothsim's minimizer ("not
+        converged"): a cause must then explain nearly all of its gradient.
     """
 
     k: int
@@ -67,6 +70,7 @@ class StepData:
     error: float = float("inf")
     tolerance: float = 0.0
     solve: object = None
+    approaching: bool = False
     cache: dict = dataclasses.field(default_factory=dict, repr=False)
 
 

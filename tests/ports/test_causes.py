@@ -194,7 +194,8 @@ def cpp_drivers(tmp_path_factory) -> dict[str, Path]:
         name = fault or "correct"
         (build / f"{name}.cpp").write_text(text)
         jobs[name] = subprocess.Popen(
-            ["g++", "-O1", "-std=c++17", f"-I{EIGEN}", f"-I{CPP}", "-o", str(build / name),
+            ["g++", "-O1", "-std=c++17", f"-I{EIGEN}", f"-I{CPP}", f"-I{CPP / 'include'}",
+             "-o", str(build / name),
              str(CPP / "assignment_driver.cpp"), str(build / f"{name}.cpp")],
             stderr=subprocess.PIPE, text=True)
         if len(jobs) % 2 == 0:   # two compilers at a time (a shared machine)
