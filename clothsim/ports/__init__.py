@@ -3,7 +3,8 @@
 :mod:`~clothsim.ports.formats` reads and writes trajectories in every format,
 :mod:`~clothsim.ports.export` writes everything a port needs, :mod:`~clothsim.ports.compare`
 compares trajectories and :mod:`~clothsim.ports.matrices` matrices,
-:mod:`~clothsim.ports.check` checks a port one step at a time,
+:mod:`~clothsim.ports.check` checks a port one step at a time (and
+:mod:`~clothsim.ports.causes` names the model a failing port solves),
 :mod:`~clothsim.ports.diff` compares two models and :mod:`~clothsim.ports.conformance`
 writes the conformance set. See docs/ports.md.
 """

@@ -16,8 +16,10 @@ import numpy as np
 from ..effects.base import overrides
 from ..errors import InputError
 from ..simulation import State
+from ..solvers import make_solver
+from .causes import FITTED, StepData, name_cause
 from .compare import EPS32, RTOL64, cloth_size, condition_number
-from .judge import judge, pin_role, pinned_moved, refine
+from .judge import CONVERGING, gradient_scale, judge, pin_role, pinned_moved, refine
 from .precision import Printed
 from .rounding import (
     converged_float32_floor,
@@ -156,7 +158,12 @@ def check_steps(simulation, positions, velocities=None, *, precision: str = "flo
     projected = [e.kind for e in sim.effects if overrides(e, "correct_positions")]
     iterations = sim.solver.iterations
     iterated = sim.solver.name != "newton"   # a converged method: the converged floor only
-    out, searches = [], 0
+    out, searches, unexplained, others = [], 0, [], []
+
+    def replay(model, problem):   # clothsim's step of another model, the same settings
+        return make_solver(sim.solver.name, model, iterations=iterations,
+                           tolerance=sim.solver.tolerance).solve(problem).x
+
     t = sim.state.time  # accumulated as the simulation does (time-dependent effects)
     for k in range(count):
         state = State(xs[k].copy(), vs[k].copy(), t, k)
@@ -197,6 +204,13 @@ def check_steps(simulation, positions, velocities=None, *, precision: str = "flo
             step = judge(sim, model, problem, k, x_cs, x_port, err, tol, optimality, precision,
                          search=searches < MAX_SEARCHES, unit=printed and printed.unit)
             searches += 1
+            if (step.status in FITTED + ("start-dependent",) and not step.settings
+                    and step.gradient_port >= CONVERGING):   # not a port that only stops short
+                g0, opt = gradient_scale(model, problem, x_port, optimality, precision,
+                                         printed and printed.unit)
+                (unexplained if step.status in FITTED else others).append(StepData(
+                    k, model, problem, x_port, g0, opt, step.gradient_clothsim,
+                    float(err[worst]), tol, replay, step.status == "not converged"))
             if precision == "float64" and printed is not None and not step.passed:
                 printed.hint32(step, float(err[worst]), lambda b=bound32, t=tol_k: max(t, b()))
             if projected:
@@ -206,6 +220,7 @@ def check_steps(simulation, positions, velocities=None, *, precision: str = "flo
         if not step.role:
             step.role = pin_role(problem, step.vertex)
         out.append(step)
+    name_cause({s.k: s for s in out}, unexplained, others)   # a model the port solves?
     return CheckReport(out, float(tol64), precision, notes, expected_steps=expected_steps,
                        printed=printed.text if printed is not None else "")
 

@@ -158,6 +158,35 @@ def _settings_text(start, k) -> str:
     return f'[solver] initial_guess = "{start}" and iterations = {k}'
 
 
+def gradient_scale(model, problem, x_port, optimality, precision, unit=None):
+    """‖∇g(x₀)‖ of the step (what relative gradients refer to) and the optimality tolerance.
+
+    Parameters
+    ----------
+    model : Model
+    problem : StepProblem
+    x_port : ndarray, shape (n, 3)
+        The port's answer [m] (sets the rounding floor).
+    optimality : float
+        The relative gradient asked for.
+    precision : {"float64", "float32"}
+    unit : float, optional
+        Relative rounding of the port's printed numbers when coarser than its precision.
+
+    Returns
+    -------
+    (float, float)
+        ‖∇g(x₀)‖ [N·s²] (1 when it is 0) and max(optimality, 10 × the rounding floor of
+        ‖∇g‖ relative to it: ε₆₄-, ε₃₂- or ``unit``-based).
+    """
+    g0 = float(np.linalg.norm(objective_gradient(model, problem, problem.initial_guess())))
+    g0 = g0 if g0 > 0 else 1.0
+    floor = gradient_noise_floor(model, problem, x_port) / g0
+    eps64 = float(np.finfo(np.float64).eps)
+    floor *= max(unit or 0.0, EPS32 if precision == "float32" else eps64) / eps64
+    return g0, max(optimality, 10 * floor)
+
+
 def judge(sim, model, problem, k, x_cs, x_port, err, tol, optimality, precision,
           search: bool = True, unit: float | None = None) -> StepCheck:
     """Classify a step whose answers differ by more than ``tol`` somewhere.
@@ -191,16 +220,11 @@ def judge(sim, model, problem, k, x_cs, x_port, err, tol, optimality, precision,
     -------
     StepCheck
     """
-    g0 = float(np.linalg.norm(objective_gradient(model, problem, problem.initial_guess())))
-    g0 = g0 if g0 > 0 else 1.0
+    g0, opt = gradient_scale(model, problem, x_port, optimality, precision, unit)
     grad_p = objective_gradient(model, problem, x_port)
     grad_c = objective_gradient(model, problem, x_cs)
     rp = float(np.linalg.norm(grad_p)) / g0
     rc = float(np.linalg.norm(grad_c)) / g0
-    floor = gradient_noise_floor(model, problem, x_port) / g0
-    eps64 = float(np.finfo(np.float64).eps)
-    floor *= max(unit or 0.0, EPS32 if precision == "float32" else eps64) / eps64
-    opt = max(optimality, 10 * floor)
     worst = int(np.argmax(err))
     settings = ""
 
@@ -214,8 +238,14 @@ def judge(sim, model, problem, k, x_cs, x_port, err, tol, optimality, precision,
         return _optimal(model, problem, x_cs, x_port, tol, verdict, worst,
                         (rp, optimality, opt, g0))
     hint = match_settings(sim, model, problem, x_port, tol) if search else None
+    if hint is not None and hint[1] == 0:   # iterations = 0 is no setting clothsim takes
+        return verdict("not a minimizer", worst, f"the port's answer is its start point "
+                       f"{hint[0]} itself ({hint[2]:.1e} m): its solve does not move the cloth")
     settings = _settings_text(*hint[:2]) if hint is not None else ""
-    excess = np.linalg.norm(grad_p - grad_c, axis=1)
+    # the gradient difference as a displacement (over the Hessian's diagonal, where a
+    # 1e10 N/m pin turns 1e-10 m into newtons); a vertex within the tolerance is no evidence
+    excess = np.where(err > tol, np.linalg.norm(grad_p - grad_c, axis=1)
+                      / _diagonal(model, problem), 0.0)
     vertex = int(np.argmax(excess))
     total = float(np.linalg.norm(excess))
     local = total > 0 and excess[vertex] > LOCAL * total
@@ -236,11 +266,12 @@ def judge(sim, model, problem, k, x_cs, x_port, err, tol, optimality, precision,
                        f"raise the port's iterations, or check with "
                        f"{_settings_text(hint[0], hint[1])}")
     if rc <= opt and rp < CONVERGING:
-        return verdict("not converged", vertex, f"the port's relative gradient {rp:.1e} is "
+        return verdict("not converged", worst, f"the port's relative gradient {rp:.1e} is "
                        f"above {opt:.1e}: it stops short of the minimizer; raise its "
                        f"iterations or tighten its tolerance")
-    if rc <= opt and rp < 1 and not local and _descends(model, problem, x_port):
-        return verdict("not converged", vertex, f"the port's answer lowers g below its start "
+    if (rc <= opt and rp < 1 and not local and _descends(model, problem, x_port)
+            and _approaches(problem, x_port, x_cs)):
+        return verdict("not converged", worst, f"the port's answer lowers g below its start "
                        f"and its gradient to {rp:.1e} of the start's, but stops short of the "
                        f"minimizer: raise its iterations (if it is converged by its own "
                        f"measure, it solves another problem: clothsim diff-model)")
@@ -248,7 +279,7 @@ def judge(sim, model, problem, k, x_cs, x_port, err, tol, optimality, precision,
         moved = np.linalg.norm(refine(model, problem, x_port) - x_port, axis=1)
         spread = float(np.mean(moved > max(tol, 0.01 * moved.max())))
         if spread > 0.5:
-            return verdict("model differs", vertex, f"{np.mean(err > tol):.0%} of the vertices "
+            return verdict("model differs", worst, f"{np.mean(err > tol):.0%} of the vertices "
                            f"disagree and the minimizer of clothsim's g nearest to the port's "
                            f"answer differs from it at {spread:.0%} of the vertices: compare "
                            f"the models (clothsim diff-model)")
@@ -262,7 +293,22 @@ def judge(sim, model, problem, k, x_cs, x_port, err, tol, optimality, precision,
         note += (f"; {role} in the scene: the port holds it {away_p:.3e} m from its target, "
                  f"clothsim {away_c:.3e} m (a port whose pin is missing or of another "
                  f"stiffness)")
-    return verdict("not a minimizer", vertex, note)
+    return verdict("not a minimizer", worst, note)
+
+
+def _diagonal(model, problem) -> np.ndarray:
+    """m_v + h² (Σ k of v's springs + its pins' k): ∇²g's diagonal per vertex [kg]."""
+    n = model.vertex_count
+    a, b = model.springs.spring_vertices.T
+    k = model.springs.spring_stiffness
+    d = np.bincount(a, k, n) + np.bincount(b, k, n)
+    d += np.bincount(problem.anchor_vertices, problem.anchor_stiffness, n)
+    return model.vertex_mass + problem.h ** 2 * d + 1e-300
+
+
+def _approaches(problem, x_port, x_cs) -> bool:
+    """The port's answer nearer clothsim's than the step's start is: an iteration towards it."""
+    return bool(np.linalg.norm(x_port - x_cs) < np.linalg.norm(problem.initial_guess() - x_cs))
 
 
 def _descends(model, problem, x_port) -> bool:

@@ -28,8 +28,9 @@ Verdicts that fail:
 ``not a minimizer``
     The port's answer is not optimal for g, by a local error at the vertex named.
 ``model differs``
-    clothsim's step is converged and the port's answer is far from it nearly everywhere: the
-    port solves another problem (``clothsim diff-model``).
+    The port solves another problem: a fitted model explains its steps and the note names
+    it (:mod:`clothsim.ports.causes`), or clothsim's step is converged and the port's
+    answer is far from it nearly everywhere (``clothsim diff-model``).
 ``float32 rounding``
     Checked as float64, but the difference is within what float32 arithmetic gives.
 ``velocities differ``

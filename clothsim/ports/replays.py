@@ -1,0 +1,131 @@
+"""Clothsim's step under a changed model: the replays behind a fitted cause.
+
+:func:`variant` applies a hypothesis' parameters θ (:mod:`clothsim.ports.hypotheses`) to a
+step's model and problem; :func:`replay` runs clothsim's step on it with the check's
+solver settings; :func:`approach` measures how far the port's answer went towards the
+changed model's minimizer (found by Newton's method) and towards the scene's.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+
+import numpy as np
+
+from ..errors import ClothsimError
+from ..model import Model
+from ..springs import FAMILIES, Springs
+from .hypotheses import StepData
+
+
+def variant(step: StepData, hypothesis: str, theta) -> tuple:
+    """The step's (model, problem) with the hypothesis' parameters θ applied.
+
+    Parameters
+    ----------
+    step : StepData
+    hypothesis : str
+    theta : ndarray
+
+    Returns
+    -------
+    (Model, StepProblem)
+    """
+    model, p = step.model, step.problem
+    sp = model.springs
+    k, r, mass = sp.spring_stiffness, sp.spring_rest_length, model.vertex_mass
+    one = 1.0 + float(np.atleast_1d(theta)[0])
+    if hypothesis == "stiffness":
+        k = max(one, 0.0) * k
+    elif hypothesis == "rest lengths":
+        r = max(one, 0.0) * r
+    elif hypothesis == "stiffness and rest lengths":
+        k, r = max(one, 0.0) * k, max((1.0 + theta[1]) / one, 0.0) * r
+    elif hypothesis.startswith("family "):
+        mask = sp.spring_family == FAMILIES.index(hypothesis.split()[1])
+        k = np.where(mask, max(one, 0.0) * k, k)
+    elif hypothesis == "inertia":
+        mass = max(one, 0.0) * mass
+    elif hypothesis == "pins":
+        p = dataclasses.replace(p, anchor_stiffness=max(one, 0.0) * p.anchor_stiffness)
+    else:
+        f = np.zeros_like(step.x_port) if p.f_ext is None else p.f_ext
+        if hypothesis == "vertex force":
+            f = f * (1.0 + np.asarray(theta))[:, None]
+        else:   # REPLACING: θ is the force per vertex or per unit mass
+            weight = np.ones(len(f)) if hypothesis == "force per vertex" else mass
+            f = weight[:, None] * np.asarray(theta)[None, :]
+        p = dataclasses.replace(p, f_ext=f)
+    springs = Springs(sp.spring_vertices, k, r, sp.spring_family, sp.vertex_count,
+                      sp.spring_damping)
+    return Model(model.mesh, springs, mass), p
+
+
+def replay(step: StepData, hypothesis: str, theta, *, positions: bool = False):
+    """Clothsim's step under the changed model, with the check's solver settings.
+
+    Parameters
+    ----------
+    step : StepData
+    hypothesis : str
+    theta : ndarray
+    positions : bool, default False
+        Return the positions instead of their distance from the port's answer.
+
+    Returns
+    -------
+    float or ndarray
+        max |x − x_port| [m] (inf without a solver, or when the step cannot be solved);
+        with ``positions``, x (n, 3) [m] or None.
+    """
+    x = None
+    if step.solve is not None:
+        try:
+            x = step.solve(*variant(step, hypothesis, theta))
+        except (ClothsimError, ArithmeticError, ValueError, RuntimeError):
+            x = None                          # a model that cannot be solved reproduces nothing
+    if positions:
+        return x
+    if x is None:
+        return float("inf")
+    d = np.linalg.norm(x - step.x_port, axis=1)
+    return float(np.max(np.where(np.isfinite(d), d, np.inf)))
+
+
+def approach(step: StepData, hypothesis: str, theta) -> tuple[float, float]:
+    """How far the port's answer went towards the minimizer of the changed g, and of the scene's.
+
+    Newton's method from the port's answer finds the minimizer x* of each; the ratio is
+    max |x_port − x*| / max |x₀ − x*| (x₀ the step's initial guess): 0 at x*, 1 where the
+    step started.
+
+    Parameters
+    ----------
+    step : StepData
+    hypothesis : str
+    theta : ndarray
+
+    Returns
+    -------
+    (float, float)
+        The ratio for the changed model and for the scene's (inf when Newton fails).
+    """
+    import warnings
+
+    from ..solvers.newton import NewtonSolver
+
+    def ratio(model, problem) -> float:
+        try:
+            with warnings.catch_warnings():   # a minimizer near enough to compare with
+                warnings.simplefilter("ignore")
+                x = NewtonSolver(model, iterations=20, tolerance=1e-8).solve(
+                    problem, step.x_port).x
+        except (ClothsimError, ArithmeticError, ValueError, RuntimeError):
+            return float("inf")
+        start = float(np.linalg.norm(problem.initial_guess() - x, axis=1).max())
+        went = float(np.linalg.norm(step.x_port - x, axis=1).max())
+        return went / start if start > 0 else float("inf")
+
+    if "scene" not in step.cache:
+        step.cache["scene"] = ratio(step.model, step.problem)
+    return ratio(*variant(step, hypothesis, theta)), step.cache["scene"]
