@@ -23,7 +23,7 @@ STAGES = [
     {"springs"},
     {"model"},
     {"matrices", "reference", "energy", "factorization"},
-    {"problem", "objective"},
+    {"problem", "objective", "contacts"},
     {"solvers"},
     {"effects"},
     {"simulation"},
