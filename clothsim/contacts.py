@@ -168,6 +168,9 @@ class ContactSet:
         The normal force [N] the plane exerted on each vertex in the step just solved
         (n · ∇g / h² at the answer, before any correction; > 0 pushes), set by the
         simulation after the solve; None before.
+    noise : float
+        The root mean square of the solve's unbalanced force per vertex [N] (the part of
+        ∇g / h² the iterations left), set with ``forces``: the uncertainty of each force.
     """
 
     def __init__(self, vertices=None, normals=None, offsets=None):
@@ -176,6 +179,7 @@ class ContactSet:
         self.normals = np.zeros((0, 3)) if normals is None else np.asarray(normals, np.float64)
         self.offsets = np.zeros(0) if offsets is None else np.asarray(offsets, np.float64)
         self.forces: np.ndarray | None = None
+        self.noise = 0.0
 
     def __len__(self) -> int:
         return len(self.vertices)

@@ -278,8 +278,13 @@ class Simulation:
         if not sets:
             return
         grad = objective_gradient(self.model, problem, x, feasible=False)
+        # the solve's unbalanced force per vertex (root mean square over the free ones): what
+        # an unconverged iteration leaves in every force estimate
+        g = problem.tangential(grad)
+        noise = float(np.sqrt(np.mean(np.einsum("ij,ij->i", g, g)))) / self.h ** 2
         for c in sets:
             c.forces = np.einsum("ij,ij->i", grad[c.vertices], c.normals) / self.h ** 2
+            c.noise = noise
 
     def step_model(self, state: State | None = None) -> Model:
         """The model whose objective g the next step minimizes.

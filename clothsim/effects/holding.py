@@ -37,6 +37,11 @@ from ..contacts import ContactSet
 #: How far (|n_kept − n_now|) a held contact's normal may turn before it is renewed.
 NORMAL_TOLERANCE = 1e-2
 
+#: A sticking vertex slides once |F_t| > μ F_n + this × the solve's unbalanced force per
+#: vertex (:attr:`ContactSet.noise`): forces estimated from a truncated iteration are not
+#: better than that, and switching on noise refactors the held-contact system every step.
+NOISE_MARGIN = 3.0
+
 #: The obstacles' contact modes: contact planes held in the solve, or the seed's projection.
 CONTACT_MODES = ("hold", "post-solve")
 
@@ -167,7 +172,8 @@ def hold_step(obstacle, state, x: np.ndarray) -> np.ndarray:
     step = x[hv] - x0[hv]
     vt = np.linalg.norm(step - _rowdot(step, hn)[:, None] * hn, axis=1) / h
     limit = np.divide(mu * fn * h, mass[hv], out=np.zeros_like(fn), where=mass[hv] > 0)
-    stick = np.where(was_stuck, ft <= mu * fn, vt <= limit) & (mu > 0)
+    noise = NOISE_MARGIN * held.planes.noise
+    stick = np.where(was_stuck, ft <= mu * fn + noise, vt <= limit) & (mu > 0)
     # the vertices that reached the obstacle in this step: the seed's response
     others = np.setdiff1d(np.arange(len(x)), held.vertices)
     index, p, n = obstacle.contacts(x0[others], x[others])

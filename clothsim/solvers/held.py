@@ -58,6 +58,12 @@ class HeldSystem:
         self.fixed = sysf.fixed
         self.basis = problem.contact_basis()
         P, D = contacts.projector(n, self.basis)
+        # each held vertex's 3 x 3 block of P, for projecting (n, 3) arrays in one pass
+        self.held = np.unique(problem.contact_vertices)
+        rows = (3 * self.held[:, None] + np.arange(3)).ravel()
+        self.blocks = P[rows][:, rows].toarray().reshape(len(self.held), 3, len(self.held),
+                                                         3)[np.arange(len(self.held)), :,
+                                                            np.arange(len(self.held)), :]
         A3 = sp.kron(As, sp.identity(3), format="csr")
         alpha = float(As.diagonal().mean())
         pattern = sp.kron(As, np.ones((3, 3)), format="csr")
@@ -66,42 +72,60 @@ class HeldSystem:
         dofs = (3 * self.free[:, None] + np.arange(3)).ravel()
         K_FF = K[dofs][:, dofs]
         self.factor = Factor(K_FF, backend=solver.backend_requested,
-                             check_conditioning=solver.check_conditioning,
+                             check_conditioning=False,   # M + h² L's factor was checked
                              cholmod_mode="supernodal" if len(dofs) > 30000 else "simplicial",
                              reuse=None if previous is None else previous.factor)
         log.info("factored the held-contact system: %d held vertices, %d unknowns",
                  len(np.unique(problem.contact_vertices)), len(dofs))
 
-    def global_step(self, solver, problem, d: np.ndarray) -> np.ndarray:
-        """x minimizing ĝ(x, d) on the feasible set, shape (n, 3) [m].
+    def prepare(self, problem) -> tuple[np.ndarray, np.ndarray]:
+        """The step's feasible displacement z and A z, constant over its iterations.
 
         Parameters
         ----------
-        solver : LocalGlobalSolver
         problem : StepProblem
-        d : ndarray, shape (s, 3)
-            The local step's directions [m].
+
+        Returns
+        -------
+        z, Az : ndarray, shape (n, 3)
+            z = x − y with pins at their targets and held vertices on their planes (zero
+            elsewhere) [m]; A z [kg·m].
+        """
+        y = problem.y
+        z = problem.hold(np.array(y, dtype=np.float64)) - y
+        z[problem.fixed_vertices] = problem.fixed_positions - y[problem.fixed_vertices]
+        return z, self.As @ z
+
+    def global_step(self, problem, rhs: np.ndarray, z: np.ndarray,
+                    Az: np.ndarray) -> np.ndarray:
+        """x minimizing ĝ(x, d) on the feasible set [m], shape (n, 3).
+
+        Parameters
+        ----------
+        problem : StepProblem
+        rhs : ndarray, shape (n, 3)
+            b(d) − A y for the local step's d [kg·m]
+            (:meth:`LocalGlobalSolver.displacement_right_hand_side`).
+        z, Az : ndarray, shape (n, 3)
+            :meth:`prepare`.
 
         Returns
         -------
         ndarray, shape (n, 3)
         """
-        y = problem.y
-        z = problem.hold(np.array(y, dtype=np.float64)) - y
-        z[problem.fixed_vertices] = problem.fixed_positions - y[problem.fixed_vertices]
-        r = solver.displacement_right_hand_side(problem, d) - self.As @ z
-        r = problem.tangential(r)
-        u = self.factor.solve(r[self.free].reshape(-1)).reshape(-1, 3)
-        delta = z.copy()
-        delta[self.free] += u
-        x = y + contacts.tangential(delta - z, self.basis) + z
-        x[problem.fixed_vertices] = problem.fixed_positions
-        return x
+        r = self.tangential(rhs - Az)
+        u = np.zeros_like(z)
+        u[self.free] = self.factor.solve(r[self.free].reshape(-1)).reshape(-1, 3)
+        return problem.y + z + self.tangential(u)
 
-    def gradient_norm(self, solver, problem, x: np.ndarray, d: np.ndarray) -> float:
-        """‖P ∇g(x)‖ over the free vertices with d = d(x) [N·s²]."""
-        g = self.As @ (x - problem.y) - solver.displacement_right_hand_side(problem, d)
-        return float(np.linalg.norm(problem.tangential(g)[self.free]))
+    def gradient_norm(self, problem, x: np.ndarray, rhs: np.ndarray) -> float:
+        """‖P ∇g(x)‖ over the free vertices [N·s²], with ``rhs`` = b(d(x)) − A y."""
+        return float(np.linalg.norm(self.tangential(self.As @ (x - problem.y) - rhs)[self.free]))
+
+    def tangential(self, g: np.ndarray) -> np.ndarray:
+        """``g`` (n, 3) with P applied at the held vertices, in place."""
+        g[self.held] = np.einsum("vij,vj->vi", self.blocks, g[self.held])
+        return g
 
 
 def constrained_matrix(problem, H, free: np.ndarray):
@@ -163,10 +187,13 @@ def held_iterates(solver, problem, x0: np.ndarray | None = None):
         x = problem.hold(np.array(x0, dtype=np.float64))
         x[problem.fixed_vertices] = problem.fixed_positions
     d = solver.local_step(x)
-    yield Iterate(0, x, held.gradient_norm(solver, problem, x, d), d=d)
+    rhs = solver.displacement_right_hand_side(problem, d)
+    yield Iterate(0, x, held.gradient_norm(problem, x, rhs), d=d)
+    z, Az = held.prepare(problem)
     k = 0
     while True:
-        x = held.global_step(solver, problem, d)
+        x = held.global_step(problem, rhs, z, Az)
         d = solver.local_step(x)
+        rhs = solver.displacement_right_hand_side(problem, d)
         k += 1
-        yield Iterate(k, x, held.gradient_norm(solver, problem, x, d), d=d)
+        yield Iterate(k, x, held.gradient_norm(problem, x, rhs), d=d)
