@@ -102,7 +102,13 @@ class Holding:
         self.planes = ContactSet(rows_v, rows_n, _rowdot(x[rows_v], rows_n))
 
     def reaction(self) -> np.ndarray:
-        """The force vector [N] each held vertex's planes exerted in the last solve, (c, 3)."""
+        """The force each held vertex's planes exerted in the last solve.
+
+        Returns
+        -------
+        ndarray, shape (c, 3)
+            Σ F_plane n_plane over the vertex's planes [N] (zero before the solve).
+        """
         c, f = len(self.vertices), self.planes.forces
         if f is None:
             return np.zeros((c, 3))
@@ -118,8 +124,20 @@ def friction_force(obstacle, state, f: np.ndarray) -> None:
     """Kinetic friction on sliding held vertices, added to ``f`` [N] (``add_force``).
 
     −μ F_n t̂, with F_n the normal force of the last step and t̂ the direction of the
-    vertex's tangential velocity v_n; only where |v_t| > μ F_n h / m, i.e. where friction
-    cannot stop the vertex within the step (else it sticks).
+    vertex's tangential velocity v_n (a sliding vertex; a sticking one is held in place).
+
+    Parameters
+    ----------
+    obstacle : Obstacle
+        In ``"hold"`` mode; its ``_holding`` says which vertices slide.
+    state : State
+        The start of the step.
+    f : ndarray, shape (n, 3)
+        The force accumulator [N], added to in place.
+
+    Returns
+    -------
+    None
     """
     held = obstacle._holding
     slide = ~held.stick

@@ -119,11 +119,35 @@ class HeldSystem:
         return problem.y + z + self.tangential(u)
 
     def gradient_norm(self, problem, x: np.ndarray, rhs: np.ndarray) -> float:
-        """‖P ∇g(x)‖ over the free vertices [N·s²], with ``rhs`` = b(d(x)) − A y."""
+        """The gradient on the feasible set, as the stop rule reads it.
+
+        Parameters
+        ----------
+        problem : StepProblem
+        x : ndarray, shape (n, 3)
+            An iterate [m].
+        rhs : ndarray, shape (n, 3)
+            b(d(x)) − A y [kg·m].
+
+        Returns
+        -------
+        float
+            ‖P ∇g(x)‖ over the free vertices [N·s²].
+        """
         return float(np.linalg.norm(self.tangential(self.As @ (x - problem.y) - rhs)[self.free]))
 
     def tangential(self, g: np.ndarray) -> np.ndarray:
-        """``g`` (n, 3) with P applied at the held vertices, in place."""
+        """P applied at the held vertices, in place.
+
+        Parameters
+        ----------
+        g : ndarray, shape (n, 3)
+
+        Returns
+        -------
+        g : ndarray, shape (n, 3)
+            The same array, without its constrained components.
+        """
         g[self.held] = np.einsum("vij,vj->vi", self.blocks, g[self.held])
         return g
 
