@@ -14,7 +14,8 @@ or ``"post-solve"`` (the seed's projection after the solve). Measured per run
 (:func:`measure_contact`): the largest spring stretch |p|/r and the largest 99th
 percentile of the stretch over the springs, both over the frames of the last second; the
 deepest any vertex ended a step inside an obstacle (whole run); the largest |v| over the
-last second; vertices ending on the sphere below its equator; wall seconds per frame.
+last second, of all vertices and of those in contact with an obstacle; vertices ending on
+the sphere below its equator; wall seconds per frame.
 
 Runs are stored one per row in ``docs/data/contact.json`` (a run replaces the row of the
 same scene, size and mode), and ``docs/data/contact.md`` is rewritten from all rows, so
@@ -76,7 +77,8 @@ def measure_contact(scene: str, resolution: int, contact: str, *, frames: int | 
     -------
     dict
         ``max_stretch`` and ``p99_stretch`` (largest over the last window), ``max_inside``
-        [m] (whole run), ``max_speed`` [m/s] (last window), ``below_equator`` (vertices on
+        [m] (whole run), ``max_speed`` [m/s] and ``max_contact_speed`` (of the vertices in
+        contact) over the last window, ``below_equator`` (vertices on
         the sphere below its centre at the end; 0 without a sphere), ``seconds_per_frame``
         [s], ``factorizations`` and the run's settings.
     """
@@ -90,7 +92,7 @@ def measure_contact(scene: str, resolution: int, contact: str, *, frames: int | 
     rest = sim.model.springs.spring_rest_length
     obstacles = [e for e in sim.effects if hasattr(e, "inside")]
     sim.expect_steps(frames * sc.substeps)
-    stretch = p99 = speed = inside = 0.0
+    stretch = p99 = speed = inside = contact_speed = 0.0
     seconds = 0.0
     for f in range(frames):
         t0 = time.perf_counter()
@@ -103,7 +105,12 @@ def measure_contact(scene: str, resolution: int, contact: str, *, frames: int | 
             ratio = energy.spring_lengths(sim.model, x) / rest
             stretch = max(stretch, float(ratio.max()))
             p99 = max(p99, float(np.percentile(ratio, 99)))
-            speed = max(speed, float(np.linalg.norm(sim.state.velocities, axis=1).max()))
+            v = np.linalg.norm(sim.state.velocities, axis=1)
+            speed = max(speed, float(v.max()))
+            touching = np.unique(np.concatenate([np.zeros(0, np.int64)] + [
+                e.contact_vertices for e in obstacles]))
+            if len(touching):
+                contact_speed = max(contact_speed, float(v[touching].max()))
     below = 0
     for e in obstacles:
         if e.kind == "sphere":
@@ -111,7 +118,7 @@ def measure_contact(scene: str, resolution: int, contact: str, *, frames: int | 
             below += int(np.count_nonzero((gap < 1e-6) & (x[:, 1] < e.center[1])))
     return {"scene": scene, "resolution": resolution, "contact": contact, "frames": frames,
             "max_stretch": stretch, "p99_stretch": p99, "max_inside": inside,
-            "max_speed": speed, "below_equator": below,
+            "max_speed": speed, "max_contact_speed": contact_speed, "below_equator": below,
             "seconds_per_frame": seconds / frames,
             "factorizations": int(getattr(sim.solver, "factor_count", 0))}
 
@@ -130,13 +137,14 @@ def page(runs: list[dict]) -> str:
     out = ["Printed by `.venv/bin/python -m benchmarks contact` (sizes run separately with "
            "`--sizes`; each row names the commit it was measured at).", "",
            "| scene | n² | mode | max stretch | 99th pct stretch | max depth inside [m] | "
-           "max \\|v\\| last second [m/s] | on sphere below equator | s per frame | factorizations "
-           "| commit |",
-           "|---|---|---|---|---|---|---|---|---|---|---|"]
+           "max \\|v\\| last second [m/s] | in contact [m/s] | on sphere below equator | "
+           "s per frame | factorizations | commit |",
+           "|---|---|---|---|---|---|---|---|---|---|---|---|"]
     for r in runs:
         out.append(f"| {r['scene']} | {r['resolution']}² | {r['contact']} | "
                    f"{r['max_stretch']:.3f} | {r['p99_stretch']:.3f} | {r['max_inside']:.1e} | "
-                   f"{r['max_speed']:.3f} | {r['below_equator']} | "
+                   f"{r['max_speed']:.3f} | {r.get('max_contact_speed', float('nan')):.3f} | "
+                   f"{r['below_equator']} | "
                    f"{r['seconds_per_frame']:.3f} | {r['factorizations']} | {r['commit']} |")
     return "\n".join(out) + "\n"
 
@@ -160,7 +168,8 @@ def main(argv=None) -> None:
                 r["load"] = round(os.getloadavg()[0], 2)
                 print(f"{scene} {n}^2 {mode}: max stretch {r['max_stretch']:.3f}, 99th pct "
                       f"{r['p99_stretch']:.3f}, max depth {r['max_inside']:.1e} m, max |v| "
-                      f"{r['max_speed']:.3f} m/s, below equator {r['below_equator']}, "
+                      f"{r['max_speed']:.3f} m/s ({r['max_contact_speed']:.3f} in contact), "
+                      f"below equator {r['below_equator']}, "
                       f"{r['seconds_per_frame']:.3f} s/frame, {r['factorizations']} factors",
                       flush=True)
                 runs = [q for q in runs if (q["scene"], q["resolution"], q["contact"])
