@@ -169,7 +169,9 @@ def main(argv=None) -> None:
     for r in ms.measure_contact_strain():
         print(f"case 8  strain in contact, {r['scene']} {r['resolution']}^2 ({r['contact']}): "
               f"largest spring stretch over the last second {r['max_stretch']:.3f}, "
-              f"max depth inside {r['max_inside']:.1e} m, max |v| {r['max_speed']:.2e} m/s")
+              f"max depth inside {r['max_inside']:.1e} m, max |v| {r['max_speed']:.2e} m/s "
+              f"({r['max_contact_speed']:.2e} in contact), {r['below_equator']} on the sphere "
+              f"below its equator")
     print("case 9  long run of the flag scene (h = 1/30 s)")
     print_long_run("coarse 7x5 (the test)", lo.measure_long_run())
     if not args.quick:
