@@ -12,8 +12,8 @@ BENCHMARKS = ("stiffness", "stability_figures", "performance", "factor_modes", "
 #: run only when named: the 257² × 500-frame memory run, the scale ladder up to 1025² and
 #: the full accuracy study at 41² take minutes each; accuracy_docs regenerates the accuracy
 #: page's two study reports (minutes)
-LONG = ("memory", "scale_ladder", "accuracy_full", "accuracy_docs",
-        "fuzz_scenes")  # the scene and --set fuzz behind docs/data/fuzz.md (about a minute)
+LONG = ("memory", "scale_ladder", "accuracy_full", "accuracy_docs", "contact",
+        "fuzz_scenes")  # fuzz_scenes: the scene and --set fuzz behind docs/data/fuzz.md (about a minute)
 
 
 def main(argv: list[str]) -> int:

@@ -354,3 +354,13 @@ def measure_sphere_tunnelling(friction: float = 0.0, *, steps: int = 8) -> dict:
             out["caught_gap"] = np.linalg.norm(x[out["caught"]], axis=1) - SPHERE_RADIUS
             out["would_end"] = float(sims["free"].state.positions[out["caught"], 1].max())
     return out
+
+
+# ==== contact: strain in contact (case 8) ===================================================
+def measure_contact_strain(resolution: int = 25) -> list[dict]:
+    """Both built-in obstacle scenes at ``resolution``² in both contact modes (the default
+    90 frames): largest spring stretch over the last second, max depth inside, max |v|
+    (:func:`benchmarks.contact.measure_contact`)."""
+    from .contact import MODES, SCENES, measure_contact
+
+    return [measure_contact(scene, resolution, mode) for scene in SCENES for mode in MODES]

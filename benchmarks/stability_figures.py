@@ -36,6 +36,16 @@ def grid_model(n: int = 8, *, size: float = 0.5, center=(0.0, 0.3, 0.0), k: floa
     return cs.Model.build(mesh, springs, total_mass=0.1, mass_lumping="uniform")
 
 
+#: The resting-contact cases (tests/effects/test_effects.py::test_resting_contact): obstacle,
+#: μ, settling steps, contact mode, iterations per step. Held contacts let the 8×8 cloth's
+#: skirt hang free of the sphere (the seed's projection keeps it on the sphere below the
+#: equator); the skirt then swings, which implicit Euler with 20 truncated iterations damps
+#: only slowly: it drags the vertices in contact along for 450 steps (measured 3e-3 m/s
+#: after 300), so this case settles 600.
+RESTING = (("plane", 0.0, 60, "hold", 20), ("sphere", 1.0, 600, "hold", 20),
+           ("plane", 0.0, 60, "post-solve", 20), ("sphere", 1.0, 150, "post-solve", 20))
+
+
 def measure_slab_in_simulation() -> dict:
     """tests/effects/test_effects.py::test_thin_box_no_tunnelling_in_simulation, measured."""
     model = grid_model(6, size=0.3, center=(0.0, 0.08, 0.0))
@@ -62,27 +72,34 @@ def measure_small_sphere_direct() -> float:
     return float((np.linalg.norm(out - c, axis=1) - R).min())
 
 
-def measure_resting_contact(name: str, friction: float, settle: int) -> dict:
+def measure_resting_contact(name: str, friction: float, settle: int,
+                            contact: str = "hold", iterations: int = 20) -> dict:
     """tests/effects/test_effects.py::test_resting_contact, measured: an 8×8 cloth settled on
     a plane (y = 0) or a sphere (centre 0, radius 0.2 m) for ``settle`` steps, then over one
-    more second the max speed [m/s] and the max depth inside [m]."""
+    more second the max speed [m/s] of all vertices and of those in contact, and the max
+    depth inside [m]; ``contact`` is the obstacle's contact mode, ``iterations`` the
+    local/global iterations per step."""
     if name == "plane":
-        obstacle = cs.Plane((0, 0, 0), (0, 1, 0), friction=friction)
+        obstacle = cs.Plane((0, 0, 0), (0, 1, 0), friction=friction, contact=contact)
         def depth(x):
             return -x[:, 1]
     else:
-        obstacle = cs.Sphere((0, 0, 0), 0.2, friction=friction)
+        obstacle = cs.Sphere((0, 0, 0), 0.2, friction=friction, contact=contact)
         def depth(x):
             return 0.2 - np.linalg.norm(x, axis=1)
     sim = cs.Simulation(grid_model(center=(0.0, 0.25, 0.0)), h=H,
-                        effects=[cs.Gravity(), obstacle], iterations=20)
+                        effects=[cs.Gravity(), obstacle], iterations=iterations)
     sim.run(settle)
-    speed, inside = 0.0, -np.inf
+    speed, inside, touching = 0.0, -np.inf, 0.0
     for _ in range(30):
         sim.step()
-        speed = max(speed, np.linalg.norm(sim.state.velocities, axis=1).max())
+        v = np.linalg.norm(sim.state.velocities, axis=1)
+        speed = max(speed, v.max())
+        if len(obstacle.contact_vertices):
+            touching = max(touching, v[obstacle.contact_vertices].max())
         inside = max(inside, depth(sim.state.positions).max())
-    return {"max_speed": speed, "max_inside": inside}
+    return {"max_speed": speed, "max_inside": inside, "max_contact_speed": touching,
+            "in_contact": len(np.unique(obstacle.contact_vertices))}
 
 
 def print_long_run(label: str, r: dict) -> None:
@@ -144,10 +161,18 @@ def main(argv=None) -> None:
               f"{r['max_depth']:.1e} m, caught {len(r['caught'])} on step 1 at y >= "
               f"{r['caught_height']:.4f} m (free: {r['would_end']:.4f} m), gap "
               f"{r['caught_gap'].max():.1e} m")
-    for name, mu, settle in (("plane", 0.0, 60), ("sphere", 1.0, 150)):
-        r = measure_resting_contact(name, mu, settle)
-        print(f"case 8  resting on {name} (mu={mu:g}, settle {settle} steps): max |v| over 1 s "
-              f"{r['max_speed']:.1e} m/s, max depth inside {r['max_inside']:.1e} m")
+    for name, mu, settle, contact, its in RESTING:
+        r = measure_resting_contact(name, mu, settle, contact, its)
+        print(f"case 8  resting on {name} ({contact}, mu={mu:g}, settle {settle} steps, {its} "
+              f"iterations): max |v| over 1 s {r['max_speed']:.1e} m/s, of the "
+              f"{r['in_contact']} vertices in contact {r['max_contact_speed']:.1e} m/s, max "
+              f"depth inside {r['max_inside']:.1e} m")
+    for r in ms.measure_contact_strain():
+        print(f"case 8  strain in contact, {r['scene']} {r['resolution']}^2 ({r['contact']}): "
+              f"largest spring stretch over the last second {r['max_stretch']:.3f}, "
+              f"max depth inside {r['max_inside']:.1e} m, max |v| {r['max_speed']:.2e} m/s "
+              f"({r['max_contact_speed']:.2e} in contact), {r['below_equator']} on the sphere "
+              f"below its equator")
     print("case 9  long run of the flag scene (h = 1/30 s)")
     print_long_run("coarse 7x5 (the test)", lo.measure_long_run())
     if not args.quick:

@@ -74,7 +74,8 @@ def augmented_objective(model: Model, problem: StepProblem, x: np.ndarray,
     return _objective_without_springs(model, problem, x) + problem.h ** 2 * springs
 
 
-def objective_gradient(model: Model, problem: StepProblem, x: np.ndarray) -> np.ndarray:
+def objective_gradient(model: Model, problem: StepProblem, x: np.ndarray, *,
+                       feasible: bool = True) -> np.ndarray:
     """The gradient of the objective g.
 
     ∇g(x) = M (x − y) + h² ∇E(x), with ∇E = Σ_i k_i (1 − r_i/|p_i|) p_i at a_i (minus at
@@ -85,11 +86,17 @@ def objective_gradient(model: Model, problem: StepProblem, x: np.ndarray) -> np.
     model : Model
     problem : StepProblem
     x : ndarray, shape (n, 3), positions [m]
+    feasible : bool, default True
+        False: the whole ∇g, also at held contacts (its normal part there is the contact
+        force times h²).
 
     Returns
     -------
     ndarray, shape (n, 3)
-        ∇g(x) [N·s²]; rows of fixed vertices are zero (they are not unknowns).
+        ∇g(x) [N·s²]; rows of fixed vertices are zero (they are not unknowns), and at
+        held contacts only the part in the contact plane is kept
+        (:meth:`~clothsim.problem.StepProblem.tangential`): the gradient on the step's
+        feasible set, zero at its solution.
     """
     h2 = problem.h ** 2
     grad = model.vertex_mass[:, None] * (x - problem.y) + h2 * energy.spring_gradient(model, x)
@@ -97,7 +104,7 @@ def objective_gradient(model: Model, problem: StepProblem, x: np.ndarray) -> np.
     if problem.f_ext is not None:
         grad -= h2 * problem.f_ext
     grad[problem.fixed_vertices] = 0.0
-    return grad
+    return problem.tangential(grad) if feasible else grad
 
 
 def gradient_noise_floor(model: Model, problem: StepProblem, x: np.ndarray) -> float:

@@ -9,6 +9,16 @@ forces f, exact pins (fixed vertices at prescribed positions, removed from the u
 and penalty pins ("anchors": zero-rest-length springs of stiffness k to fixed points q).
 :class:`StepProblem` holds exactly these data; every solver minimizes the same g.
 
+Contact enters the step as **held contacts** (an obstacle's ``[contact] mode = "hold"``, the
+default): vertex v_c, in contact with an obstacle at the end of the last step and pushed by
+it, stays on its contact plane during this step, n_c · x_{v_c} = o_c, and slides freely in
+it. The step then minimizes g over that affine set: x_{n+1} = argmin g(x) subject to the
+pins and n_c · x_{v_c} = o_c. Its optimality measure is the gradient on the set,
+∇g with the normal part removed at every held vertex (:meth:`StepProblem.tangential`,
+used by :func:`~clothsim.objective.objective_gradient`). In the seed's mode
+(``"post-solve"``) there are no held contacts and the step is the unconstrained minimum;
+the obstacles then correct x after the solve.
+
 - :class:`PinSet`: the pins active during one step (what effects hand the simulation);
 - :class:`StepProblem`: the data of one step;
 - :class:`PenaltyAnchors`: the anchor terms (energy, gradient, right-hand side).
@@ -23,6 +33,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
+from . import contacts
 from .errors import InputError, check_finite
 
 _EMPTY_I = np.zeros(0, np.int64)
@@ -230,6 +241,9 @@ class StepProblem:
     start : {"y", "x_n"}
         Where the iteration starts (:meth:`initial_guess`): the inertial target y (the
         paper, default) or the previous positions x_n (what most ports do).
+    contact_vertices, contact_normals, contact_offsets : ndarray, shapes (c,), (c, 3), (c,)
+        Held contacts: vertex v_c stays on the plane n_c · x = o_c [m] (n_c a unit vector)
+        during the step. Contacts at exactly pinned vertices are dropped (the pin holds).
     """
 
     h: float
@@ -243,6 +257,9 @@ class StepProblem:
     anchor_positions: np.ndarray = field(default_factory=lambda: _EMPTY_X)
     anchor_stiffness: np.ndarray = field(default_factory=lambda: np.zeros(0))
     start: str = "y"
+    contact_vertices: np.ndarray = field(default_factory=lambda: _EMPTY_I)
+    contact_normals: np.ndarray = field(default_factory=lambda: _EMPTY_X)
+    contact_offsets: np.ndarray = field(default_factory=lambda: np.zeros(0))
 
     def __post_init__(self):
         self.start = check_initial_guess(self.start)
@@ -274,12 +291,25 @@ class StepProblem:
         self.anchor_stiffness = np.broadcast_to(k, self.anchor_vertices.shape)
         self.anchors = PenaltyAnchors(self.anchor_vertices, self.anchor_positions,
                                       self.anchor_stiffness)
+        cv = _index_array("contacts.vertices", self.contact_vertices, n)
+        cn = _points("contacts.normals", np.reshape(self.contact_normals, (-1, 3)), len(cv))
+        co = check_finite("contacts.offsets", np.reshape(self.contact_offsets, -1))
+        if len(co) != len(cv):
+            raise InputError(f"contacts.offsets: expected one per contact ({len(cv)}), got "
+                             f"{len(co)}")
+        if len(cv) and np.abs(np.linalg.norm(cn, axis=1) - 1.0).max() > 1e-9:
+            raise InputError("contacts.normals: must be unit vectors")
+        keep = ~np.isin(cv, self.fixed_vertices)
+        self.contact_vertices, self.contact_normals = cv[keep], cn[keep]
+        self.contact_offsets = co[keep].astype(np.float64)
+        self._basis = None
 
     def initial_guess(self) -> np.ndarray:
         """The iteration's starting point x_0, with fixed vertices at their prescribed positions.
 
-        x_0 = y (the paper) or x_n, as :attr:`start` says. Penalty pins are springs of the
-        energy, not constraints: their vertices start where y or x_n puts them.
+        x_0 = y (the paper) or x_n, as :attr:`start` says, held contacts moved onto their
+        planes (:meth:`hold`). Penalty pins are springs of the energy, not constraints:
+        their vertices start where y or x_n puts them.
 
         Returns
         -------
@@ -287,7 +317,57 @@ class StepProblem:
         """
         x0 = np.array(self.x if self.start == "x_n" else self.y, dtype=np.float64)
         x0[self.fixed_vertices] = self.fixed_positions
-        return x0
+        return self.hold(x0)
+
+    @property
+    def has_contacts(self) -> bool:
+        """Whether the step holds vertices on contact planes (see the module docstring)."""
+        return len(self.contact_vertices) > 0
+
+    def hold(self, x: np.ndarray) -> np.ndarray:
+        """Move every held vertex onto its contact plane(s), in place
+        (:func:`clothsim.contacts.hold`).
+
+        Parameters
+        ----------
+        x : ndarray, shape (n, 3), positions [m]
+
+        Returns
+        -------
+        x : ndarray, shape (n, 3), the same array
+        """
+        return contacts.hold(x, self.contact_vertices, self.contact_normals,
+                             self.contact_offsets)
+
+    def tangential(self, g: np.ndarray) -> np.ndarray:
+        """``g`` without its normal part at held vertices: the gradient on the feasible set.
+
+        Parameters
+        ----------
+        g : ndarray, shape (n, 3)
+            A gradient [N·s²] (or any per-vertex vector field).
+
+        Returns
+        -------
+        ndarray, shape (n, 3)
+            ``g`` itself without held contacts, else a copy with g_v − (b·g_v) b at every
+            held vertex v, for each direction b of :meth:`contact_basis`.
+        """
+        if not len(self.contact_vertices):
+            return g
+        return contacts.tangential(g, self.contact_basis())
+
+    def contact_basis(self) -> list[tuple[np.ndarray, np.ndarray]]:
+        """Orthonormal constrained directions of the held vertices (computed once).
+
+        Returns
+        -------
+        list of (ndarray (u,) of int, ndarray (u, 3))
+            :func:`clothsim.contacts.contact_basis` of the held contacts.
+        """
+        if self._basis is None:
+            self._basis = contacts.contact_basis(self.contact_vertices, self.contact_normals)
+        return self._basis
 
     def free_mask(self, n: int) -> np.ndarray:
         """Which vertices are unknowns (not exactly pinned).

@@ -15,10 +15,12 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
+from .contacts import ContactSet
 from .effects.base import HOOKS, BoundEffects, Effect, overrides
 from .effects.pins import Pin
 from .errors import InputError, NonFiniteStateError, check_finite
 from .model import Model
+from .objective import objective_gradient
 from .problem import PinSet, check_initial_guess
 from .solvers import Solver, StepProblem, StepResult, make_solver
 
@@ -271,9 +273,29 @@ class Simulation:
         pins = PinSet()
         if self._hooks["pins"]:
             pins = PinSet.merge([e.pins(t + h) for e in self._hooks["pins"]])
+        held = ContactSet.merge([ContactSet()] + self._held_sets(t + h))
         return StepProblem(h, s.positions, s.velocities, y, f, pins.fixed_vertices,
                            pins.fixed_positions, pins.anchor_vertices, pins.anchor_positions,
-                           pins.anchor_stiffness, start=self.initial_guess)
+                           pins.anchor_stiffness, start=self.initial_guess,
+                           contact_vertices=held.vertices, contact_normals=held.normals,
+                           contact_offsets=held.offsets)
+
+    def _held_sets(self, t: float) -> list[ContactSet]:
+        return [e.hold_contacts(t) for e in self._hooks["hold_contacts"]]
+
+    def _contact_forces(self, problem: StepProblem, x: np.ndarray, t: float) -> None:
+        """Tell each holding obstacle the normal force [N] its planes exerted in the step."""
+        sets = [c for c in self._held_sets(t) if len(c)]
+        if not sets:
+            return
+        grad = objective_gradient(self.model, problem, x, feasible=False)
+        # the solve's unbalanced force per vertex (root mean square over the free ones): what
+        # an unconverged iteration leaves in every force estimate
+        g = problem.tangential(grad)
+        noise = float(np.sqrt(np.mean(np.einsum("ij,ij->i", g, g)))) / self.h ** 2
+        for c in sets:
+            c.forces = np.einsum("ij,ij->i", grad[c.vertices], c.normals) / self.h ** 2
+            c.noise = noise
 
     def step_model(self, state: State | None = None) -> Model:
         """The model whose objective g the next step minimizes.
@@ -351,6 +373,8 @@ class Simulation:
         result: StepResult = self._step_solver(s).solve(problem)
         x = result.x
         t1 = s.time + h
+        if problem.has_contacts:
+            self._contact_forces(problem, x, t1)
         for e in self._hooks["correct_positions"]:
             x = e.correct_positions(t1, s, x)
         v = (x - s.positions) / h

@@ -23,7 +23,7 @@ STAGES = [
     {"springs"},
     {"model"},
     {"matrices", "reference", "energy", "factorization", "factor_mode"},
-    {"problem", "objective"},
+    {"problem", "objective", "contacts"},
     {"solvers"},
     {"effects"},
     {"simulation"},

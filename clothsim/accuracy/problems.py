@@ -73,7 +73,8 @@ class RecordedStep:
 
 
 _ARRAYS = ("x", "v", "y", "f_ext", "fixed_vertices", "fixed_positions", "anchor_vertices",
-           "anchor_positions", "anchor_stiffness")
+           "anchor_positions", "anchor_stiffness", "contact_vertices", "contact_normals",
+           "contact_offsets")
 
 
 def step_digest(model: Model) -> str:

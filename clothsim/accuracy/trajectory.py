@@ -152,7 +152,8 @@ def run_trajectory(sim: Simulation, *, frames: int, frame_time: float,
     x*, and objective gap). With ``record_energy``, :func:`mechanical_energy` at each
     frame is recorded in ``Trajectory.energy``. With ``record_contact``,
     ``Trajectory.contact[f]`` tells whether any effect's ``correct_positions`` (an obstacle,
-    a strain limit) moved a vertex during frame f → f + 1 (:func:`watch_corrections`).
+    a strain limit) moved a vertex, or an obstacle held one on its contact plane, during
+    frame f → f + 1 (:func:`watch_corrections`).
 
     Parameters
     ----------
@@ -225,7 +226,9 @@ def watch_corrections(sim: Simulation) -> list:
 
     Each of ``sim``'s effects with a ``correct_positions`` hook gets an instance-level
     wrapper that compares the solver's x with the corrected x; the returned list receives
-    the effect's kind each time a correction moved a vertex (clear it to start over).
+    the effect's kind each time a correction moved a vertex, or the step held vertices on
+    the effect's contact planes (an obstacle in ``[contact] mode = "hold"``: the solve
+    itself kept them on the surface); clear it to start over.
 
     Parameters
     ----------
@@ -242,9 +245,10 @@ def watch_corrections(sim: Simulation) -> list:
             continue
         hook = effect.correct_positions
 
-        def watched(t, state, x, _hook=hook, _kind=effect.kind):
+        def watched(t, state, x, _hook=hook, _kind=effect.kind, _effect=effect):
+            held = overrides(_effect, "hold_contacts") and len(_effect.hold_contacts(t)) > 0
             corrected = _hook(t, state, x)
-            if corrected is not x and not np.array_equal(corrected, x):
+            if held or (corrected is not x and not np.array_equal(corrected, x)):
                 touched.append(_kind)
             return corrected
 

@@ -11,8 +11,9 @@ from .damping import Damping
 from .force import Force
 from .gravity import Gravity
 from .impulse import Impulse
-from .obstacles import Obstacle, Plane, Sphere
+from .obstacles import Obstacle, Plane
 from .pins import Pin
+from .sphere import Sphere
 from .strain_limit import StrainLimit
 from .wind import Wind
 

@@ -10,7 +10,9 @@ need to know which vertices are pinned. One step from t to t + h runs:
 1. ``add_force(t, state, f)``                add external forces f (n, 3) [N]
 2. ``adjust_target(t, state, y) -> y``       change the inertial target y (damping)
 3. ``pins(t + h) -> PinSet``                  exact pins and penalty anchors for the step
-4. the solver minimizes g(x)
+   ``hold_contacts(t + h) -> ContactSet``       contact planes held during the step
+4. the solver minimizes g(x) (on the held contact planes); each holding obstacle's
+   :attr:`ContactSet.forces <clothsim.contacts.ContactSet>` is then set
 5. ``correct_positions(t + h, state, x) -> x``    move x after the solve (collisions, …)
 6. v = (x − x_n) / h, then ``correct_velocities(t + h, state, x, v) -> v``
 
@@ -31,12 +33,13 @@ from collections.abc import Callable
 import numpy as np
 
 from ..errors import InputError
+from ..contacts import ContactSet
 from ..problem import PinSet
 
 #: Every hook an effect may override, in the order a step calls them (``connect_pins``
 #: is called once, after :meth:`Effect.bind`).
-HOOKS = ("add_force", "adjust_target", "pins", "correct_positions", "correct_velocities",
-         "connect_pins")
+HOOKS = ("add_force", "adjust_target", "pins", "hold_contacts", "correct_positions",
+         "correct_velocities", "connect_pins")
 
 
 class Effect:
@@ -144,6 +147,27 @@ class Effect:
         """
         raise NotImplementedError
 
+    def hold_contacts(self, t: float) -> ContactSet:
+        """The contact planes this effect holds vertices on during the step ending at ``t``.
+
+        Called by ``Simulation.problem()`` after ``pins`` (also by the port tools: it must
+        not change the effect's state); the sets of all effects are merged into the step's
+        :class:`~clothsim.problem.StepProblem`, whose solution keeps every listed vertex
+        on its plane. After the solve the simulation sets the returned set's ``forces``
+        (the normal force of each plane [N]), which ``correct_positions`` may read.
+
+        Parameters
+        ----------
+        t : float
+            Time at the end of the step [s].
+
+        Returns
+        -------
+        ContactSet
+            Vertices (c,), unit normals (c, 3) and offsets (c,) [m] of the planes n·x = o.
+        """
+        raise NotImplementedError
+
     def correct_positions(self, t: float, state, x: np.ndarray) -> np.ndarray:
         """Return corrected end-of-step positions (do not modify ``x`` in place).
 
@@ -232,9 +256,12 @@ def overrides(effect: Effect, hook: str) -> bool:
     Returns
     -------
     bool
-        True when the effect's class overrides the hook of :class:`Effect`.
+        True when the effect's class overrides the hook of :class:`Effect` and the
+        instance does not list it in ``unused_hooks`` (an obstacle in the seed's contact
+        mode holds no contacts; a frictionless one adds no force).
     """
-    return getattr(type(effect), hook) is not getattr(Effect, hook)
+    return (getattr(type(effect), hook) is not getattr(Effect, hook)
+            and hook not in getattr(effect, "unused_hooks", ()))
 
 
 class BoundEffects(tuple):
@@ -268,3 +295,4 @@ class BoundEffects(tuple):
 
 
 __all__ = ["HOOKS", "BoundEffects", "Effect", "PinSet", "overrides"]
+__all__ = ["HOOKS", "ContactSet", "Effect", "PinSet", "overrides"]

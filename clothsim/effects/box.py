@@ -29,8 +29,9 @@ class Box(Obstacle):
 
     kind = "box"
 
-    def __init__(self, min, max, *, friction: float = 0.0):  # noqa: A002 (TOML keys)
-        super().__init__(friction)
+    def __init__(self, min, max, *, friction: float = 0.0,  # noqa: A002 (TOML keys)
+                 contact: str = "hold"):
+        super().__init__(friction, contact)
         lo = _vector3("box.min", min)
         hi = _vector3("box.max", max)
         bad = np.flatnonzero(lo >= hi)
@@ -89,6 +90,12 @@ class Box(Obstacle):
         x[rows, axis] = np.where(normal[rows, axis] > 0, self.max[axis], self.min[axis])
         return x, normal
 
+    def on_face(self, x, normal):
+        # the two coordinates along the face within the box (its closed rectangle)
+        along = np.abs(normal) < 0.5
+        inside = (x >= self.min) & (x <= self.max)
+        return np.all(inside | ~along, axis=1)
+
     def describe(self):
         return {"kind": self.kind, "min": self.min.tolist(), "max": self.max.tolist(),
-                "friction": self.friction}
+                "friction": self.friction, "contact": self.contact}

@@ -42,11 +42,10 @@ from __future__ import annotations
 
 import numpy as np
 
+from ..contacts import ContactSet
 from ..errors import InputError, check_finite
 from .base import Effect
-
-#: Largest sphere radius [m]: R² and the contact quadratic stay far inside float range.
-MAX_RADIUS = 1e100
+from .holding import CONTACT_MODES, Holding, friction_force, hold_step
 
 
 def _vector3(name: str, value) -> np.ndarray:
@@ -87,10 +86,17 @@ class Obstacle(Effect):
 
     kind = "obstacle"
 
-    def __init__(self, friction: float = 0.0):
+    def __init__(self, friction: float = 0.0, contact: str = "hold"):
         self.friction = _non_negative(f"{self.kind}.friction", friction)
+        if contact not in CONTACT_MODES:
+            raise InputError(f"{self.kind}.contact: must be one of "
+                             f"{', '.join(map(repr, CONTACT_MODES))}, got {contact!r}")
+        self.contact = contact
+        self.unused_hooks = (("hold_contacts", "add_force") if contact != "hold"
+                             else ("add_force",) if self.friction == 0.0 else ())
         self.contact_vertices = np.zeros(0, np.int64)
         self.contact_normals = np.zeros((0, 3))
+        self._holding = Holding()
 
     # -- geometry, implemented by each shape ---------------------------------------------
     def contacts(self, x0: np.ndarray, x: np.ndarray):
@@ -160,28 +166,73 @@ class Obstacle(Effect):
         """
         return x, normal
 
-    # -- the hooks ---------------------------------------------------------------------
-    def correct_positions(self, t, state, x):
-        x0 = state.positions
-        index, p, n = self.contacts(x0, x)
-        if len(index) == 0:
-            self.contact_vertices = index
-            self.contact_normals = n
-            return x
-        xc = x[index]
-        depth = np.maximum(_rowdot(p - xc, n), 0.0)
-        xc = xc + depth[:, None] * n
+    def on_face(self, x: np.ndarray, normal: np.ndarray) -> np.ndarray:
+        """Which held contact points still lie on the face of their normal (default: all).
+
+        Parameters
+        ----------
+        x : ndarray, shape (k, 3)
+            Contact points [m].
+        normal : ndarray, shape (k, 3)
+            Their held normals.
+
+        Returns
+        -------
+        ndarray of bool, shape (k,)
+        """
+        return np.ones(len(x), bool)
+
+    def respond(self, x0: np.ndarray, x: np.ndarray, p: np.ndarray, n: np.ndarray):
+        """The seed's response of vertices that reached the solid in this step.
+
+        Projection onto the plane at the contact point, position-based Coulomb friction,
+        placement on the surface (steps 2–4 of the module docstring).
+
+        Parameters
+        ----------
+        x0, x : ndarray, shape (c, 3)
+            Their positions at the start of the step and after the solve [m].
+        p, n : ndarray, shape (c, 3)
+            Contact points [m] and outward unit normals (:meth:`contacts`).
+
+        Returns
+        -------
+        x : ndarray, shape (c, 3)
+            The corrected positions [m].
+        n : ndarray, shape (c, 3)
+            The normals there.
+        """
+        depth = np.maximum(_rowdot(p - x, n), 0.0)
+        xc = x + depth[:, None] * n
         if self.friction > 0.0:
-            step = xc - x0[index]
+            step = xc - x0
             tangential = step - _rowdot(step, n)[:, None] * n
             length = np.linalg.norm(tangential, axis=1)
             keep = np.zeros_like(length)
             moving = length > 0
             keep[moving] = np.maximum(0.0, 1.0 - self.friction * depth[moving] / length[moving])
             xc = xc - (1.0 - keep)[:, None] * tangential
-        xc, n = self.settle(xc, n)
+        return self.settle(xc, n)
+
+    # -- the hooks ---------------------------------------------------------------------
+    def hold_contacts(self, t):
+        return self._holding.planes if self.contact == "hold" else ContactSet()
+
+    def add_force(self, t, state, f):
+        if self.contact == "hold":
+            friction_force(self, state, f)
+
+    def correct_positions(self, t, state, x):
+        if self.contact == "hold" and hasattr(self, "model"):   # bound to a simulation
+            return hold_step(self, state, x)
+        x0 = state.positions
+        index, p, n = self.contacts(x0, x)
+        if len(index) == 0:
+            self.contact_vertices = index
+            self.contact_normals = n
+            return x
         x = x.copy()
-        x[index] = xc
+        x[index], n = self.respond(x0[index], x[index], p, n)
         # safety net against rounding: nothing may stay strictly inside
         still = np.flatnonzero(self.inside(x))
         if len(still):
@@ -218,6 +269,7 @@ class Obstacle(Effect):
                              f"{self.kind}, whose contact response would move it; move the "
                              f"obstacle or give the vertex a mass",
                              field=f"{self.kind}.{key}")
+        self._holding = Holding()
 
 
 class Plane(Obstacle):
@@ -244,8 +296,9 @@ class Plane(Obstacle):
 
     kind = "plane"
 
-    def __init__(self, point, normal, *, friction: float = 0.0, thickness: float = 0.0):
-        super().__init__(friction)
+    def __init__(self, point, normal, *, friction: float = 0.0, thickness: float = 0.0,
+                 contact: str = "hold"):
+        super().__init__(friction, contact)
         self.point = _vector3("plane.point", point)
         normal = _vector3("plane.normal", normal)
         scale = float(np.abs(normal).max())
@@ -284,80 +337,4 @@ class Plane(Obstacle):
 
     def describe(self):
         return {"kind": self.kind, "point": self.point.tolist(), "normal": self.normal.tolist(),
-                "friction": self.friction, "thickness": self.thickness}
-
-
-class Sphere(Obstacle):
-    """A static solid ball.
-
-    Parameters
-    ----------
-    center : (3,) array_like
-        Centre c [m].
-    radius : float
-        R [m], > 0.
-    friction : float, default 0
-        Coulomb coefficient μ.
-
-    Notes
-    -----
-    Entry along the step x(s) = x_n + s d, s ∈ [0, 1], d = x − x_n: the smaller root of
-    |x_n + s d − c|² = R², computed without cancellation as
-    s = (|x_n − c|² − R²) / (−d·(x_n − c) + √disc), disc = (d·(x_n − c))² − |d|²(|x_n − c|² − R²).
-    """
-
-    kind = "sphere"
-
-    def __init__(self, center, radius, *, friction: float = 0.0):
-        super().__init__(friction)
-        self.center = _vector3("sphere.center", center)
-        r = check_finite("sphere.radius", radius)
-        if r.ndim != 0 or r <= 0:
-            raise InputError(f"sphere.radius: must be one positive number, got {radius!r}")
-        if r > MAX_RADIUS:
-            raise InputError(f"sphere.radius: must be at most {MAX_RADIUS:g} m (its square "
-                             f"must stay far from overflow), got {float(r)!r}")
-        self.radius = float(r)
-
-    def inside(self, x):
-        q = x - self.center
-        return _rowdot(q, q) < self.radius ** 2
-
-    def closest(self, x):
-        q = x - self.center
-        length = np.linalg.norm(q, axis=1)
-        n = np.empty_like(q)
-        ok = length > 0
-        n[ok] = q[ok] / length[ok, None]
-        n[~ok] = (0.0, 1.0, 0.0)  # the centre itself: any direction is nearest
-        # a few ulps outside, so that rounding never leaves a placed point inside
-        return self.center + (self.radius * (1.0 + 4 * np.finfo(float).eps)) * n, n
-
-    def contacts(self, x0, x):
-        R2 = self.radius ** 2
-        q0 = x0 - self.center
-        c0 = _rowdot(q0, q0) - R2                       # > = 0: x_n outside or on
-        d = x - x0
-        bh = _rowdot(d, q0)                             # half the linear coefficient
-        disc = bh * bh - _rowdot(d, d) * c0
-        start_out = c0 >= 0
-        enters = start_out & (bh < 0) & (disc > 0)
-        i = np.flatnonzero(enters)
-        s = c0[i] / (-bh[i] + np.sqrt(disc[i]))
-        hit = s <= 1.0
-        i, s = i[hit], s[hit]
-        p = x0[i] + s[:, None] * d[i]
-        n = p - self.center
-        n /= np.linalg.norm(n, axis=1)[:, None]
-        p = self.center + self.radius * n
-        # started inside (initial overlap): nearest surface point of x
-        j = np.flatnonzero(~start_out & self.inside(x))
-        pj, nj = self.closest(x[j])
-        return np.concatenate([i, j]), np.concatenate([p, pj]), np.concatenate([n, nj])
-
-    def settle(self, x, normal):
-        return self.closest(x)
-
-    def describe(self):
-        return {"kind": self.kind, "center": self.center.tolist(), "radius": self.radius,
-                "friction": self.friction}
+                "friction": self.friction, "thickness": self.thickness, "contact": self.contact}

@@ -31,6 +31,8 @@ def _base(name: str, description: str, effects: list, plane: str = "xy") -> dict
                   "center": [0.0, 1.0, 0.0], "plane": plane, "mass": 0.1},
         "springs": {"structural": 100.0, "shear": 100.0, "bending": 10.0},
         "solver": {"method": "local-global", "iterations": 10},
+        # the obstacle cases: the projection after the solve that ports of the seed do
+        "contact": {"mode": "post-solve"},
         "effects": effects,
     }
 

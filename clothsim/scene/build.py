@@ -25,7 +25,7 @@ from ..polygon import polygon
 from ..simulation import Simulation
 from ..springs import FAMILIES, Springs, grid_springs, mesh_springs, springs_from_pairs
 from .checks import Invalid, integer, locate
-from .effects import constructor_params
+from .effects import _PYTHON_ONLY_KEYS, constructor_params
 from .overrides import blame, builds
 from .pins import declared_pins
 from .scale import check_extent, force_problem, overflow_problem, scene_key, stiffness_problem
@@ -277,6 +277,8 @@ class Scene:
                 n = (self.build_model() if model is None else model).vertex_count
                 params["vertices"] = read_index_list(params["vertices"], f"{path}.vertices",
                                                      e.get("index_base", 0), n)
+            if "contact" in _PYTHON_ONLY_KEYS.get(e["kind"], ()):   # an obstacle's mode
+                params["contact"] = self.data.get("contact", {}).get("mode", "hold")
             try:
                 out.append((path, EFFECTS[e["kind"]](**params)))
             except (InputError, TypeError, ValueError) as exc:

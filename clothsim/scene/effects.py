@@ -32,7 +32,9 @@ MAX_LENGTH = 1e100  # [m]: coordinates and radii whose squares stay finite
 PARAMETERS = {kind: {key: t for key, (t, _unit) in keys.items()}
               for kind, keys in EFFECT_KEYS.items()}  # kind -> key -> type word
 _SCENE_ONLY = {"pin": ("index_base", "grid"), "force": ("index_base",)}  # read by the scene
-_PYTHON_ONLY_KEYS = {"pin": ("motion",)}     # callables: Python API only, not in scene files
+_PYTHON_ONLY_KEYS = {"pin": ("motion",),     # callables: Python API only, not in scene files
+                     # an obstacle's contact mode: the scene's [contact] mode sets it
+                     "plane": ("contact",), "sphere": ("contact",), "box": ("contact",)}
 
 
 def _vec3(v, path: str, *, point=False) -> list[float]:

@@ -20,7 +20,7 @@ REQUIRED = object()   #: marker: the key has no default and must be given (when 
 NONE = object()       #: marker: absent means "not used" (no default value)
 
 SHAPES = ("grid", "mesh", "polygon", "jacobson", "files")
-TABLES = ("scene", "cloth", "springs", "solver", "output")
+TABLES = ("scene", "cloth", "springs", "solver", "contact", "output")
 TOP_KEYS = TABLES + ("effects",)
 
 # Upper bounds that keep a run finite (a larger value is almost surely a typo, and would
@@ -56,7 +56,7 @@ class Key:
     Attributes
     ----------
     table : str
-        ``"scene"``, ``"cloth"``, ``"springs"``, ``"solver"`` or ``"output"``.
+        ``"scene"``, ``"cloth"``, ``"springs"``, ``"solver"``, ``"contact"`` or ``"output"``.
     name : str
         The key.
     type : str
@@ -201,6 +201,14 @@ KEYS: tuple[Key, ...] = (
         "Where each step's iteration starts: `\"y\"`, the inertial target x_n + h v_n (the "
         "paper), or `\"x_n\"`, the previous positions (most ports, the assignment's "
         "`main.cpp`). With a fixed iteration count the answer depends on it."),
+    # [contact]
+    Key("contact", "mode", "string", "hold", "",
+        "How the obstacles (`plane`, `sphere`, `box`) answer contact. `\"hold\"`: a vertex "
+        "an obstacle pushes is held on its contact plane during the next step's solve and "
+        "slides in it (sticks while static friction holds it), and leaves the surface when "
+        "the cloth pulls it away; the cloth stays whole over edges (docs/effects.md). "
+        "`\"post-solve\"`: the seed's and the paper's projection of each vertex after the "
+        "solve, for reproducing the seed's demos and checking ports that do that."),
     # [output]
     Key("output", "frame_compression", "string", "auto", "",
         "How `clothsim run` writes the `frame_%06d.vtu` files: `\"zlib\"` (compressed, about "

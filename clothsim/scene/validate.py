@@ -12,6 +12,7 @@ import math
 from pathlib import Path
 from typing import Any
 
+from ..effects.holding import CONTACT_MODES
 from ..effects.pins import PIN_METHODS
 from ..factorization import BACKENDS, CHOLMOD_MODES
 from ..io.frames import FRAME_COMPRESSIONS
@@ -305,7 +306,8 @@ def validate(raw: dict, base_dir: Path, default_name: str) -> dict:
     Returns
     -------
     dict
-        The ``scene``, ``cloth``, ``springs``, ``solver``, ``output`` and ``effects`` tables,
+        The ``scene``, ``cloth``, ``springs``, ``solver``, ``contact``, ``output`` and
+        ``effects`` tables,
         checked, with defaults filled in (lengths [m], masses [kg], times [s], stiffnesses [N/m]).
 
     Raises
@@ -328,6 +330,10 @@ def validate(raw: dict, base_dir: Path, default_name: str) -> dict:
                                     so.get("backend", d("solver", "backend")),
                                     so.get("initial_guess", d("solver", "initial_guess")),
                                     so.get("cholmod_mode", d("solver", "cholmod_mode")))
+    co = table(raw.get("contact", {}), "contact")
+    check_keys(co, "contact", schema.keys("contact"))
+    out["contact"] = {"mode": string(co.get("mode", d("contact", "mode")), "contact.mode",
+                                     choices=CONTACT_MODES)}
     ou = table(raw.get("output", {}), "output")
     check_keys(ou, "output", schema.keys("output"))
     out["output"] = {"frame_compression": string(

@@ -99,6 +99,9 @@ class AndersonSolver(LocalGlobalSolver):
             k, x of shape (n, 3) [m] (the solver's array: copy it to keep it) and
             ‖∇g(x)‖ over the free degrees of freedom [N·s²].
         """
+        if problem.has_contacts:   # held contacts: plain constrained local/global steps
+            yield from LocalGlobalSolver.iterates(self, problem, x0)
+            return
         step = FusedStep(self, problem, x0, energy=True)
         yield Iterate(0, step.x, step.norm0, d=step.current_directions())
         shape, m = step.delta.shape, step.delta.size

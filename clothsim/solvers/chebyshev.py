@@ -282,6 +282,9 @@ class ChebyshevSolver(LocalGlobalSolver):
             k, x of shape (n, 3) [m] (the solver's array: copy it to keep it) and
             ‖∇g(x)‖ over the free degrees of freedom [N·s²].
         """
+        if problem.has_contacts:   # held contacts: plain constrained local/global steps
+            yield from LocalGlobalSolver.iterates(self, problem, x0)
+            return
         self.system(problem)
         if self.rho is None:
             self.rho = estimate_spectral_radius(self.model, problem, solver=self)

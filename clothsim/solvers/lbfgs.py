@@ -96,6 +96,9 @@ class LBFGSSolver(LocalGlobalSolver):
             k, x of shape (n, 3) [m] (the solver's array: copy it to keep it) and
             ‖∇g(x)‖ over the free degrees of freedom [N·s²].
         """
+        if problem.has_contacts:   # held contacts: plain constrained local/global steps
+            yield from LocalGlobalSolver.iterates(self, problem, x0)
+            return
         step = FusedStep(self, problem, x0, energy=True)
         shape = step.delta.shape
         a = step.a0.copy()                 # A_FF δ_F of the current iterate

@@ -44,6 +44,7 @@ from ..model import Model
 from .base import Iterate, Solver, StepProblem, StepResult
 from .directions import SpringDirections
 from .fused import FusedStep
+from .held import held_iterates
 from .system import SystemFactor, factor_system
 
 log = logging.getLogger(__name__)
@@ -110,6 +111,8 @@ class LocalGlobalSolver(Solver):
         self.backend: str | None = None
         self._cache_key = None
         self._cache: SystemFactor | None = None
+        self._held_key = None   # the held-contact system (clothsim.solvers.held), cached
+        self._held = None
         self._Ms = model.vertex_mass
         self._Js = matrices.spring_matrix(model, expand=False)
         # the local step's arithmetic and carried directions (clothsim.solvers.directions)
@@ -126,6 +129,8 @@ class LocalGlobalSolver(Solver):
     def invalidate(self) -> None:
         self._cache_key = None
         self._cache = None
+        self._held_key = None
+        self._held = None
 
     def system(self, problem: StepProblem) -> SystemFactor:
         """The factor for this problem's h and pins: cached, rebuilt only when they change.
@@ -352,6 +357,9 @@ class LocalGlobalSolver(Solver):
         Iterate
             k, x_k (n, 3) [m] and ‖∇g(x_k)‖ [N·s²].
         """
+        if problem.has_contacts:   # held contacts: the constrained global step
+            yield from held_iterates(self, problem, x0)
+            return
         step = FusedStep(self, problem, x0)
         yield Iterate(0, step.x, step.norm0, d=step.current_directions())
         k = 0

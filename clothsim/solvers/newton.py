@@ -57,6 +57,7 @@ from ..model import Model
 from .base import Iterate, Solver, StepProblem, StepResult, gradient_noise_floor, objective_gradient
 from .curvature import ReusedCholesky, negative_curvature, smallest_eigenvalue
 from .descent import ARMIJO_C, MAX_HALVINGS, armijo, objective_difference  # noqa: F401
+from .held import constrained_matrix
 from .hessian import FreeHessian
 
 INDEFINITE = ("shift", "project")
@@ -229,7 +230,7 @@ class NewtonSolver(Solver):
         """(factor, τ, H): τ = 0 and ``factor`` of H itself when H ≻ 0. With ``try_exact``
         False (far from a stationary point, right after an indefinite H) the unshifted
         factorization, which would almost surely fail, is not attempted."""
-        H = self._assembler.matrix(problem, x, free)
+        H = self._held(problem, self._assembler.matrix(problem, x, free), free)
         if try_exact:
             try:
                 factor = self._factor(H)
@@ -238,10 +239,18 @@ class NewtonSolver(Solver):
             except FactorizationError:
                 pass
         if self.indefinite == "project":
-            P = self._assembler.matrix(problem, x, free, definite=True)
+            P = self._held(problem, self._assembler.matrix(problem, x, free, definite=True),
+                           free)
             return self._factor(P), math.inf, H
         factor, tau = self._shifted(H, free)
         return factor, tau, H
+
+    @staticmethod
+    def _held(problem, H, free):
+        """H, or with held contacts P H P + α D over the free degrees of freedom
+        (:func:`clothsim.solvers.held.constrained_matrix`): the Newton step then stays on
+        the contact planes."""
+        return constrained_matrix(problem, H, free) if problem.has_contacts else H
 
     def _escape(self, problem, x, grad, H, factor, free):
         """(x + αv, g(x + αv) − g(x)) along negative curvature v of H, or None."""

@@ -174,4 +174,5 @@ class SymplecticEulerSolver(Solver):
         yield Iterate(0, problem.x, 0.0)
         x = problem.y + problem.h ** 2 * self._inv_mass[:, None] * self.force(problem, problem.x)
         x[problem.fixed_vertices] = problem.fixed_positions
+        problem.hold(x)   # held contacts: onto their planes (the explicit step's projection)
         yield Iterate(1, x, 0.0)

@@ -1,0 +1,222 @@
+"""Local/global iterations on a step with held contacts (:mod:`clothsim.contacts`).
+
+A held vertex v stays on its contact plane n · x_v = o and slides in it. The local step is
+unchanged; the global step minimizes ĝ(x, d) over the feasible set instead of all of
+R^{3n}. With δ = x − y split as δ = z + P u, where z is a feasible displacement (pins at
+their targets, held vertices on their planes) and P = I − Σ b bᵀ removes the constrained
+directions b of each held vertex, the global step is
+
+    (P A P + α D) u = P (b(d) − A y − A z)        over the free degrees of freedom,
+
+with A = (M_s + h² L_s) ⊗ I3 and D = Σ b bᵀ (α D fixes the constrained components of u
+at 0; α is the mean diagonal of A, for conditioning). The matrix couples the three
+coordinates of held vertices, so it is a 3n × 3n system: factored once per contact set
+(held vertices and their normals), cached while the set stays, its symbolic analysis
+reused when only the set changes (the pattern is that of M_s + h² L_s ⊗ ones(3, 3)).
+Without held contacts the solvers use the n × n factor of the paper
+(:mod:`clothsim.solvers.system`).
+
+The iteration's residual is ‖P ∇g(x_k)‖ over the free vertices
+(:func:`~clothsim.objective.objective_gradient`), zero at the constrained minimum.
+"""
+
+from __future__ import annotations
+
+import logging
+
+import numpy as np
+import scipy.sparse as sp
+
+from .. import contacts
+from ..factorization import Factor
+from .base import Iterate
+
+log = logging.getLogger(__name__)
+
+_TINY = 1e-300   # stored in the fixed pattern where P A P + α D is zero (below rounding)
+
+
+class HeldSystem:
+    """The factor of the global step with held contacts, for one contact set.
+
+    Parameters
+    ----------
+    solver : LocalGlobalSolver
+        Supplies the scalar system M_s + h² L_s (with the pins) and the backend.
+    problem : StepProblem
+        The step: h, pins and held contacts.
+    previous : HeldSystem, optional
+        The system this one replaces (its symbolic analysis is reused).
+    """
+
+    def __init__(self, solver, problem, previous: HeldSystem | None = None):
+        sysf = solver.system(problem)
+        n = solver.model.vertex_count
+        As = sp.csr_matrix(sysf.A)
+        self.As = As
+        self.free = sysf.free
+        self.fixed = sysf.fixed
+        self.basis = problem.contact_basis()
+        P, D = contacts.projector(n, self.basis)
+        # each held vertex's 3 x 3 block of P, for projecting (n, 3) arrays in one pass
+        self.held = np.unique(problem.contact_vertices)
+        self.blocks = np.broadcast_to(np.eye(3), (len(self.held), 3, 3)).copy()
+        for v, b in self.basis:
+            self.blocks[np.searchsorted(self.held, v)] -= b[:, :, None] * b[:, None, :]
+        A3 = sp.kron(As, sp.identity(3), format="csr")
+        alpha = float(As.diagonal().mean())
+        pattern = sp.kron(As, np.ones((3, 3)), format="csr")
+        pattern.data[:] = _TINY
+        K = (P @ A3 @ P + alpha * D + pattern).tocsr()
+        dofs = (3 * self.free[:, None] + np.arange(3)).ravel()
+        K_FF = K[dofs][:, dofs]
+        self.factor = Factor(K_FF, backend=solver.backend_requested,
+                             check_conditioning=False,   # M + h² L's factor was checked
+                             cholmod_mode="supernodal",   # measured: simplicial 30x slower
+                             reuse=None if previous is None else previous.factor)
+        log.info("factored the held-contact system: %d held vertices, %d unknowns",
+                 len(np.unique(problem.contact_vertices)), len(dofs))
+
+    def prepare(self, problem) -> tuple[np.ndarray, np.ndarray]:
+        """The step's feasible displacement z and A z, constant over its iterations.
+
+        Parameters
+        ----------
+        problem : StepProblem
+
+        Returns
+        -------
+        z, Az : ndarray, shape (n, 3)
+            z = x − y with pins at their targets and held vertices on their planes (zero
+            elsewhere) [m]; A z [kg·m].
+        """
+        y = problem.y
+        z = problem.hold(np.array(y, dtype=np.float64)) - y
+        z[problem.fixed_vertices] = problem.fixed_positions - y[problem.fixed_vertices]
+        return z, self.As @ z
+
+    def global_step(self, problem, rhs: np.ndarray, z: np.ndarray,
+                    Az: np.ndarray) -> np.ndarray:
+        """x minimizing ĝ(x, d) on the feasible set [m], shape (n, 3).
+
+        Parameters
+        ----------
+        problem : StepProblem
+        rhs : ndarray, shape (n, 3)
+            b(d) − A y for the local step's d [kg·m]
+            (:meth:`LocalGlobalSolver.displacement_right_hand_side`).
+        z, Az : ndarray, shape (n, 3)
+            :meth:`prepare`.
+
+        Returns
+        -------
+        ndarray, shape (n, 3)
+        """
+        r = self.tangential(rhs - Az)
+        u = np.zeros_like(z)
+        u[self.free] = self.factor.solve(r[self.free].reshape(-1)).reshape(-1, 3)
+        return problem.y + z + self.tangential(u)
+
+    def gradient_norm(self, problem, x: np.ndarray, rhs: np.ndarray) -> float:
+        """The gradient on the feasible set, as the stop rule reads it.
+
+        Parameters
+        ----------
+        problem : StepProblem
+        x : ndarray, shape (n, 3)
+            An iterate [m].
+        rhs : ndarray, shape (n, 3)
+            b(d(x)) − A y [kg·m].
+
+        Returns
+        -------
+        float
+            ‖P ∇g(x)‖ over the free vertices [N·s²].
+        """
+        return float(np.linalg.norm(self.tangential(self.As @ (x - problem.y) - rhs)[self.free]))
+
+    def tangential(self, g: np.ndarray) -> np.ndarray:
+        """P applied at the held vertices, in place.
+
+        Parameters
+        ----------
+        g : ndarray, shape (n, 3)
+
+        Returns
+        -------
+        g : ndarray, shape (n, 3)
+            The same array, without its constrained components.
+        """
+        g[self.held] = np.einsum("vij,vj->vi", self.blocks, g[self.held])
+        return g
+
+
+def constrained_matrix(problem, H, free: np.ndarray):
+    """P H P + α D over the free degrees of freedom (a Newton step with held contacts).
+
+    Parameters
+    ----------
+    problem : StepProblem
+        The step, with held contacts.
+    H : sparse matrix, shape (3f, 3f)
+        A Hessian over the free degrees of freedom (interleaved).
+    free : ndarray of bool, shape (3n,)
+        Which of the 3n degrees of freedom are unknowns.
+
+    Returns
+    -------
+    csc_matrix, shape (3f, 3f)
+        In H's pattern and data layout (the Newton solver shifts its diagonal in place).
+        Solving it with a tangential right-hand side gives a step in the contact planes.
+    """
+    P, D = contacts.projector(len(free) // 3, problem.contact_basis())
+    P, D = P[free][:, free], D[free][:, free]
+    K = (P @ H @ P + float(H.diagonal().mean()) * D).tocsr()
+    H = sp.csc_matrix(H, copy=True)          # same pattern and layout as H (held blocks are
+    cols = np.repeat(np.arange(H.shape[1]), np.diff(H.indptr))   # dense 3 x 3 in it)
+    H.data = np.asarray(K[H.indices, cols]).ravel()
+    return H
+
+
+def held_iterates(solver, problem, x0: np.ndarray | None = None):
+    """Local/global iterates of a step with held contacts (see the module docstring).
+
+    Parameters
+    ----------
+    solver : LocalGlobalSolver
+        Caches the :class:`HeldSystem` of the current contact set.
+    problem : StepProblem
+        A step whose :attr:`~clothsim.problem.StepProblem.has_contacts`.
+    x0 : ndarray, shape (n, 3), optional
+        Initial guess [m]; moved onto the pins and contact planes. Default
+        :meth:`StepProblem.initial_guess`.
+
+    Yields
+    ------
+    Iterate
+        k, x_k (n, 3) [m], ‖P ∇g(x_k)‖ [N·s²] and d(x_k).
+    """
+    key = (problem.h, problem.fixed_vertices.tobytes(), problem.anchor_vertices.tobytes(),
+           problem.anchor_stiffness.tobytes(), problem.contact_vertices.tobytes(),
+           problem.contact_normals.tobytes())
+    if key != solver._held_key:
+        solver._held = HeldSystem(solver, problem, previous=solver._held)
+        solver._held_key = key
+        solver.factor_count += 1
+    held = solver._held
+    if x0 is None:
+        x = problem.initial_guess()
+    else:
+        x = problem.hold(np.array(x0, dtype=np.float64))
+        x[problem.fixed_vertices] = problem.fixed_positions
+    d = solver.local_step(x)
+    rhs = solver.displacement_right_hand_side(problem, d)
+    yield Iterate(0, x, held.gradient_norm(problem, x, rhs), d=d)
+    z, Az = held.prepare(problem)
+    k = 0
+    while True:
+        x = held.global_step(problem, rhs, z, Az)
+        d = solver.local_step(x)
+        rhs = solver.displacement_right_hand_side(problem, d)
+        k += 1
+        yield Iterate(k, x, held.gradient_norm(problem, x, rhs), d=d)
