@@ -13,7 +13,7 @@ BENCHMARKS = ("stiffness", "stability_figures", "performance", "factor_modes", "
 #: the full accuracy study at 41² take minutes each; accuracy_docs regenerates the accuracy
 #: page's two study reports (minutes)
 LONG = ("memory", "scale_ladder", "accuracy_full", "accuracy_docs", "contact",
-        "fuzz_scenes")  # fuzz_scenes: the scene and --set fuzz behind docs/data/fuzz.md (about a minute)
+        "fuzz_scenes")  # fuzz_scenes: the fuzz behind docs/data/fuzz.md (a minute)
 
 
 def main(argv: list[str]) -> int:

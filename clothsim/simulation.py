@@ -11,7 +11,6 @@ from __future__ import annotations
 
 import logging
 import time as _time
-from dataclasses import dataclass, field
 
 import numpy as np
 
@@ -23,74 +22,9 @@ from .model import Model
 from .objective import objective_gradient
 from .problem import PinSet, check_initial_guess
 from .solvers import Solver, StepProblem, StepResult, make_solver
+from .state import State, StepRecord
 
 log = logging.getLogger(__name__)
-
-
-@dataclass
-class State:
-    """Positions and velocities at one time.
-
-    Attributes
-    ----------
-    positions : ndarray, shape (n, 3)  [m]
-    velocities : ndarray, shape (n, 3)  [m/s]
-    time : float  [s]
-    step : int
-        Steps taken since the start.
-    """
-
-    positions: np.ndarray
-    velocities: np.ndarray
-    time: float = 0.0
-    step: int = 0
-
-    def __post_init__(self):
-        x = check_finite("state.positions", self.positions)
-        if x.ndim != 2 or x.shape[1] != 3:
-            raise InputError(f"state.positions: expected shape (n, 3), got {x.shape}")
-        v = check_finite("state.velocities", self.velocities)
-        if v.shape != x.shape:
-            raise InputError(f"state.velocities: expected shape {x.shape} like the positions, "
-                             f"got {v.shape}")
-        self.positions, self.velocities = x, v
-        self.time = float(check_finite("state.time", self.time))
-
-    def copy(self) -> State:
-        """An independent copy (positions and velocities copied).
-
-        Returns
-        -------
-        State
-        """
-        return State(self.positions.copy(), self.velocities.copy(), self.time, self.step)
-
-
-@dataclass
-class StepRecord:
-    """What one step did: solver iterations, final relative residual, wall seconds.
-
-    Attributes
-    ----------
-    iterations : int
-        Solver iterations done.
-    residual : float
-        Final relative residual ‖∇g(x_k)‖ / ‖∇g(x_0)‖ (dimensionless).
-    seconds : float
-        Wall time of the whole step [s].
-    converged : bool or None
-        True or False when the solver had a tolerance (met or missed), None ("not
-        checked") for a fixed iteration count.
-    residual_history : list of float
-        Relative residual at each iterate, from k = 0 (the initial guess: 1, or 0 when it
-        is already the solution).
-    """
-
-    iterations: int
-    residual: float
-    seconds: float
-    converged: bool | None = None
-    residual_history: list[float] = field(default_factory=list)
 
 
 class Simulation:

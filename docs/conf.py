@@ -93,8 +93,9 @@ API_PAGES = {
         "clothsim.mesh", "clothsim.polygon", "clothsim.mesh_checks", "clothsim.voronoi",
         "clothsim.springs", "clothsim.model", "clothsim.gallery"]),
     "solvers": ("Solvers and the time step", [
-        "clothsim.simulation", "clothsim.problem", "clothsim.objective", "clothsim.solvers",
-        "clothsim.factorization"]),
+        "clothsim.simulation", "clothsim.state", "clothsim.problem", "clothsim.contacts",
+        "clothsim.objective", "clothsim.solvers", "clothsim.factorization",
+        "clothsim.factor_mode"]),
     "effects": ("Effects", ["clothsim.effects"]),
     "scenes-and-runs": ("Scenes, runs and files", [
         "clothsim.scene", "clothsim.runner", "clothsim.interrupts", "clothsim.io",

@@ -26,7 +26,7 @@ STAGES = [
     {"problem", "objective", "contacts"},
     {"solvers"},
     {"effects"},
-    {"simulation"},
+    {"simulation", "state"},
     {"gallery"},
     {"io"},
     {"datasets"},

@@ -32,8 +32,8 @@ from collections.abc import Callable
 
 import numpy as np
 
-from ..errors import InputError
 from ..contacts import ContactSet
+from ..errors import InputError
 from ..problem import PinSet
 
 #: Every hook an effect may override, in the order a step calls them (``connect_pins``
