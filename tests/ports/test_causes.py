@@ -213,6 +213,7 @@ def run_cpp(driver: Path, model: Path, out: Path) -> Path:
     return out
 
 
+@pytest.mark.slow  # five g++/Eigen builds (75 s on 2 cores): CI runs it, make test does not
 @pytest.mark.parametrize("fault", [None, *CPP_FAULTS])
 def test_cpp_solution_faults_are_named(cpp_drivers, cases, tmp_path, fault):
     d = cases / "net"
