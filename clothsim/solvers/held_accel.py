@@ -15,8 +15,11 @@ all). The three accelerations keep their iterates in it:
   direction lies in the set's tangent space. Its Armijo search uses
   :func:`~.descent.objective_difference` along that direction.
 
-Every iterate is moved back onto the pins and planes (:func:`feasible`): that only
-removes rounding (the combinations are feasible in exact arithmetic).
+Chebyshev's and Anderson's iterates are moved back onto the pins and planes
+(:func:`feasible`): that only removes rounding (the combinations are feasible in exact
+arithmetic). L-BFGS's are not: its step α p is exactly what its line search measured, p is
+projected onto the tangent space, so the iterates leave the planes only by the rounding of
+the steps (eps times the path length).
 """
 
 from __future__ import annotations
@@ -186,7 +189,9 @@ def lbfgs_iterates(solver, problem, x0=None):
         r = h0(q.reshape(cur.grad.shape)).ravel()
         for (s, t, rho), a in zip(pairs, reversed(alphas)):
             r += (a - rho * float(t @ r)) * s
-        p = -r.reshape(cur.grad.shape)
+        # exactly tangential (to p's own rounding): a normal part of the s_j's rounding
+        # (eps |x|, not eps |s|) times the contact force would swamp the slope deep down
+        p = held.tangential(-r.reshape(cur.grad.shape))
         p[held.fixed] = 0.0
         slope = float(cur.grad.ravel() @ p.ravel())
         if not slope < 0.0:
@@ -198,7 +203,9 @@ def lbfgs_iterates(solver, problem, x0=None):
             alpha *= 0.5
         else:
             return  # no decrease at working precision: optimal to rounding
-        new = _Point(solver, held, problem, feasible(problem, cur.x + alpha * p))
+        # not re-held: x + α p is what the search measured (it drifts off the planes by
+        # eps times the path length at most)
+        new = _Point(solver, held, problem, cur.x + alpha * p)
         s = (new.x - cur.x).ravel()
         t = (new.grad - cur.grad).ravel()
         st = float(s @ t)
