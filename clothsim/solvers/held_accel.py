@@ -77,6 +77,16 @@ def chebyshev_iterates(solver, problem, x0=None):
     (a compression of the pencil (∇²g, A) to the tangent space), so that ρ is not an
     underestimate.
 
+    Parameters
+    ----------
+    solver : ChebyshevSolver
+        Its options; caches the held system (:func:`~.held.held_start`).
+    problem : StepProblem
+        A step whose :attr:`~clothsim.problem.StepProblem.has_contacts`.
+    x0 : ndarray, shape (n, 3), optional
+        Initial guess [m], moved onto the pins and planes; default
+        :meth:`~clothsim.problem.StepProblem.initial_guess`.
+
     Yields
     ------
     Iterate
@@ -112,6 +122,16 @@ def anderson_iterates(solver, problem, x0=None):
     G(x_k) − ΔG θ (weights 1 − Σθ on G(x_k) and ±θ_j on earlier G: sum 1) is kept only
     when g decreases, else x_{k+1} = G(x_k) and the window restarts
     (:class:`~.AndersonSolver`). Returns when G(x) = x in floating point.
+
+    Parameters
+    ----------
+    solver : AndersonSolver
+        Its options; caches the held system (:func:`~.held.held_start`).
+    problem : StepProblem
+        A step whose :attr:`~clothsim.problem.StepProblem.has_contacts`.
+    x0 : ndarray, shape (n, 3), optional
+        Initial guess [m], moved onto the pins and planes; default
+        :meth:`~clothsim.problem.StepProblem.initial_guess`.
 
     Yields
     ------
@@ -161,6 +181,16 @@ def lbfgs_iterates(solver, problem, x0=None):
     of the constrained global-step matrix on the tangent space (without pairs, p is the
     held local/global step from x_k with d = d(x_k)); backtracking Armijo on the exact
     energy difference. Returns when no step length along p decreases g.
+
+    Parameters
+    ----------
+    solver : LBFGSSolver
+        Its options; caches the held system (:func:`~.held.held_start`).
+    problem : StepProblem
+        A step whose :attr:`~clothsim.problem.StepProblem.has_contacts`.
+    x0 : ndarray, shape (n, 3), optional
+        Initial guess [m], moved onto the pins and planes; default
+        :meth:`~clothsim.problem.StepProblem.initial_guess`.
 
     Yields
     ------
