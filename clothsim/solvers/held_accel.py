@@ -68,6 +68,11 @@ class _Point:
         return Iterate(k, self.x, self.norm, d=self.d)
 
 
+def _start(solver, problem, x0):
+    held, x = held_start(solver, problem, x0)
+    return held, _Point(solver, held, problem, x)
+
+
 def chebyshev_iterates(solver, problem, x0=None):
     """Chebyshev-accelerated held local/global iterates (:class:`~.ChebyshevSolver`).
 
@@ -79,21 +84,15 @@ def chebyshev_iterates(solver, problem, x0=None):
 
     Parameters
     ----------
-    solver : ChebyshevSolver
-        Its options; caches the held system (:func:`~.held.held_start`).
-    problem : StepProblem
-        A step whose :attr:`~clothsim.problem.StepProblem.has_contacts`.
-    x0 : ndarray, shape (n, 3), optional
-        Initial guess [m], moved onto the pins and planes; default
-        :meth:`~clothsim.problem.StepProblem.initial_guess`.
+    solver, problem, x0
+        As for :func:`~.held.held_start`, ``solver`` a :class:`~.ChebyshevSolver`.
 
     Yields
     ------
     Iterate
         k, x_k (n, 3) [m], ‖P ∇g(x_k)‖ [N·s²] and d(x_k).
     """
-    held, x = held_start(solver, problem, x0)
-    cur = _Point(solver, held, problem, x)
+    held, cur = _start(solver, problem, x0)
     yield cur.iterate(0)
     z, Az = held.prepare(problem)
     x_prev = cur.x
@@ -125,22 +124,16 @@ def anderson_iterates(solver, problem, x0=None):
 
     Parameters
     ----------
-    solver : AndersonSolver
-        Its options; caches the held system (:func:`~.held.held_start`).
-    problem : StepProblem
-        A step whose :attr:`~clothsim.problem.StepProblem.has_contacts`.
-    x0 : ndarray, shape (n, 3), optional
-        Initial guess [m], moved onto the pins and planes; default
-        :meth:`~clothsim.problem.StepProblem.initial_guess`.
+    solver, problem, x0
+        As for :func:`~.held.held_start`, ``solver`` a :class:`~.AndersonSolver`.
 
     Yields
     ------
     Iterate
         k, x_k (n, 3) [m], ‖P ∇g(x_k)‖ [N·s²] and d(x_k).
     """
-    held, x = held_start(solver, problem, x0)
+    held, cur = _start(solver, problem, x0)
     model = solver.model
-    cur = _Point(solver, held, problem, x)
     yield cur.iterate(0)
     z, Az = held.prepare(problem)
     dF, dG = deque(maxlen=solver.window), deque(maxlen=solver.window)
@@ -184,22 +177,16 @@ def lbfgs_iterates(solver, problem, x0=None):
 
     Parameters
     ----------
-    solver : LBFGSSolver
-        Its options; caches the held system (:func:`~.held.held_start`).
-    problem : StepProblem
-        A step whose :attr:`~clothsim.problem.StepProblem.has_contacts`.
-    x0 : ndarray, shape (n, 3), optional
-        Initial guess [m], moved onto the pins and planes; default
-        :meth:`~clothsim.problem.StepProblem.initial_guess`.
+    solver, problem, x0
+        As for :func:`~.held.held_start`, ``solver`` a :class:`~.LBFGSSolver`.
 
     Yields
     ------
     Iterate
         k, x_k (n, 3) [m], ‖P ∇g(x_k)‖ [N·s²] and d(x_k).
     """
-    held, x = held_start(solver, problem, x0)
+    held, cur = _start(solver, problem, x0)
     model = solver.model
-    cur = _Point(solver, held, problem, x)
     yield cur.iterate(0)
     pairs: deque = deque(maxlen=solver.window)   # (s, t, 1 / sᵀt), flattened
 
