@@ -15,6 +15,7 @@ from clothsim.gallery import GRAVITY, grid_cloth
 from clothsim.objective import objective, objective_gradient
 from clothsim.scene import Scene, builtin_scene_text, parse_toml
 from clothsim.solvers import make_solver
+from clothsim.solvers.descent import objective_difference
 
 H = 1 / 30
 
@@ -57,10 +58,8 @@ def test_bad_held_contacts_name_the_field(bad, message):
         cs.StepProblem(H, x, x, **{**args, **bad})
 
 
-def test_local_global_reaches_the_constrained_minimum_an_independent_solver_finds():
-    """SLSQP (scipy) on g with the plane and pin constraints written out, against
-    local/global's held global step and Newton's projected steps."""
-    model, p, held, normal = held_problem(3)
+def slsqp_minimum(model, p, normal):
+    """The held step's minimizer by SLSQP (scipy), the plane and pin constraints written out."""
     n = model.vertex_count
 
     def f(z):
@@ -74,6 +73,13 @@ def test_local_global_reaches_the_constrained_minimum_an_independent_solver_find
     cons += [{"type": "eq", "fun": lambda z: z.reshape(n, 3)[0] - p.fixed_positions[0]}]
     ref = minimize(f, p.initial_guess().ravel(), jac=grad, constraints=cons, method="SLSQP",
                    options={"ftol": 1e-15, "maxiter": 500}).x.reshape(n, 3)
+    return ref
+
+
+def test_local_global_reaches_the_constrained_minimum_an_independent_solver_finds():
+    """SLSQP against local/global's held global step and Newton's projected steps."""
+    model, p, held, normal = held_problem(3)
+    ref = slsqp_minimum(model, p, normal)
     for method, its in (("local-global", 3000), ("newton", 50)):
         with warnings.catch_warnings():
             warnings.simplefilter("ignore")
@@ -90,6 +96,93 @@ def test_every_solver_keeps_held_vertices_on_their_planes(method):
         result = make_solver(method, model, iterations=20).solve(p)
     np.testing.assert_allclose(result.x[held] @ normal, p.contact_offsets, atol=1e-12)
     np.testing.assert_array_equal(result.x[0], p.fixed_positions[0])
+
+
+ACCELERATED = ["chebyshev", "anderson", "lbfgs"]
+
+
+def quiet_solve(method, model, p, **options):
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        return make_solver(method, model, **options).solve(p)
+
+
+@pytest.mark.parametrize("method", ACCELERATED)
+def test_accelerated_solvers_reach_the_held_minimum(method):
+    """Chebyshev, Anderson and L-BFGS on a held step: on the planes, at SLSQP's minimizer."""
+    model, p, held, normal = held_problem(3)
+    ref = slsqp_minimum(model, p, normal)
+    result = quiet_solve(method, model, p, iterations=3000, tolerance=1e-11)
+    assert result.converged
+    np.testing.assert_allclose(result.x[held] @ normal, p.contact_offsets, atol=1e-14)
+    np.testing.assert_array_equal(result.x[0], p.fixed_positions[0])
+    assert np.abs(result.x - ref).max() < 1e-6
+
+
+@pytest.mark.parametrize("method", ACCELERATED)
+def test_accelerated_solvers_beat_held_local_global_to_1e6(method):
+    """The held step is accelerated, not handed to plain local/global (4 x 4 sheet:
+    local/global needs ~1000 iterations to 1e-6, the accelerated ones ~80-120)."""
+    model, p, _, _ = held_problem(4)
+    plain = quiet_solve("local-global", model, p, iterations=20000, tolerance=1e-6)
+    fast = quiet_solve(method, model, p, iterations=20000, tolerance=1e-6)
+    assert plain.converged and fast.converged
+    assert fast.iterations < plain.iterations / 3, (fast.iterations, plain.iterations)
+
+
+@pytest.mark.parametrize("method", ACCELERATED)
+def test_every_accelerated_iterate_is_on_the_planes_also_on_an_edge(method):
+    """Every iterate, not only the last, is feasible; a vertex held by two planes (a box
+    edge) moves only along their intersection."""
+    model, p, held, normal = held_problem(4)
+    side = np.array([0.0, 0.0, 1.0])
+    edge = held[1]
+    x = p.initial_guess()
+    p = cs.StepProblem(p.h, p.x, p.v, f_ext=p.f_ext, fixed_vertices=p.fixed_vertices,
+                       fixed_positions=p.fixed_positions,
+                       contact_vertices=np.r_[p.contact_vertices, edge],
+                       contact_normals=np.r_[p.contact_normals, side[None]],
+                       contact_offsets=np.r_[p.contact_offsets, x[edge] @ side])
+    solver = make_solver(method, model)
+    for it in solver.iterates(p):
+        np.testing.assert_allclose(it.x[held] @ normal, p.contact_offsets[:len(held)],
+                                   atol=1e-14)
+        assert it.x[edge] @ side == pytest.approx(x[edge] @ side, abs=1e-14)
+        np.testing.assert_array_equal(it.x[0], p.fixed_positions[0])
+        if it.k == 150:
+            break
+    assert it.k == 150
+
+
+@pytest.mark.parametrize("method", ["anderson", "lbfgs"])
+def test_the_energy_never_increases_on_a_held_step(method):
+    """Anderson's safeguard and L-BFGS's Armijo search hold on the planes: each iterate's g
+    is at most its predecessor's (exact difference, descent.objective_difference), up to
+    the rounding of the planes: a held vertex is on its plane to eps |x|, and g changes by
+    that times the contact force (~1e-18 here; the decreases start at 1e-4)."""
+    model, p, held, _ = held_problem(4)
+    force = objective_gradient(model, p, p.initial_guess(), feasible=False)[held]
+    rounding = 8 * np.finfo(float).eps * np.abs(force).sum()
+    previous = None
+    for it in make_solver(method, model).iterates(p):
+        if previous is not None:
+            assert objective_difference(model, p, previous, it.x - previous) <= rounding
+        previous = it.x.copy()
+        if it.k == 200:
+            break
+
+
+@pytest.mark.parametrize("method", ACCELERATED)
+def test_a_cloth_at_rest_on_a_plane_stays_put_with_every_accelerated_solver(method):
+    model, plane = lying_sheet(friction=0.5)
+    sim = cs.Simulation(model, h=H, effects=[cs.Gravity(GRAVITY), plane],
+                        solver=make_solver(method, model, iterations=200, tolerance=1e-6))
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        sim.run(20)
+    assert sim.problem().has_contacts
+    assert np.abs(sim.state.positions[:, 1]).max() == 0.0
+    assert np.abs(sim.state.velocities).max() < 1e-9
 
 
 def lying_sheet(contact="hold", friction=0.0):

@@ -39,6 +39,7 @@ from ..errors import InputError
 from ..model import Model
 from .base import Iterate, StepProblem
 from .fused import FusedStep
+from .held_accel import anderson_iterates
 from .local_global import LocalGlobalSolver
 
 
@@ -99,8 +100,8 @@ class AndersonSolver(LocalGlobalSolver):
             k, x of shape (n, 3) [m] (the solver's array: copy it to keep it) and
             ‖∇g(x)‖ over the free degrees of freedom [N·s²].
         """
-        if problem.has_contacts:   # held contacts: plain constrained local/global steps
-            yield from LocalGlobalSolver.iterates(self, problem, x0)
+        if problem.has_contacts:   # held contacts: on the contact planes (.held_accel)
+            yield from anderson_iterates(self, problem, x0)
             return
         step = FusedStep(self, problem, x0, energy=True)
         yield Iterate(0, step.x, step.norm0, d=step.current_directions())

@@ -69,6 +69,7 @@ from ..errors import InputError, check_finite
 from ..model import Model
 from .base import Iterate, StepProblem, gradient_noise_floor
 from .fused import FusedStep
+from .held_accel import chebyshev_iterates
 from .local_global import LocalGlobalSolver
 
 log = logging.getLogger(__name__)
@@ -282,13 +283,13 @@ class ChebyshevSolver(LocalGlobalSolver):
             k, x of shape (n, 3) [m] (the solver's array: copy it to keep it) and
             ‖∇g(x)‖ over the free degrees of freedom [N·s²].
         """
-        if problem.has_contacts:   # held contacts: plain constrained local/global steps
-            yield from LocalGlobalSolver.iterates(self, problem, x0)
-            return
         self.system(problem)
         if self.rho is None:
             self.rho = estimate_spectral_radius(self.model, problem, solver=self)
             self.rho_estimations += 1
+        if problem.has_contacts:   # held contacts: the same update on the contact planes
+            yield from chebyshev_iterates(self, problem, x0)
+            return
         gamma = self.gamma
         step = FusedStep(self, problem, x0)
         yield Iterate(0, step.x, step.norm0, d=step.current_directions())

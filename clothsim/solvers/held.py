@@ -178,6 +178,41 @@ def constrained_matrix(problem, H, free: np.ndarray):
     return H
 
 
+def held_start(solver, problem, x0: np.ndarray | None = None):
+    """The :class:`HeldSystem` of the step's contact set (cached) and its feasible start.
+
+    Parameters
+    ----------
+    solver : LocalGlobalSolver
+        Caches the :class:`HeldSystem` of the current contact set.
+    problem : StepProblem
+        A step whose :attr:`~clothsim.problem.StepProblem.has_contacts`.
+    x0 : ndarray, shape (n, 3), optional
+        Initial guess [m]; moved onto the pins and contact planes. Default
+        :meth:`StepProblem.initial_guess`.
+
+    Returns
+    -------
+    held : HeldSystem
+    x : ndarray, shape (n, 3)
+        The start [m], a new array, on the pins and contact planes.
+    """
+    key = (problem.h, problem.fixed_vertices.tobytes(), problem.anchor_vertices.tobytes(),
+           problem.anchor_stiffness.tobytes(), problem.contact_vertices.tobytes(),
+           problem.contact_normals.tobytes())
+    if key != solver._held_key:
+        solver._held = HeldSystem(solver, problem, previous=solver._held)
+        solver._held_key = key
+        solver.factor_count += 1
+    held = solver._held
+    if x0 is None:
+        x = problem.initial_guess()
+    else:
+        x = problem.hold(np.array(x0, dtype=np.float64))
+        x[problem.fixed_vertices] = problem.fixed_positions
+    return held, x
+
+
 def held_iterates(solver, problem, x0: np.ndarray | None = None):
     """Local/global iterates of a step with held contacts (see the module docstring).
 
@@ -196,19 +231,7 @@ def held_iterates(solver, problem, x0: np.ndarray | None = None):
     Iterate
         k, x_k (n, 3) [m], ‖P ∇g(x_k)‖ [N·s²] and d(x_k).
     """
-    key = (problem.h, problem.fixed_vertices.tobytes(), problem.anchor_vertices.tobytes(),
-           problem.anchor_stiffness.tobytes(), problem.contact_vertices.tobytes(),
-           problem.contact_normals.tobytes())
-    if key != solver._held_key:
-        solver._held = HeldSystem(solver, problem, previous=solver._held)
-        solver._held_key = key
-        solver.factor_count += 1
-    held = solver._held
-    if x0 is None:
-        x = problem.initial_guess()
-    else:
-        x = problem.hold(np.array(x0, dtype=np.float64))
-        x[problem.fixed_vertices] = problem.fixed_positions
+    held, x = held_start(solver, problem, x0)
     d = solver.local_step(x)
     rhs = solver.displacement_right_hand_side(problem, d)
     yield Iterate(0, x, held.gradient_norm(problem, x, rhs), d=d)

@@ -35,6 +35,7 @@ from ..model import Model
 from .base import Iterate, StepProblem
 from .descent import ARMIJO_C, MAX_HALVINGS
 from .fused import FusedStep
+from .held_accel import lbfgs_iterates
 from .local_global import LocalGlobalSolver
 
 
@@ -96,8 +97,8 @@ class LBFGSSolver(LocalGlobalSolver):
             k, x of shape (n, 3) [m] (the solver's array: copy it to keep it) and
             ‖∇g(x)‖ over the free degrees of freedom [N·s²].
         """
-        if problem.has_contacts:   # held contacts: plain constrained local/global steps
-            yield from LocalGlobalSolver.iterates(self, problem, x0)
+        if problem.has_contacts:   # held contacts: on the contact planes (.held_accel)
+            yield from lbfgs_iterates(self, problem, x0)
             return
         step = FusedStep(self, problem, x0, energy=True)
         shape = step.delta.shape

@@ -11,6 +11,7 @@ from clothsim.accuracy import prepare_steps, record_problems
 from clothsim.accuracy.converged import WarmNewtonSolver, warm_started
 from clothsim.solvers import NewtonSolver
 
+from ..test_held_contacts import held_problem
 from .test_study import box_factory, buckling_strip, stiff_settling
 
 
@@ -81,3 +82,13 @@ def test_a_warm_started_run_factors_its_lbfgs_matrix_once():
         sim.run(3)
     assert sim.solver._lbfgs is lbfgs and lbfgs._cache is factor is not None
     assert lbfgs.analysis_count == 1
+
+
+def test_warm_newton_is_plain_newton_on_a_held_step():
+    """With held contacts the warm start is skipped: Newton's own iterates, bit for bit."""
+    model, p, held, normal = held_problem(4)
+    warm = WarmNewtonSolver(model, iterations=50, tolerance=1e-10).solve(p)
+    plain = NewtonSolver(model, iterations=50, tolerance=1e-10).solve(p)
+    assert warm.converged and warm.iterations == plain.iterations
+    np.testing.assert_array_equal(warm.x, plain.x)
+    np.testing.assert_allclose(warm.x[held] @ normal, p.contact_offsets, atol=1e-14)
