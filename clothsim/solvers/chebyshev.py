@@ -153,6 +153,9 @@ class ChebyshevSolver(LocalGlobalSolver):
         Spectral radius ρ ∈ [0, 1) of plain local/global for this scene and h.
         Default: estimated by :func:`estimate_spectral_radius` on the first solved step and
         kept (a one-off cost; :meth:`get_state` / :meth:`set_state` carry it over a resume).
+        A step that converges at once (free fall: no spring changes length) gives ρ = 0,
+        which says nothing of the scene: it serves that step only, and the next step
+        estimates again (a cloth dropped onto an obstacle is accelerated once it lands).
     delay : int, default 2
         S: plain local/global iterations (ω = γ = 1) before acceleration starts (0–3 is right for
         an exact global step; Wang's S = 10 suits an inexact one).
@@ -194,6 +197,7 @@ class ChebyshevSolver(LocalGlobalSolver):
             if not 0.0 < gamma < 2.0:
                 raise InputError(f"solver.gamma: must be in (0, 2), got {gamma!r}")
         self.rho = rho
+        self._rho_provisional = False  # ρ = 0 from a step that converged at once
         self.delay = int(delay)
         self.gamma_option = gamma
         self.rho_estimations = 0
@@ -244,7 +248,7 @@ class ChebyshevSolver(LocalGlobalSolver):
         dict
             ``{"rho": ρ or None}`` (JSON-able).
         """
-        return {"rho": self.rho}
+        return {"rho": None if self._rho_provisional else self.rho}
 
     def set_state(self, state: dict) -> None:
         """Restore :meth:`get_state`'s output (a missing key leaves ρ unchanged).
@@ -257,6 +261,7 @@ class ChebyshevSolver(LocalGlobalSolver):
         if "rho" in state:
             rho = state["rho"]
             self.rho = None if rho is None else float(rho)
+            self._rho_provisional = False
 
     def iterates(self, problem: StepProblem, x0: np.ndarray | None = None) -> Iterator[Iterate]:
         """Yield the initial guess, then each accelerated iterate, without end.
@@ -284,9 +289,10 @@ class ChebyshevSolver(LocalGlobalSolver):
             ‖∇g(x)‖ over the free degrees of freedom [N·s²].
         """
         self.system(problem)
-        if self.rho is None:
+        if self.rho is None or self._rho_provisional:
             self.rho = estimate_spectral_radius(self.model, problem, solver=self)
             self.rho_estimations += 1
+            self._rho_provisional = self.rho == 0.0  # see the ``rho`` parameter
         if problem.has_contacts:   # held contacts: the same update on the contact planes
             yield from chebyshev_iterates(self, problem, x0)
             return

@@ -174,3 +174,26 @@ def test_rho_is_zero_at_rest():
     model, problem = falling_step()
     problem = cs.Simulation(model, h=1 / 30).problem()
     assert estimate_spectral_radius(model, problem) == 0.0
+
+
+def test_a_step_that_converges_at_once_does_not_fix_rho_at_zero():
+    """A free-falling cloth's first step converges at once (ρ estimate 0): the next step,
+    once the cloth is stretched, estimates again, so a dropped cloth is accelerated when it
+    lands (before, ρ = 0 was kept for the whole run: plain local/global)."""
+    mesh = cs.grid(7, 7, size=(1.0, 1.0), center=(0.0, 1.0, 0.0), plane="xy")
+    springs = cs.grid_springs(mesh, structural=800.0, shear=800.0, bending=80.0)
+    model = cs.Model.build(mesh, springs, total_mass=1.0)
+    sim = cs.Simulation(model, h=1 / 30, solver="chebyshev", iterations=10,
+                        effects=[cs.Gravity((0.0, -9.81, 0.0))])
+    sim.step()
+    assert sim.solver.rho == 0.0 and sim.solver.rho_estimations == 1
+    assert sim.solver.get_state() == {"rho": None}   # a resume estimates again too
+    # the same cloth, its free fall stopped by a stretch: a step with work to accelerate
+    stretched = sim.state.copy()
+    stretched.positions = stretched.positions * np.array([1.3, 1.0, 1.0])
+    sim.state = stretched
+    sim.step()
+    assert 0.0 < sim.solver.rho < 1.0 and sim.solver.rho_estimations == 2
+    sim.step()
+    assert sim.solver.rho_estimations == 2   # a real estimate is kept
+    assert sim.solver.get_state() == {"rho": sim.solver.rho}
