@@ -16,7 +16,7 @@ demo: setup
 
 test: setup
 	$(VENV)/bin/ruff check clothsim tests benchmarks examples scripts
-	$(PY) -m pytest -q -m "not slow"
+	$(PY) -m pytest -q -m "not slow" -n auto
 
 bench: setup
 	$(PY) -m benchmarks
