@@ -178,6 +178,23 @@ def constrained_matrix(problem, H, free: np.ndarray):
     return H
 
 
+def feasible(problem, x: np.ndarray) -> np.ndarray:
+    """x with the pins at their targets and held vertices on their planes, in place.
+
+    Parameters
+    ----------
+    problem : StepProblem
+    x : ndarray, shape (n, 3)
+        A point of the feasible set up to rounding [m].
+
+    Returns
+    -------
+    x : ndarray, shape (n, 3)
+    """
+    x[problem.fixed_vertices] = problem.fixed_positions
+    return problem.hold(x)
+
+
 def held_start(solver, problem, x0: np.ndarray | None = None):
     """The :class:`HeldSystem` of the step's contact set (cached) and its feasible start.
 
@@ -205,11 +222,8 @@ def held_start(solver, problem, x0: np.ndarray | None = None):
         solver._held_key = key
         solver.factor_count += 1
     held = solver._held
-    if x0 is None:
-        x = problem.initial_guess()
-    else:
-        x = problem.hold(np.array(x0, dtype=np.float64))
-        x[problem.fixed_vertices] = problem.fixed_positions
+    x = (problem.initial_guess() if x0 is None
+         else feasible(problem, np.array(x0, dtype=np.float64)))
     return held, x
 
 

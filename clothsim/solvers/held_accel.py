@@ -16,7 +16,7 @@ all). The three accelerations keep their iterates in it:
   :func:`~.descent.objective_difference` along that direction.
 
 Chebyshev's and Anderson's iterates are moved back onto the pins and planes
-(:func:`feasible`): that only removes rounding (the combinations are feasible in exact
+(:func:`~.held.feasible`): that only removes rounding (the combinations are feasible in exact
 arithmetic). L-BFGS's are not: its step α p is exactly what its line search measured, p is
 projected onto the tangent space, so the iterates leave the planes only by the rounding of
 the steps (eps times the path length).
@@ -30,24 +30,7 @@ import numpy as np
 
 from .base import Iterate
 from .descent import ARMIJO_C, MAX_HALVINGS, objective_difference
-from .held import held_start
-
-
-def feasible(problem, x: np.ndarray) -> np.ndarray:
-    """x with the pins at their targets and held vertices on their planes, in place.
-
-    Parameters
-    ----------
-    problem : StepProblem
-    x : ndarray, shape (n, 3)
-        A point of the feasible set up to rounding [m].
-
-    Returns
-    -------
-    x : ndarray, shape (n, 3)
-    """
-    x[problem.fixed_vertices] = problem.fixed_positions
-    return problem.hold(x)
+from .held import feasible, held_start
 
 
 class _Point:
