@@ -27,6 +27,7 @@ Run ``python -m benchmarks cpp_side_by_side`` (or ``python -m benchmarks.cpp_sid
 from __future__ import annotations
 
 import argparse
+import dataclasses
 import os
 import sys
 import tempfile
@@ -62,9 +63,8 @@ SIZES = (129, 257)
 REPEATS = 31
 WARM_STEPS = 10         # Simulation.run(3), then 7 steps: mid-motion, as the performance page
 #: also checked, never timed: a size where the port's float arithmetic resolves one iteration
-CHECK_SIZE = 33
+CHECK_SIZE = 17
 F32 = float(np.finfo(np.float32).eps)
-
 
 
 def side_by_side_sim(n: int) -> cs.Simulation:
@@ -95,6 +95,8 @@ class Case:
         self.moved = float(np.linalg.norm(x - x_start, axis=1).max())
         self.springs = sim.model.spring_count
         self.problem, self.solver = sim.problem(), sim.solver
+        # the same step started from y (clothsim's default): its cost, not compared
+        self.problem_y = dataclasses.replace(self.problem, start="y")
         # one step from the same state: the port's float rounding of one step, not of ten
         self.distance, self.one_fewer = self._one_step(sim, folder)
         factor = self.solver.system(self.problem).A_FF_factor
@@ -104,7 +106,8 @@ class Case:
         self.bare = cholesky(factor.A, mode=self.mode)   # the same solve, bare
         self.rhs = np.asfortranarray(np.random.default_rng(n).normal(size=(factor.A.shape[0],
                                                                             3)))
-        self.times = {"clothsim": [], "port": [], "bare": [], "port_wall": []}
+        self.times = {"clothsim": [], "port": [], "bare": [], "port_wall": [],
+                      "clothsim_y": []}
 
     def _one_step(self, sim: cs.Simulation, folder: Path) -> tuple[float, float]:
         """Largest distance between the port's step and clothsim's from clothsim's state,
@@ -132,8 +135,8 @@ class Case:
             self.times["port_wall"].append(wall[0] / ITERATIONS)
             return
         c0 = time.thread_time()
-        if what == "clothsim":
-            self.solver.solve(self.problem)
+        if what.startswith("clothsim"):
+            self.solver.solve(self.problem if what == "clothsim" else self.problem_y)
         else:
             for _ in range(ITERATIONS):
                 self.bare(self.rhs)
@@ -143,7 +146,8 @@ class Case:
         t = {k: np.asarray(v) for k, v in self.times.items()}
         timed = {"clothsim": spread(t["clothsim"]), "port": spread(t["port"]),
                  "bare": spread(t["bare"]), "ratio": spread(t["clothsim"] / t["port"]),
-                 "port_wall": spread(t["port_wall"])} if self.timed else {}
+                 "port_wall": spread(t["port_wall"]), "clothsim_y": spread(t["clothsim_y"]),
+                 "ratio_y": spread(t["clothsim_y"] / t["port"])} if self.timed else {}
         return {"n": self.n, "springs": self.springs, "mode": self.mode, "timed": self.timed,
                 "tolerance": self.tolerance, "agree": self.distance <= self.tolerance,
                 "distance": self.distance, "one_fewer": self.one_fewer, "drift": self.drift,
@@ -153,7 +157,7 @@ class Case:
 def run(sizes=SIZES, *, repeats: int = REPEATS, source=None) -> dict:
     """Build, agree and time every size, interleaved; raises :class:`Skip` where it cannot."""
     program = build_driver(port_source(source))
-    load = os.getloadavg()[0]
+    load, measured = os.getloadavg()[0], commit()   # the code as it was when measured
     with tempfile.TemporaryDirectory() as tmp, warnings.catch_warnings():
         warnings.simplefilter("ignore")
         cases = []
@@ -162,17 +166,43 @@ def run(sizes=SIZES, *, repeats: int = REPEATS, source=None) -> dict:
                 cases.append(Case(n, program, Path(tmp)))
             if CHECK_SIZE not in sizes:
                 cases.append(Case(CHECK_SIZE, program, Path(tmp), timed=False))
-            order = ["clothsim", "port", "bare"]
+            order = ["clothsim", "port", "bare", "clothsim_y"]
             for r in range(repeats):
                 for case in (c for c in cases if c.timed):   # interleaved, order rotated
-                    for what in order[r % 3:] + order[:r % 3]:
+                    for what in order[r % 4:] + order[:r % 4]:
                         case.measure(what)
+            shares = {c.n: profile(c) for c in cases if c.timed}
         finally:
             for case in cases:
                 case.driver.close()
-    return {"rows": [c.row() for c in cases], "repeats": repeats, "load": (load,
-            os.getloadavg()[0]), "commit": commit(), "compiler": compiler_version(),
+    return {"rows": [c.row() for c in cases], "profile": shares, "repeats": repeats, "load": (load,
+            os.getloadavg()[0]), "commit": measured, "compiler": compiler_version(),
             "eigen": eigen_version()}
+
+
+#: clothsim's solve by where its time goes: cProfile self time, functions grouped
+PARTS = (("CHOLMOD solve", ("solve_columns",)),
+         ("local step: spring vectors and projection", ("take", "directions.py", "einsum")),
+         ("right-hand side: h² J products", ("csr_matvec", "_right_hand_side")),
+         ("per step: start, gradient at x_0", ("gradient ", "fused.py __init__")),
+         ("other: update, norms, Python", ("",)))
+
+
+def profile(case: Case, solves: int = 10) -> dict[str, float]:
+    """Shares of clothsim's solve time by part (:data:`PARTS`), on ``case``'s step."""
+    import cProfile
+    import pstats
+
+    prof = cProfile.Profile()
+    prof.runcall(lambda: [case.solver.solve(case.problem) for _ in range(solves)])
+    shares = dict.fromkeys(name for name, _ in PARTS)
+    shares = {k: 0.0 for k in shares}
+    for (path, _, func), (_, _, self_time, _, _) in pstats.Stats(prof).stats.items():
+        where = f"{func} {Path(path).name} {func}"
+        part = next(name for name, keys in PARTS if any(k in where for k in keys))
+        shares[part] += self_time
+    total = sum(shares.values())
+    return {k: v / total for k, v in shares.items()}
 
 
 def _ms(q) -> str:
@@ -182,11 +212,13 @@ def _ms(q) -> str:
 def table(result: dict) -> list[str]:
     """The timings, then the agreement, as Markdown tables (the page's and the terminal's)."""
     lines = ["| grid | springs | clothsim ms/iteration | of which its bare solve | "
-             "port ms/iteration | clothsim/port |", "|---|---|---|---|---|---|"]
+             "port ms/iteration | clothsim/port | clothsim from y (its default) | "
+             "from y/port |", "|---|---|---|---|---|---|---|---|"]
     for r in (r for r in result["rows"] if r["timed"]):
         lines.append(f"| {r['n']}² | {r['springs']} | {_ms(r['clothsim'])} {r['mode']} | "
                      f"{1e3 * r['bare'][0]:.2f} | {_ms(r['port'])} | **{r['ratio'][0]:.2f}** "
-                     f"({r['ratio'][1]:.2f}–{r['ratio'][2]:.2f}) |")
+                     f"({r['ratio'][1]:.2f}–{r['ratio'][2]:.2f}) | {_ms(r['clothsim_y'])} | "
+                     f"{r['ratio_y'][0]:.2f} ({r['ratio_y'][1]:.2f}–{r['ratio_y'][2]:.2f}) |")
     lines += ["", "| grid | one step apart | float bound κ·ε·max‖x‖ | agree | one iteration "
               f"fewer moves clothsim's by | {WARM_STEPS} steps from rest apart |",
               "|---|---|---|---|---|---|"]
@@ -195,6 +227,12 @@ def table(result: dict) -> list[str]:
                      f"{r['distance']:.1e} m | {r['tolerance']:.1e} m | "
                      f"{'yes' if r['agree'] else '**no**'} | {r['one_fewer']:.1e} m | "
                      f"{r['drift']:.1e} m (cloth moved {r['moved']:.2f} m) |")
+    sizes = list(result["profile"])
+    lines += ["", "| clothsim's solve, share of its time | " + " | ".join(f"{n}²" for n in sizes)
+              + " |", "|---|" + "---|" * len(sizes)]
+    for name, _ in PARTS:
+        lines.append(f"| {name} | " + " | ".join(f"{100 * result['profile'][n][name]:.0f} %"
+                                                 for n in sizes) + " |")
     return lines
 
 

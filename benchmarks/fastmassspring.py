@@ -60,7 +60,7 @@ def port_source(source: str | Path | None = None) -> Path:
     ----------
     source : path, optional
         A folder holding the files, or a git repository holding the commit, to copy them
-        from instead of downloading them.
+        from instead of downloading them; default ``$CLOTHSIM_FASTMASSSPRING`` if set.
 
     Returns
     -------
@@ -74,6 +74,7 @@ def port_source(source: str | Path | None = None) -> Path:
         its SHA-256), saying how to get them.
     """
     folder = cache_dir() / PORT.name
+    source = source or os.environ.get("CLOTHSIM_FASTMASSSPRING") or None
     if source is not None:
         _copy_from(Path(source), folder)
     if not changed(PORT, folder):
