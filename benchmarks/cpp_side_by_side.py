@@ -172,12 +172,13 @@ def run(sizes=SIZES, *, repeats: int = REPEATS, source=None) -> dict:
                     for what in order[r % 4:] + order[:r % 4]:
                         case.measure(what)
             shares = {c.n: profile(c) for c in cases if c.timed}
+            starts = {c.n: start_gradient(c) for c in cases if c.timed}
         finally:
             for case in cases:
                 case.driver.close()
-    return {"rows": [c.row() for c in cases], "profile": shares, "repeats": repeats, "load": (load,
-            os.getloadavg()[0]), "commit": measured, "compiler": compiler_version(),
-            "eigen": eigen_version()}
+    return {"rows": [c.row() for c in cases], "profile": shares, "start_gradient": starts,
+            "repeats": repeats, "load": (load, os.getloadavg()[0]), "commit": measured,
+            "compiler": compiler_version(), "eigen": eigen_version()}
 
 
 #: clothsim's solve by where its time goes: cProfile self time, functions grouped
@@ -203,6 +204,27 @@ def profile(case: Case, solves: int = 10) -> dict[str, float]:
         shares[part] += self_time
     total = sum(shares.values())
     return {k: v / total for k, v in shares.items()}
+
+
+def start_gradient(case: Case, repeats: int = 15) -> tuple[float, float]:
+    """Thread CPU seconds of ∇g(x_0) as a step started at x_n gets it (the full gradient)
+    and of the one product A_FF δ_0 that gives it too (∇g(x_0)_F = A_FF δ_0 − rhs(x_0)),
+    interleaved, medians."""
+    sysf = case.solver.system(case.problem)
+    A_FF = sysf.A_FF_factor.A.tocsr()
+    x0 = case.problem.initial_guess()
+    delta = np.ascontiguousarray(x0[sysf.free] - case.problem.y[sysf.free])
+    d = case.solver._dirs.current().T
+    times = {"gradient": [], "product": []}
+    for _ in range(repeats):
+        for what in times:
+            c0 = time.thread_time()
+            if what == "gradient":
+                case.solver.gradient(case.problem, x0, d)
+            else:
+                A_FF @ delta
+            times[what].append(time.thread_time() - c0)
+    return float(np.median(times["gradient"])), float(np.median(times["product"]))
 
 
 def _ms(q) -> str:
@@ -233,6 +255,10 @@ def table(result: dict) -> list[str]:
     for name, _ in PARTS:
         lines.append(f"| {name} | " + " | ".join(f"{100 * result['profile'][n][name]:.0f} %"
                                                  for n in sizes) + " |")
+    for i, what in enumerate(("∇g(x_0) as now: the full gradient, ms",
+                              "∇g(x_0) as A_FF δ_0 − rhs(x_0): the product, ms")):
+        lines.append(f"| {what} | " + " | ".join(
+            f"{1e3 * result['start_gradient'][n][i]:.2f}" for n in sizes) + " |")
     return lines
 
 

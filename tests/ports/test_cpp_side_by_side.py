@@ -77,6 +77,8 @@ def test_benchmark_builds_agrees_and_reports(program, capsys, monkeypatch):
     assert set(shares) == {name for name, _ in side.PARTS}
     assert sum(shares.values()) == pytest.approx(1.0) and shares["CHOLMOD solve"] > 0
     assert shares["per step: start, gradient at x_0"] > 0   # the x_n start's gradient
+    full, product = result["start_gradient"][9]
+    assert full > 0 and product > 0
     out = capsys.readouterr().out
     assert "| 9² |" in out and f"| {side.CHECK_SIZE}² (check only) |" in out
 
