@@ -49,6 +49,7 @@ ITERATIONS = 10
 #: CMake's Release flags (the port's CMakeLists sets none, which would mean -O0)
 CXXFLAGS = ("-O3", "-DNDEBUG", "-std=c++17")
 
+
 class Skip(Exception):
     """The side by side cannot run here (no compiler, no Eigen, no port source): one line."""
 
@@ -123,7 +124,7 @@ def build_driver(source: Path) -> Path:
         raise Skip("no C++ compiler (g++; apt package g++)")
     if not (EIGEN / "Eigen" / "Sparse").is_file():
         raise Skip(f"no Eigen headers in {EIGEN} (apt package libeigen3-dev; or set EIGEN)")
-    key = hashlib.sha256(DRIVER.read_bytes() + " ".join((cxx, *CXXFLAGS)).encode()
+    key = hashlib.sha256(DRIVER.read_bytes() + " ".join((cxx, str(EIGEN), *CXXFLAGS)).encode()
                          + (source / "ClothApp" / "MassSpringSolver.cpp").read_bytes()
                          ).hexdigest()[:12]
     program = source / "build" / f"driver-{key}"
@@ -167,10 +168,13 @@ class Driver:
         self.setup_seconds = float(self._ask(None, "ready")[0])
 
     def _ask(self, command: str | None, answer: str) -> list[str]:
-        if command is not None:
-            self.proc.stdin.write(command + "\n")
-            self.proc.stdin.flush()
-        words = self.proc.stdout.readline().split()
+        try:
+            if command is not None:
+                self.proc.stdin.write(command + "\n")
+                self.proc.stdin.flush()
+            words = self.proc.stdout.readline().split()
+        except BrokenPipeError:     # it had stopped already: its stderr says why
+            words = []
         if not words or words[0] != answer:
             self.proc.kill()
             _, err = self.proc.communicate()
@@ -194,8 +198,13 @@ class Driver:
         self._ask(f"state {prev} {now}", "set")
 
     def close(self) -> None:
+        """Ask the driver to quit; end it if it does not within 30 s."""
         if self.proc.poll() is None:
-            self.proc.communicate("quit\n", timeout=30)
+            try:
+                self.proc.communicate("quit\n", timeout=30)
+            except subprocess.TimeoutExpired:
+                self.proc.kill()
+                self.proc.communicate()
 
 
 def compiler_version() -> str:

@@ -22,9 +22,10 @@ from benchmarks import fastmassspring as port
 from clothsim.factorization import cholmod_available
 from clothsim.gallery import GRAVITY, grid_cloth, top_corners
 
-# compiling the port with Eigen takes about 20 s on one core: CI runs this, make test not
-pytestmark = [pytest.mark.slow,
-              pytest.mark.skipif(not cholmod_available(), reason="the benchmark times CHOLMOD")]
+pytestmark = pytest.mark.skipif(not cholmod_available(), reason="the benchmark times CHOLMOD")
+# compiling the port with Eigen takes about 20 s on one core: CI runs those tests, make test
+# runs only the ones that need no build
+slow = pytest.mark.slow
 
 
 @pytest.fixture(scope="module")
@@ -54,6 +55,7 @@ def _agree(program, tmp_path, sim, steps, *, damping=1.0, iterations=port.ITERAT
     return float(np.linalg.norm(x_port - sim.state.positions, axis=1).max()), bound
 
 
+@slow
 def test_benchmark_builds_agrees_and_reports(program, capsys, monkeypatch):
     """The benchmark on a tiny grid: every size agrees, the check size discriminates one
     iteration, the table holds every figure (the timings are printed, never asserted)."""
@@ -83,6 +85,7 @@ def test_benchmark_builds_agrees_and_reports(program, capsys, monkeypatch):
     assert "| 9² |" in out and f"| {side.CHECK_SIZE}² (check only) |" in out
 
 
+@slow
 @pytest.mark.parametrize("case", ["inertial-damping", "free-fall", "one-pin-stiff"])
 def test_driver_agrees_on_scenes_it_was_not_built_for(program, tmp_path, case):
     """The port's damping a = 0.993 against clothsim's Damping("inertial"); no pins (free
@@ -108,6 +111,7 @@ def test_driver_agrees_on_scenes_it_was_not_built_for(program, tmp_path, case):
         assert sim.state.positions[:, 1].mean() == pytest.approx(1.0 - drop, rel=1e-6)
 
 
+@slow
 def test_another_computation_is_told_apart(program, tmp_path):
     """The port at 9 iterations against clothsim's 10: beyond the bound (the check can fail)."""
     sim = side.side_by_side_sim(side.CHECK_SIZE)
@@ -129,6 +133,7 @@ def test_source_with_other_contents_is_refused(tmp_path, monkeypatch):
         port.port_source(tmp_path / "empty")
 
 
+@slow
 def test_driver_names_a_bad_scene(program, tmp_path):
     """A scene file that ends early stops the driver with one line saying so."""
     bad = tmp_path / "scene.txt"
@@ -137,3 +142,19 @@ def test_driver_names_a_bad_scene(program, tmp_path):
         port.Driver(program, bad)
     done = subprocess.run([str(program)], capture_output=True, text=True)
     assert done.returncode == 2 and "usage" in done.stderr
+
+
+def test_no_compiler_or_offline_is_one_line(tmp_path, monkeypatch, capsys):
+    """Without a compiler, or offline without the port's files, the benchmark says so in
+    one line and writes nothing."""
+    monkeypatch.setenv("CXX", "no-such-compiler-here")
+    with pytest.raises(port.Skip, match="no C.. compiler"):
+        port.build_driver(tmp_path)
+    monkeypatch.setenv("CLOTHSIM_CACHE", str(tmp_path / "cache"))
+    monkeypatch.setenv("CLOTHSIM_OFFLINE", "1")
+    monkeypatch.delenv("CLOTHSIM_FASTMASSSPRING", raising=False)
+    monkeypatch.setattr(side, "PAGE", tmp_path / "page.md")
+    assert side.main(["--sizes", "9"]) is None
+    out = capsys.readouterr().out.strip()
+    assert out.startswith("cpp_side_by_side skipped: ") and "CLOTHSIM_OFFLINE" in out
+    assert "\n" not in out and not (tmp_path / "page.md").exists()
