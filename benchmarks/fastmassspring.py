@@ -80,13 +80,18 @@ def port_source(source: str | Path | None = None) -> Path:
         _copy_from(Path(source), folder)
     if not changed(PORT, folder):
         return folder
-    how = (f"give --source a clone of github.com/sam007961/FastMassSpring holding "
-           f"{COMMIT[:7]}")
+    how = (f"give --source (or $CLOTHSIM_FASTMASSSPRING) a folder or git clone of "
+           f"github.com/sam007961/FastMassSpring at {COMMIT[:7]}")
     if offline():
         raise Skip(f"the port's source is not in {folder} and CLOTHSIM_OFFLINE is set; {how}")
     try:
         fetch_files(PORT, folder, None, how)
     except DataUnavailableError as exc:
+        for sub in sorted(folder.rglob("*"), reverse=True):   # the empty folders it made
+            if sub.is_dir() and not any(sub.iterdir()):
+                sub.rmdir()
+        if folder.is_dir() and not any(folder.iterdir()):
+            folder.rmdir()
         raise Skip(str(exc)) from None
     return folder
 

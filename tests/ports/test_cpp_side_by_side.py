@@ -158,3 +158,17 @@ def test_no_compiler_or_offline_is_one_line(tmp_path, monkeypatch, capsys):
     out = capsys.readouterr().out.strip()
     assert out.startswith("cpp_side_by_side skipped: ") and "CLOTHSIM_OFFLINE" in out
     assert "\n" not in out and not (tmp_path / "page.md").exists()
+
+
+def test_failed_download_leaves_no_folder(tmp_path, monkeypatch):
+    """A download that fails (here: nothing listens) is one line and leaves no empty folders
+    in the cache."""
+    import dataclasses
+
+    monkeypatch.setenv("CLOTHSIM_CACHE", str(tmp_path))
+    monkeypatch.delenv("CLOTHSIM_OFFLINE", raising=False)
+    monkeypatch.delenv("CLOTHSIM_FASTMASSSPRING", raising=False)
+    monkeypatch.setattr(port, "PORT", dataclasses.replace(port.PORT, url="http://127.0.0.1:9/"))
+    with pytest.raises(port.Skip, match="could not download .*CLOTHSIM_FASTMASSSPRING"):
+        port.port_source()
+    assert list(tmp_path.iterdir()) == []
