@@ -125,3 +125,20 @@ def test_accept_is_advance(given):
         if k % RESYNC == 0:     # re-synced: the same spring vectors
             np.testing.assert_array_equal(fused.rhs, plain.rhs)
         assert np.linalg.norm(fused.rhs - plain.rhs) <= floor, k
+
+
+def test_start_gradient_is_the_definition():
+    """x_0's gradient as one product A_FF δ_F − rhs(x_0) (a start at x_n) equals the
+    definition's, on every start: y, x_n with exact pins, penalty pins, far away."""
+    for label, model, problem in [*cases(), ("far away, x_n", *_far_x_n())]:
+        solver = make_solver("local-global", model)
+        step = FusedStep(solver, problem)
+        x = problem.initial_guess()
+        g = solver.gradient(problem, x, solver.local_step(x))
+        assert np.allclose(step.a0 - step.rhs, g.T, rtol=0, atol=1e-12 * np.abs(g).max()), label
+        assert step.norm0 == pytest.approx(float(np.linalg.norm(g)), rel=1e-12), label
+
+
+def _far_x_n():
+    model, problem = penalty_step((300.0, -40.0, 120.0))
+    return model, dataclasses.replace(problem, start="x_n")
