@@ -45,6 +45,8 @@ SCENES = ("drop-on-square", "drape-sphere")
 MODES = ("hold", "post-solve")
 SIZES = (25, 65, 129, 257)
 DEFAULT_SIZES = (25, 65)
+#: "At rest": every vertex slower than this [m/s] over the last second of the scene.
+REST_SPEED = 0.02
 JSON = ROOT / "docs" / "data" / "contact.json"
 PAGE = ROOT / "docs" / "data" / "contact.md"
 
@@ -58,8 +60,90 @@ def _depth(effect, x: np.ndarray) -> float:
     return float(np.linalg.norm(x[inside] - q, axis=1).max())
 
 
+def _scene(scene: str, resolution: int, contact: str, damping=None) -> Scene:
+    """The built-in ``scene`` at ``resolution``² in ``contact`` mode; ``damping``: None keeps
+    the scene's own damping, False removes it, a dict replaces it (``[[effects]]`` keys)."""
+    doc = tomllib.loads(builtin_scene_text(scene))
+    doc["cloth"]["resolution"] = [resolution, resolution]
+    doc["contact"] = {"mode": contact}
+    if damping is not None:
+        doc["effects"] = [e for e in doc["effects"] if e["kind"] != "damping"]
+        if damping:
+            doc["effects"].append({"kind": "damping", **damping})
+    return Scene.from_dict(doc, source=f"{scene}.toml")
+
+
+def _held(obstacles) -> tuple[set, set, bytes]:
+    """The held vertices, the sticking ones and the contact set's key (what a change of
+    refactors the held-contact system), as the obstacles hand them to the next step."""
+    held, stick, key = set(), set(), b""
+    for e in obstacles:
+        h = e._holding
+        held.update(h.vertices.tolist())
+        stick.update(h.vertices[h.stick].tolist())
+        key += h.planes.vertices.tobytes() + h.planes.normals.tobytes()
+    return held, stick, key
+
+
+def _fastest(speed: np.ndarray, vertices: set) -> float:
+    return float(speed[sorted(vertices)].max()) if len(vertices) else 0.0
+
+
+def trace_contact(scene: str, resolution: int, contact: str = "hold", *,
+                  frames: int | None = None, damping=None):
+    """Run an obstacle scene frame by frame and say what its contacts do (a diagnostic).
+
+    Parameters
+    ----------
+    scene : {"drop-on-square", "drape-sphere"}
+    resolution : int
+        Vertices per side.
+    contact : {"hold", "post-solve"}
+    frames : int, optional
+        Default: the scene's.
+    damping : None, False or dict, optional
+        The scene's damping (None), none (False), or this ``[[effects]]`` table.
+
+    Yields
+    ------
+    dict
+        Per frame: ``frame``, ``seconds`` (wall, of its steps), ``x`` and ``v`` (n, 3),
+        ``touching`` (vertices in contact at its end), ``held`` (handed to the next step),
+        ``entered`` and ``left`` (the held set against the previous frame's), ``sticking``
+        and ``stick_changed`` (vertices held in all three directions, and how many switched
+        between sticking and sliding), ``set_changed`` (whether the planes handed to the
+        next step differ: a refactorization in "hold" mode), ``speed``, ``held_speed`` and
+        ``stick_speed`` (max |v| of all, held and sticking vertices [m/s]),
+        ``factorizations`` (so far).
+    """
+    sc = _scene(scene, resolution, contact, damping)
+    sim = sc.build_simulation()
+    frames = sc.frames if frames is None else frames
+    obstacles = [e for e in sim.effects if hasattr(e, "inside")]
+    sim.expect_steps(frames * sc.substeps)
+    held, stick, key = _held(obstacles)
+    for f in range(frames):
+        t0 = time.perf_counter()
+        for _ in range(sc.substeps):
+            sim.step()
+        seconds = time.perf_counter() - t0
+        x, v = sim.state.positions, sim.state.velocities
+        speed = np.linalg.norm(v, axis=1)
+        now, now_stick, now_key = _held(obstacles)
+        touching = np.unique(np.concatenate([np.zeros(0, np.int64)] + [
+            e.contact_vertices for e in obstacles]))
+        yield {"frame": f, "seconds": seconds, "x": x, "v": v, "touching": touching,
+               "held": len(now), "entered": len(now - held), "left": len(held - now),
+               "sticking": len(now_stick), "stick_changed": len((now_stick ^ stick) & now & held),
+               "set_changed": now_key != key, "speed": float(speed.max()),
+               "held_speed": _fastest(speed, now), "stick_speed": _fastest(speed, now_stick),
+               "factorizations": int(getattr(sim.solver, "factor_count", 0)),
+               "model": sim.model, "obstacles": obstacles}
+        held, stick, key = now, now_stick, now_key
+
+
 def measure_contact(scene: str, resolution: int, contact: str, *, frames: int | None = None,
-                    last: int | None = None) -> dict:
+                    last: int | None = None, damping=None) -> dict:
     """Run a built-in obstacle scene at ``resolution``² in a contact mode; measure it.
 
     Parameters
@@ -73,45 +157,38 @@ def measure_contact(scene: str, resolution: int, contact: str, *, frames: int | 
         Frames to run (default: the scene's, 90).
     last : int, optional
         Frames of the final window (default: one second).
+    damping : None, False or dict, optional
+        :func:`trace_contact`.
 
     Returns
     -------
     dict
         ``max_stretch`` and ``p99_stretch`` (largest over the last window), ``max_inside``
         [m] (whole run), ``max_speed`` [m/s] and ``max_contact_speed`` (of the vertices in
-        contact) over the last window, ``below_equator`` (vertices on
-        the sphere below its centre at the end; 0 without a sphere), ``seconds_per_frame``
-        [s], ``factorizations`` and the run's settings.
+        contact) over the last window, ``at_rest`` (``max_speed`` below
+        :data:`REST_SPEED`), ``set_changes`` (frames whose contact set changed, whole run),
+        ``below_equator`` (vertices on the sphere below its centre at the end; 0 without a
+        sphere), ``seconds_per_frame`` [s], ``factorizations`` and the run's settings.
     """
-    doc = tomllib.loads(builtin_scene_text(scene))
-    doc["cloth"]["resolution"] = [resolution, resolution]
-    doc["contact"] = {"mode": contact}
-    sc = Scene.from_dict(doc, source=f"{scene}.toml")
-    sim = sc.build_simulation()
+    sc = _scene(scene, resolution, contact, damping)
     frames = sc.frames if frames is None else frames
     last = round(sc.fps) if last is None else last
-    rest = sim.model.springs.spring_rest_length
-    obstacles = [e for e in sim.effects if hasattr(e, "inside")]
-    sim.expect_steps(frames * sc.substeps)
-    stretch = p99 = speed = inside = contact_speed = 0.0
-    seconds = 0.0
-    for f in range(frames):
-        t0 = time.perf_counter()
-        for _ in range(sc.substeps):
-            sim.step()
-        seconds += time.perf_counter() - t0
-        x = sim.state.positions
+    stretch = p99 = speed = inside = contact_speed = seconds = 0.0
+    changes = 0
+    for r in trace_contact(scene, resolution, contact, frames=frames, damping=damping):
+        x, obstacles = r["x"], r["obstacles"]
+        seconds += r["seconds"]
+        changes += r["set_changed"]
         inside = max([inside] + [_depth(e, x) for e in obstacles])
-        if f >= frames - last:
-            ratio = energy.spring_lengths(sim.model, x) / rest
+        if r["frame"] >= frames - last:
+            model = r["model"]
+            ratio = energy.spring_lengths(model, x) / model.springs.spring_rest_length
             stretch = max(stretch, float(ratio.max()))
             p99 = max(p99, float(np.percentile(ratio, 99)))
-            v = np.linalg.norm(sim.state.velocities, axis=1)
-            speed = max(speed, float(v.max()))
-            touching = np.unique(np.concatenate([np.zeros(0, np.int64)] + [
-                e.contact_vertices for e in obstacles]))
-            if len(touching):
-                contact_speed = max(contact_speed, float(v[touching].max()))
+            speed = max(speed, r["speed"])
+            if len(r["touching"]):
+                v = np.linalg.norm(r["v"][r["touching"]], axis=1)
+                contact_speed = max(contact_speed, float(v.max()))
     below = 0
     for e in obstacles:
         if e.kind == "sphere":
@@ -119,9 +196,9 @@ def measure_contact(scene: str, resolution: int, contact: str, *, frames: int | 
             below += int(np.count_nonzero((gap < 1e-6) & (x[:, 1] < e.center[1])))
     return {"scene": scene, "resolution": resolution, "contact": contact, "frames": frames,
             "max_stretch": stretch, "p99_stretch": p99, "max_inside": inside,
-            "max_speed": speed, "max_contact_speed": contact_speed, "below_equator": below,
-            "seconds_per_frame": seconds / frames,
-            "factorizations": int(getattr(sim.solver, "factor_count", 0))}
+            "max_speed": speed, "max_contact_speed": contact_speed,
+            "at_rest": speed < REST_SPEED, "set_changes": changes, "below_equator": below,
+            "seconds_per_frame": seconds / frames, "factorizations": r["factorizations"]}
 
 
 def measure_projected_iterations(scene: str, resolution: int, iterations: int = 10) -> float:
@@ -149,6 +226,14 @@ def measure_projected_iterations(scene: str, resolution: int, iterations: int = 
         if f >= 60:
             worst = max(worst, float((energy.spring_lengths(sim.model, x) / rest).max()))
     return worst
+
+
+def _trace_line(r: dict) -> str:
+    return (f"frame {r['frame']:3d}: held {r['held']:5d} +{r['entered']:<4d} -{r['left']:<4d} "
+            f"sticking {r['sticking']:5d} (switched {r['stick_changed']:4d}) "
+            f"set {'changed' if r['set_changed'] else 'same   '} max |v| {r['speed']:.3f}, "
+            f"held {r['held_speed']:.3f}, sticking {r['stick_speed']:.3f} m/s, "
+            f"factorizations {r['factorizations']}")
 
 
 def _load() -> list[dict]:
@@ -187,8 +272,19 @@ def main(argv=None) -> None:
     parser.add_argument("--options", action="store_true",
                         help="print the alternative measured instead (projection in every "
                              "iteration), writing nothing")
+    parser.add_argument("--trace", action="store_true",
+                        help="print what the contacts do in every frame (held set, vertices "
+                             "entering and leaving it, sticking, speeds), writing nothing")
     args = parser.parse_args([] if argv is None else argv)
     warnings.simplefilter("ignore")
+    if args.trace:
+        for n in args.sizes:
+            for scene in args.scenes:
+                for mode in args.modes:
+                    print(f"== {scene} {n}^2 {mode}", flush=True)
+                    for r in trace_contact(scene, n, mode):
+                        print(_trace_line(r), flush=True)
+        return
     if args.options:
         for n in args.sizes:
             for scene in args.scenes:
