@@ -7,6 +7,7 @@ Run from the repository root::
     .venv/bin/python -m benchmarks.contact --sizes 257           # the largest (~1 h)
     .venv/bin/python -m benchmarks.contact --sizes 49 --scenes drape-sphere --modes hold
     .venv/bin/python -m benchmarks.contact --options --sizes 25 65   # the option not chosen
+    .venv/bin/python -m benchmarks.contact --trace --sizes 25 --scenes drape-sphere --modes hold
 
 Each run is the built-in scene (``drop-on-square``: a 1 m cloth dropped onto a 0.5 m box;
 ``drape-sphere``: onto a 0.3 m sphere) at n × n vertices, its default 90 frames of
@@ -15,8 +16,12 @@ or ``"post-solve"`` (the seed's projection after the solve). Measured per run
 (:func:`measure_contact`): the largest spring stretch |p|/r and the largest 99th
 percentile of the stretch over the springs, both over the frames of the last second; the
 deepest any vertex ended a step inside an obstacle (whole run); the largest |v| over the
-last second, of all vertices and of those in contact with an obstacle; vertices ending on
-the sphere below its equator; wall seconds per frame.
+last second, of all vertices and of those in contact with an obstacle, and whether the
+first is below :data:`REST_SPEED` ("at rest"); vertices ending on the sphere below its
+equator; the frames whose contact set changed (each refactors the held-contact system);
+wall seconds per frame. "hold" runs the scene as shipped, with its declared damping;
+"post-solve" runs it without, as the seed did (:data:`SEED_DAMPING`).
+``--trace`` prints, frame by frame, what the contacts do (:func:`trace_contact`).
 
 Runs are stored one per row in ``docs/data/contact.json`` (a run replaces the row of the
 same scene, size and mode), and ``docs/data/contact.md`` is rewritten from all rows, so
@@ -45,6 +50,9 @@ SCENES = ("drop-on-square", "drape-sphere")
 MODES = ("hold", "post-solve")
 SIZES = (25, 65, 129, 257)
 DEFAULT_SIZES = (25, 65)
+#: The damping each mode's runs use: the scene's own in "hold"; none in "post-solve", which
+#: reproduces the seed (its scenes declared no damping).
+SEED_DAMPING = {"hold": None, "post-solve": False}
 #: "At rest": every vertex slower than this [m/s] over the last second of the scene.
 REST_SPEED = 0.02
 JSON = ROOT / "docs" / "data" / "contact.json"
@@ -60,12 +68,16 @@ def _depth(effect, x: np.ndarray) -> float:
     return float(np.linalg.norm(x[inside] - q, axis=1).max())
 
 
-def _scene(scene: str, resolution: int, contact: str, damping=None) -> Scene:
+def _scene(scene: str, resolution: int, contact: str, damping=None,
+           iterations: int | None = None) -> Scene:
     """The built-in ``scene`` at ``resolution``² in ``contact`` mode; ``damping``: None keeps
-    the scene's own damping, False removes it, a dict replaces it (``[[effects]]`` keys)."""
+    the scene's own damping, False removes it, a dict replaces it (``[[effects]]`` keys);
+    ``iterations``: the solver's, when given."""
     doc = tomllib.loads(builtin_scene_text(scene))
     doc["cloth"]["resolution"] = [resolution, resolution]
     doc["contact"] = {"mode": contact}
+    if iterations is not None:
+        doc["solver"]["iterations"] = iterations
     if damping is not None:
         doc["effects"] = [e for e in doc["effects"] if e["kind"] != "damping"]
         if damping:
@@ -90,7 +102,7 @@ def _fastest(speed: np.ndarray, vertices: set) -> float:
 
 
 def trace_contact(scene: str, resolution: int, contact: str = "hold", *,
-                  frames: int | None = None, damping=None):
+                  frames: int | None = None, damping=None, iterations: int | None = None):
     """Run an obstacle scene frame by frame and say what its contacts do (a diagnostic).
 
     Parameters
@@ -103,6 +115,8 @@ def trace_contact(scene: str, resolution: int, contact: str = "hold", *,
         Default: the scene's.
     damping : None, False or dict, optional
         The scene's damping (None), none (False), or this ``[[effects]]`` table.
+    iterations : int, optional
+        Solver iterations per step (default: the scene's).
 
     Yields
     ------
@@ -116,7 +130,7 @@ def trace_contact(scene: str, resolution: int, contact: str = "hold", *,
         ``stick_speed`` (max |v| of all, held and sticking vertices [m/s]),
         ``factorizations`` (so far).
     """
-    sc = _scene(scene, resolution, contact, damping)
+    sc = _scene(scene, resolution, contact, damping, iterations)
     sim = sc.build_simulation()
     frames = sc.frames if frames is None else frames
     obstacles = [e for e in sim.effects if hasattr(e, "inside")]
@@ -236,10 +250,60 @@ def _trace_line(r: dict) -> str:
             f"factorizations {r['factorizations']}")
 
 
+#: The options ``--rest`` compares: (label, damping as :func:`trace_contact` takes it,
+#: iterations or None for the scene's).
+REST_OPTIONS = (("none", False, None), ("rigid 0.1 (declared)", None, None),
+                ("rigid 0.2", {"model": "rigid", "coefficient": 0.2}, None),
+                ("rigid 0.4", {"model": "rigid", "coefficient": 0.4}, None),
+                ("velocity 0.05", {"model": "velocity", "coefficient": 0.05}, None),
+                ("inertial 0.9", {"model": "inertial", "coefficient": 0.9}, None),
+                ("rigid 0.1 (declared), 100 iterations", None, 100))
+REST_PAGE = ROOT / "docs" / "data" / "contact-rest.md"
+
+
+def rest_by_second(scene: str, resolution: int, seconds: int = 5, damping=None,
+                   iterations: int | None = None) -> tuple[list[float], list[int]]:
+    """The largest speed [m/s] of any vertex in each second of a longer run ("hold" mode),
+    and the frames of each second whose contact set changed."""
+    speed, changes = [], []
+    for r in trace_contact(scene, resolution, "hold", frames=30 * seconds, damping=damping,
+                           iterations=iterations):
+        k = r["frame"] // 30
+        if len(speed) <= k:
+            speed.append(0.0)
+            changes.append(0)
+        speed[k] = max(speed[k], r["speed"])
+        changes[k] += int(r["set_changed"])
+    return speed, changes
+
+
+def rest_page(resolution: int = 25, seconds: int = 5) -> str:
+    """The ``--rest`` comparison: damping options (and a converged solve) against time."""
+    out = [f"Printed by `.venv/bin/python -m benchmarks.contact --rest` at {resolution}², "
+           f"commit {commit()}: the largest speed of any vertex [m/s] in each second of a "
+           f"{seconds} s run in \"hold\" mode (the scenes end after 3 s), and in brackets "
+           f"the frames of that second whose contact set changed. At rest: below "
+           f"{REST_SPEED} m/s.", ""]
+    for scene in SCENES:
+        out += [f"| {scene} | " + " | ".join(f"{k + 1}. s" for k in range(seconds)) + " |",
+                "|---" * (seconds + 1) + "|"]
+        for label, damping, iterations in REST_OPTIONS:
+            speed, changes = rest_by_second(scene, resolution, seconds, damping, iterations)
+            out.append(f"| {label} | " + " | ".join(
+                f"{v:.3f} ({c})" for v, c in zip(speed, changes)) + " |")
+            print(out[-1], flush=True)
+        out.append("")
+    return "\n".join(out)
+
+
 def _load() -> list[dict]:
     if JSON.is_file():
         return json.loads(JSON.read_text(encoding="utf-8"))["runs"]
     return []
+
+
+def _rest(r: dict) -> str:
+    return "yes" if r["max_speed"] < REST_SPEED else "no"
 
 
 def page(runs: list[dict]) -> str:
@@ -249,15 +313,21 @@ def page(runs: list[dict]) -> str:
                                        MODES.index(r["contact"])))
     out = ["Printed by `.venv/bin/python -m benchmarks contact` (sizes run separately with "
            "`--sizes`; each row names the commit it was measured at).", "",
+           f"At rest means every vertex slower than {REST_SPEED} m/s over the last second. "
+           "\"hold\" runs the scene as it is (with its declared damping); \"post-solve\" runs the "
+           "seed's scene, without it. Contact set changes: frames whose held planes differ from "
+           "the previous frame's (each one refactors the held-contact system).", "",
            "| scene | n² | mode | max stretch | 99th pct stretch | max depth inside [m] | "
-           "max \\|v\\| last second [m/s] | in contact [m/s] | on sphere below equator | "
-           "s per frame | factorizations | commit |",
-           "|---|---|---|---|---|---|---|---|---|---|---|---|"]
+           "max \\|v\\| last second [m/s] | at rest | in contact [m/s] | "
+           "on sphere below equator | contact set changes | s per frame | factorizations | "
+           "commit |",
+           "|---|---|---|---|---|---|---|---|---|---|---|---|---|---|"]
     for r in runs:
         out.append(f"| {r['scene']} | {r['resolution']}² | {r['contact']} | "
                    f"{r['max_stretch']:.3f} | {r['p99_stretch']:.3f} | {r['max_inside']:.1e} | "
-                   f"{r['max_speed']:.3f} | {r.get('max_contact_speed', float('nan')):.3f} | "
-                   f"{r['below_equator']} | "
+                   f"{r['max_speed']:.3f} | {_rest(r)} | "
+                   f"{r.get('max_contact_speed', float('nan')):.3f} | "
+                   f"{r['below_equator']} | {r.get('set_changes', '')} | "
                    f"{r['seconds_per_frame']:.3f} | {r['factorizations']} | {r['commit']} |")
     return "\n".join(out) + "\n"
 
@@ -275,8 +345,17 @@ def main(argv=None) -> None:
     parser.add_argument("--trace", action="store_true",
                         help="print what the contacts do in every frame (held set, vertices "
                              "entering and leaving it, sticking, speeds), writing nothing")
+    parser.add_argument("--rest", action="store_true",
+                        help="compare damping options over 5 s at the first size (default "
+                             "25) and write docs/data/contact-rest.md")
     args = parser.parse_args([] if argv is None else argv)
     warnings.simplefilter("ignore")
+    if args.rest:
+        n = args.sizes[0] if argv and "--sizes" in argv else 25
+        text = rest_page(n)
+        with atomic_path(REST_PAGE) as tmp:
+            tmp.write_text(text, encoding="utf-8")
+        return
     if args.trace:
         for n in args.sizes:
             for scene in args.scenes:
@@ -297,13 +376,14 @@ def main(argv=None) -> None:
     for n in args.sizes:
         for scene in args.scenes:
             for mode in args.modes:
-                r = measure_contact(scene, n, mode)
+                r = measure_contact(scene, n, mode, damping=SEED_DAMPING[mode])
                 r["commit"] = where
                 r["load"] = round(os.getloadavg()[0], 2)
                 print(f"{scene} {n}^2 {mode}: max stretch {r['max_stretch']:.3f}, 99th pct "
                       f"{r['p99_stretch']:.3f}, max depth {r['max_inside']:.1e} m, max |v| "
                       f"{r['max_speed']:.3f} m/s ({r['max_contact_speed']:.3f} in contact), "
-                      f"below equator {r['below_equator']}, "
+                      f"below equator {r['below_equator']}, at rest {_rest(r)}, "
+                      f"contact set changed in {r['set_changes']} frames, "
                       f"{r['seconds_per_frame']:.3f} s/frame, {r['factorizations']} factors",
                       flush=True)
                 runs = [q for q in runs if (q["scene"], q["resolution"], q["contact"])

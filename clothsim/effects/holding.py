@@ -176,12 +176,12 @@ def _sticking(obstacle, state, x, hv, hn, fn, ft, was_stuck, pull, noise) -> np.
     friction cone, |F_t| <= μ F_n + ``noise`` (the forces' uncertainty). A sliding one
     sticks once friction has stopped it: its tangential velocity at the end of the step
     no longer points the way friction opposed (v_t · t̂ <= 0, t̂ the direction
-    :func:`friction_force` used), or it is below what the solve's unbalanced force could
-    produce in a step (``noise`` h / m). A slide that is still under way thus goes on,
-    rather than sticking at once and slipping again in the next step.
+    :func:`friction_force` used). A slide that is still under way, however slowly, thus
+    goes on, rather than sticking at once and slipping again in the next step (measured:
+    sticking also below the velocity the solve's unbalanced force makes in a step doubled
+    the switches on drape-sphere at 25², 45 against 18 a frame with 100 iterations).
     """
     x0, h, mu = state.positions, obstacle.h, obstacle.friction
-    mass = obstacle.model.vertex_mass[hv]
     step = x[hv] - x0[hv]
     vt = (step - _rowdot(step, hn)[:, None] * hn) / h
     v0 = state.velocities[hv]
@@ -189,8 +189,7 @@ def _sticking(obstacle, state, x, hv, hn, fn, ft, was_stuck, pull, noise) -> np.
     length = np.linalg.norm(direction, axis=1)
     direction = np.where(length[:, None] > 0, direction / np.maximum(length, 1e-300)[:, None],
                          pull)
-    slow = np.divide(noise * h, mass, out=np.full_like(fn, np.inf), where=mass > 0)
-    stopped = (_rowdot(vt, direction) <= 0.0) | (np.linalg.norm(vt, axis=1) <= slow)
+    stopped = _rowdot(vt, direction) <= 0.0
     return np.where(was_stuck, ft <= mu * fn + noise, stopped) & (mu > 0)
 
 
