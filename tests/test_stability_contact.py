@@ -55,3 +55,19 @@ def test_contact_keeps_the_cloth_whole(contact_strain, scene):
     assert seed["max_stretch"] > 2.0
     if scene == "drape-sphere":
         assert seed["below_equator"] > 100
+
+
+def test_the_contact_trace_counts_what_the_solver_refactors():
+    """benchmarks.contact's diagnostic (--trace) on drop-on-square at 13²: the held set's
+    size changes by the vertices entering minus those leaving, sticking vertices are held
+    ones, and a frame whose planes changed costs the next step one factorization (and
+    one that kept them, none)."""
+    from benchmarks.contact import trace_contact
+
+    rows = list(trace_contact("drop-on-square", 13, "hold", frames=40))
+    assert any(r["held"] for r in rows) and any(r["set_changed"] for r in rows)
+    for a, b in zip(rows, rows[1:]):
+        assert b["held"] - a["held"] == b["entered"] - b["left"]
+        assert b["sticking"] <= b["held"]
+        assert b["factorizations"] - a["factorizations"] == int(a["set_changed"])
+        assert b["stick_speed"] <= b["held_speed"] <= b["speed"]
