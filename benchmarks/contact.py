@@ -162,17 +162,11 @@ def measure_contact(scene: str, resolution: int, contact: str, *, frames: int | 
 
     Parameters
     ----------
-    scene : {"drop-on-square", "drape-sphere"}
-    resolution : int
-        Vertices per side.
-    contact : {"hold", "post-solve"}
-        ``[contact] mode``.
-    frames : int, optional
-        Frames to run (default: the scene's, 90).
+    scene, resolution, contact, frames, damping
+        As :func:`trace_contact` (``contact`` is ``[contact] mode``; frames default to
+        the scene's 90).
     last : int, optional
         Frames of the final window (default: one second).
-    damping : None, False or dict, optional
-        :func:`trace_contact`.
 
     Returns
     -------
