@@ -7,6 +7,7 @@ Run from the repository root::
     .venv/bin/python -m benchmarks.contact --sizes 257           # the largest (~1 h)
     .venv/bin/python -m benchmarks.contact --sizes 49 --scenes drape-sphere --modes hold
     .venv/bin/python -m benchmarks.contact --options --sizes 25 65   # the option not chosen
+    .venv/bin/python -m benchmarks.contact --trace --sizes 25 --scenes drape-sphere --modes hold
 
 Each run is the built-in scene (``drop-on-square``: a 1 m cloth dropped onto a 0.5 m box;
 ``drape-sphere``: onto a 0.3 m sphere) at n × n vertices, its default 90 frames of
@@ -15,8 +16,12 @@ or ``"post-solve"`` (the seed's projection after the solve). Measured per run
 (:func:`measure_contact`): the largest spring stretch |p|/r and the largest 99th
 percentile of the stretch over the springs, both over the frames of the last second; the
 deepest any vertex ended a step inside an obstacle (whole run); the largest |v| over the
-last second, of all vertices and of those in contact with an obstacle; vertices ending on
-the sphere below its equator; wall seconds per frame.
+last second, of all vertices and of those in contact with an obstacle, and whether the
+first is below :data:`REST_SPEED` ("at rest"); vertices ending on the sphere below its
+equator; the frames whose contact set changed (each refactors the held-contact system);
+wall seconds per frame. "hold" runs the scene as shipped, with its declared damping;
+"post-solve" runs it without, as the seed did (:data:`SEED_DAMPING`).
+``--trace`` prints, frame by frame, what the contacts do (:func:`trace_contact`).
 
 Runs are stored one per row in ``docs/data/contact.json`` (a run replaces the row of the
 same scene, size and mode), and ``docs/data/contact.md`` is rewritten from all rows, so
@@ -45,6 +50,11 @@ SCENES = ("drop-on-square", "drape-sphere")
 MODES = ("hold", "post-solve")
 SIZES = (25, 65, 129, 257)
 DEFAULT_SIZES = (25, 65)
+#: The damping each mode's runs use: the scene's own in "hold"; none in "post-solve", which
+#: reproduces the seed (its scenes declared no damping).
+SEED_DAMPING = {"hold": None, "post-solve": False}
+#: "At rest": every vertex slower than this [m/s] over the last second of the scene.
+REST_SPEED = 0.02
 JSON = ROOT / "docs" / "data" / "contact.json"
 PAGE = ROOT / "docs" / "data" / "contact.md"
 
@@ -58,9 +68,42 @@ def _depth(effect, x: np.ndarray) -> float:
     return float(np.linalg.norm(x[inside] - q, axis=1).max())
 
 
-def measure_contact(scene: str, resolution: int, contact: str, *, frames: int | None = None,
-                    last: int | None = None) -> dict:
-    """Run a built-in obstacle scene at ``resolution``² in a contact mode; measure it.
+def _scene(scene: str, resolution: int, contact: str, damping=None,
+           iterations: int | None = None) -> Scene:
+    """The built-in ``scene`` at ``resolution``² in ``contact`` mode; ``damping``: None keeps
+    the scene's own damping, False removes it, a dict replaces it (``[[effects]]`` keys);
+    ``iterations``: the solver's, when given."""
+    doc = tomllib.loads(builtin_scene_text(scene))
+    doc["cloth"]["resolution"] = [resolution, resolution]
+    doc["contact"] = {"mode": contact}
+    if iterations is not None:
+        doc["solver"]["iterations"] = iterations
+    if damping is not None:
+        doc["effects"] = [e for e in doc["effects"] if e["kind"] != "damping"]
+        if damping:
+            doc["effects"].append({"kind": "damping", **damping})
+    return Scene.from_dict(doc, source=f"{scene}.toml")
+
+
+def _held(obstacles) -> tuple[set, set, bytes]:
+    """The held vertices, the sticking ones and the contact set's key (what a change of
+    refactors the held-contact system), as the obstacles hand them to the next step."""
+    held, stick, key = set(), set(), b""
+    for e in obstacles:
+        h = e._holding
+        held.update(h.vertices.tolist())
+        stick.update(h.vertices[h.stick].tolist())
+        key += h.planes.vertices.tobytes() + h.planes.normals.tobytes()
+    return held, stick, key
+
+
+def _fastest(speed: np.ndarray, vertices: set) -> float:
+    return float(speed[sorted(vertices)].max()) if len(vertices) else 0.0
+
+
+def trace_contact(scene: str, resolution: int, contact: str = "hold", *,
+                  frames: int | None = None, damping=None, iterations: int | None = None):
+    """Run an obstacle scene frame by frame and say what its contacts do (a diagnostic).
 
     Parameters
     ----------
@@ -68,9 +111,60 @@ def measure_contact(scene: str, resolution: int, contact: str, *, frames: int | 
     resolution : int
         Vertices per side.
     contact : {"hold", "post-solve"}
-        ``[contact] mode``.
     frames : int, optional
-        Frames to run (default: the scene's, 90).
+        Default: the scene's.
+    damping : None, False or dict, optional
+        The scene's damping (None), none (False), or this ``[[effects]]`` table.
+    iterations : int, optional
+        Solver iterations per step (default: the scene's).
+
+    Yields
+    ------
+    dict
+        Per frame: ``frame``, ``seconds`` (wall, of its steps), ``x`` and ``v`` (n, 3),
+        ``touching`` (vertices in contact at its end), ``held`` (handed to the next step),
+        ``entered`` and ``left`` (the held set against the previous frame's), ``sticking``
+        and ``stick_changed`` (vertices held in all three directions, and how many switched
+        between sticking and sliding), ``set_changed`` (whether the planes handed to the
+        next step differ: a refactorization in "hold" mode), ``speed``, ``held_speed`` and
+        ``stick_speed`` (max |v| of all, held and sticking vertices [m/s]),
+        ``factorizations`` (so far).
+    """
+    sc = _scene(scene, resolution, contact, damping, iterations)
+    sim = sc.build_simulation()
+    frames = sc.frames if frames is None else frames
+    obstacles = [e for e in sim.effects if hasattr(e, "inside")]
+    sim.expect_steps(frames * sc.substeps)
+    held, stick, key = _held(obstacles)
+    for f in range(frames):
+        t0 = time.perf_counter()
+        for _ in range(sc.substeps):
+            sim.step()
+        seconds = time.perf_counter() - t0
+        x, v = sim.state.positions, sim.state.velocities
+        speed = np.linalg.norm(v, axis=1)
+        now, now_stick, now_key = _held(obstacles)
+        touching = np.unique(np.concatenate([np.zeros(0, np.int64)] + [
+            e.contact_vertices for e in obstacles]))
+        yield {"frame": f, "seconds": seconds, "x": x, "v": v, "touching": touching,
+               "held": len(now), "entered": len(now - held), "left": len(held - now),
+               "sticking": len(now_stick), "stick_changed": len((now_stick ^ stick) & now & held),
+               "set_changed": now_key != key, "speed": float(speed.max()),
+               "held_speed": _fastest(speed, now), "stick_speed": _fastest(speed, now_stick),
+               "factorizations": int(getattr(sim.solver, "factor_count", 0)),
+               "model": sim.model, "obstacles": obstacles}
+        held, stick, key = now, now_stick, now_key
+
+
+def measure_contact(scene: str, resolution: int, contact: str, *, frames: int | None = None,
+                    last: int | None = None, damping=None) -> dict:
+    """Run a built-in obstacle scene at ``resolution``² in a contact mode; measure it.
+
+    Parameters
+    ----------
+    scene, resolution, contact, frames, damping
+        As :func:`trace_contact` (``contact`` is ``[contact] mode``; frames default to
+        the scene's 90).
     last : int, optional
         Frames of the final window (default: one second).
 
@@ -79,39 +173,30 @@ def measure_contact(scene: str, resolution: int, contact: str, *, frames: int | 
     dict
         ``max_stretch`` and ``p99_stretch`` (largest over the last window), ``max_inside``
         [m] (whole run), ``max_speed`` [m/s] and ``max_contact_speed`` (of the vertices in
-        contact) over the last window, ``below_equator`` (vertices on
-        the sphere below its centre at the end; 0 without a sphere), ``seconds_per_frame``
-        [s], ``factorizations`` and the run's settings.
+        contact) over the last window, ``at_rest`` (``max_speed`` below
+        :data:`REST_SPEED`), ``set_changes`` (frames whose contact set changed, whole run),
+        ``below_equator`` (vertices on the sphere below its centre at the end; 0 without a
+        sphere), ``seconds_per_frame`` [s], ``factorizations`` and the run's settings.
     """
-    doc = tomllib.loads(builtin_scene_text(scene))
-    doc["cloth"]["resolution"] = [resolution, resolution]
-    doc["contact"] = {"mode": contact}
-    sc = Scene.from_dict(doc, source=f"{scene}.toml")
-    sim = sc.build_simulation()
+    sc = _scene(scene, resolution, contact, damping)
     frames = sc.frames if frames is None else frames
     last = round(sc.fps) if last is None else last
-    rest = sim.model.springs.spring_rest_length
-    obstacles = [e for e in sim.effects if hasattr(e, "inside")]
-    sim.expect_steps(frames * sc.substeps)
-    stretch = p99 = speed = inside = contact_speed = 0.0
-    seconds = 0.0
-    for f in range(frames):
-        t0 = time.perf_counter()
-        for _ in range(sc.substeps):
-            sim.step()
-        seconds += time.perf_counter() - t0
-        x = sim.state.positions
+    stretch = p99 = speed = inside = contact_speed = seconds = 0.0
+    changes = 0
+    for r in trace_contact(scene, resolution, contact, frames=frames, damping=damping):
+        x, obstacles = r["x"], r["obstacles"]
+        seconds += r["seconds"]
+        changes += r["set_changed"]
         inside = max([inside] + [_depth(e, x) for e in obstacles])
-        if f >= frames - last:
-            ratio = energy.spring_lengths(sim.model, x) / rest
+        if r["frame"] >= frames - last:
+            model = r["model"]
+            ratio = energy.spring_lengths(model, x) / model.springs.spring_rest_length
             stretch = max(stretch, float(ratio.max()))
             p99 = max(p99, float(np.percentile(ratio, 99)))
-            v = np.linalg.norm(sim.state.velocities, axis=1)
-            speed = max(speed, float(v.max()))
-            touching = np.unique(np.concatenate([np.zeros(0, np.int64)] + [
-                e.contact_vertices for e in obstacles]))
-            if len(touching):
-                contact_speed = max(contact_speed, float(v[touching].max()))
+            speed = max(speed, r["speed"])
+            if len(r["touching"]):
+                v = np.linalg.norm(r["v"][r["touching"]], axis=1)
+                contact_speed = max(contact_speed, float(v.max()))
     below = 0
     for e in obstacles:
         if e.kind == "sphere":
@@ -119,9 +204,9 @@ def measure_contact(scene: str, resolution: int, contact: str, *, frames: int | 
             below += int(np.count_nonzero((gap < 1e-6) & (x[:, 1] < e.center[1])))
     return {"scene": scene, "resolution": resolution, "contact": contact, "frames": frames,
             "max_stretch": stretch, "p99_stretch": p99, "max_inside": inside,
-            "max_speed": speed, "max_contact_speed": contact_speed, "below_equator": below,
-            "seconds_per_frame": seconds / frames,
-            "factorizations": int(getattr(sim.solver, "factor_count", 0))}
+            "max_speed": speed, "max_contact_speed": contact_speed,
+            "at_rest": speed < REST_SPEED, "set_changes": changes, "below_equator": below,
+            "seconds_per_frame": seconds / frames, "factorizations": r["factorizations"]}
 
 
 def measure_projected_iterations(scene: str, resolution: int, iterations: int = 10) -> float:
@@ -151,10 +236,68 @@ def measure_projected_iterations(scene: str, resolution: int, iterations: int = 
     return worst
 
 
+def _trace_line(r: dict) -> str:
+    return (f"frame {r['frame']:3d}: held {r['held']:5d} +{r['entered']:<4d} -{r['left']:<4d} "
+            f"sticking {r['sticking']:5d} (switched {r['stick_changed']:4d}) "
+            f"set {'changed' if r['set_changed'] else 'same   '} max |v| {r['speed']:.3f}, "
+            f"held {r['held_speed']:.3f}, sticking {r['stick_speed']:.3f} m/s, "
+            f"factorizations {r['factorizations']}")
+
+
+#: The options ``--rest`` compares: (label, damping as :func:`trace_contact` takes it,
+#: iterations or None for the scene's).
+REST_OPTIONS = (("none", False, None), ("rigid 0.1 (declared)", None, None),
+                ("rigid 0.2", {"model": "rigid", "coefficient": 0.2}, None),
+                ("rigid 0.4", {"model": "rigid", "coefficient": 0.4}, None),
+                ("velocity 0.05", {"model": "velocity", "coefficient": 0.05}, None),
+                ("inertial 0.9", {"model": "inertial", "coefficient": 0.9}, None),
+                ("rigid 0.1 (declared), 100 iterations", None, 100))
+REST_PAGE = ROOT / "docs" / "data" / "contact-rest.md"
+
+
+def rest_by_second(scene: str, resolution: int, seconds: int = 5, damping=None,
+                   iterations: int | None = None) -> tuple[list[float], list[int]]:
+    """The largest speed [m/s] of any vertex in each second of a longer run ("hold" mode),
+    and the frames of each second whose contact set changed."""
+    speed, changes = [], []
+    for r in trace_contact(scene, resolution, "hold", frames=30 * seconds, damping=damping,
+                           iterations=iterations):
+        k = r["frame"] // 30
+        if len(speed) <= k:
+            speed.append(0.0)
+            changes.append(0)
+        speed[k] = max(speed[k], r["speed"])
+        changes[k] += int(r["set_changed"])
+    return speed, changes
+
+
+def rest_page(resolution: int = 25, seconds: int = 5) -> str:
+    """The ``--rest`` comparison: damping options (and a converged solve) against time."""
+    out = [f"Printed by `.venv/bin/python -m benchmarks.contact --rest` at {resolution}², "
+           f"commit {commit()}: the largest speed of any vertex [m/s] in each second of a "
+           f"{seconds} s run in \"hold\" mode (the scenes end after 3 s), and in brackets "
+           f"the frames of that second whose contact set changed. At rest: below "
+           f"{REST_SPEED} m/s.", ""]
+    for scene in SCENES:
+        out += [f"| {scene} | " + " | ".join(f"{k + 1}. s" for k in range(seconds)) + " |",
+                "|---" * (seconds + 1) + "|"]
+        for label, damping, iterations in REST_OPTIONS:
+            speed, changes = rest_by_second(scene, resolution, seconds, damping, iterations)
+            out.append(f"| {label} | " + " | ".join(
+                f"{v:.3f} ({c})" for v, c in zip(speed, changes)) + " |")
+            print(out[-1], flush=True)
+        out.append("")
+    return "\n".join(out)
+
+
 def _load() -> list[dict]:
     if JSON.is_file():
         return json.loads(JSON.read_text(encoding="utf-8"))["runs"]
     return []
+
+
+def _rest(r: dict) -> str:
+    return "yes" if r["max_speed"] < REST_SPEED else "no"
 
 
 def page(runs: list[dict]) -> str:
@@ -164,15 +307,21 @@ def page(runs: list[dict]) -> str:
                                        MODES.index(r["contact"])))
     out = ["Printed by `.venv/bin/python -m benchmarks contact` (sizes run separately with "
            "`--sizes`; each row names the commit it was measured at).", "",
+           f"At rest means every vertex slower than {REST_SPEED} m/s over the last second. "
+           "\"hold\" runs the scene as it is (with its declared damping); \"post-solve\" runs the "
+           "seed's scene, without it. Contact set changes: frames whose held planes differ from "
+           "the previous frame's (each one refactors the held-contact system).", "",
            "| scene | n² | mode | max stretch | 99th pct stretch | max depth inside [m] | "
-           "max \\|v\\| last second [m/s] | in contact [m/s] | on sphere below equator | "
-           "s per frame | factorizations | commit |",
-           "|---|---|---|---|---|---|---|---|---|---|---|---|"]
+           "max \\|v\\| last second [m/s] | at rest | in contact [m/s] | "
+           "on sphere below equator | contact set changes | s per frame | factorizations | "
+           "commit |",
+           "|---|---|---|---|---|---|---|---|---|---|---|---|---|---|"]
     for r in runs:
         out.append(f"| {r['scene']} | {r['resolution']}² | {r['contact']} | "
                    f"{r['max_stretch']:.3f} | {r['p99_stretch']:.3f} | {r['max_inside']:.1e} | "
-                   f"{r['max_speed']:.3f} | {r.get('max_contact_speed', float('nan')):.3f} | "
-                   f"{r['below_equator']} | "
+                   f"{r['max_speed']:.3f} | {_rest(r)} | "
+                   f"{r.get('max_contact_speed', float('nan')):.3f} | "
+                   f"{r['below_equator']} | {r.get('set_changes', '')} | "
                    f"{r['seconds_per_frame']:.3f} | {r['factorizations']} | {r['commit']} |")
     return "\n".join(out) + "\n"
 
@@ -187,8 +336,28 @@ def main(argv=None) -> None:
     parser.add_argument("--options", action="store_true",
                         help="print the alternative measured instead (projection in every "
                              "iteration), writing nothing")
+    parser.add_argument("--trace", action="store_true",
+                        help="print what the contacts do in every frame (held set, vertices "
+                             "entering and leaving it, sticking, speeds), writing nothing")
+    parser.add_argument("--rest", action="store_true",
+                        help="compare damping options over 5 s at the first size (default "
+                             "25) and write docs/data/contact-rest.md")
     args = parser.parse_args([] if argv is None else argv)
     warnings.simplefilter("ignore")
+    if args.rest:
+        n = args.sizes[0] if argv and "--sizes" in argv else 25
+        text = rest_page(n)
+        with atomic_path(REST_PAGE) as tmp:
+            tmp.write_text(text, encoding="utf-8")
+        return
+    if args.trace:
+        for n in args.sizes:
+            for scene in args.scenes:
+                for mode in args.modes:
+                    print(f"== {scene} {n}^2 {mode}", flush=True)
+                    for r in trace_contact(scene, n, mode):
+                        print(_trace_line(r), flush=True)
+        return
     if args.options:
         for n in args.sizes:
             for scene in args.scenes:
@@ -201,13 +370,14 @@ def main(argv=None) -> None:
     for n in args.sizes:
         for scene in args.scenes:
             for mode in args.modes:
-                r = measure_contact(scene, n, mode)
+                r = measure_contact(scene, n, mode, damping=SEED_DAMPING[mode])
                 r["commit"] = where
                 r["load"] = round(os.getloadavg()[0], 2)
                 print(f"{scene} {n}^2 {mode}: max stretch {r['max_stretch']:.3f}, 99th pct "
                       f"{r['p99_stretch']:.3f}, max depth {r['max_inside']:.1e} m, max |v| "
                       f"{r['max_speed']:.3f} m/s ({r['max_contact_speed']:.3f} in contact), "
-                      f"below equator {r['below_equator']}, "
+                      f"below equator {r['below_equator']}, at rest {_rest(r)}, "
+                      f"contact set changed in {r['set_changes']} frames, "
                       f"{r['seconds_per_frame']:.3f} s/frame, {r['factorizations']} factors",
                       flush=True)
                 runs = [q for q in runs if (q["scene"], q["resolution"], q["contact"])

@@ -361,6 +361,7 @@ def measure_contact_strain(resolution: int = 25) -> list[dict]:
     """Both built-in obstacle scenes at ``resolution``² in both contact modes (the default
     90 frames): largest spring stretch over the last second, max depth inside, max |v|
     (:func:`benchmarks.contact.measure_contact`)."""
-    from .contact import MODES, SCENES, measure_contact
+    from .contact import MODES, SCENES, SEED_DAMPING, measure_contact
 
-    return [measure_contact(scene, resolution, mode) for scene in SCENES for mode in MODES]
+    return [measure_contact(scene, resolution, mode, damping=SEED_DAMPING[mode])
+            for scene in SCENES for mode in MODES]
