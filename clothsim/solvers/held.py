@@ -9,11 +9,14 @@ directions b of each held vertex, the global step is
     (P A P + α D) u = P (b(d) − A y − A z)        over the free degrees of freedom,
 
 with A = (M_s + h² L_s) ⊗ I3 and D = Σ b bᵀ (α D fixes the constrained components of u
-at 0; α is the mean diagonal of A, for conditioning). The matrix couples the three
-coordinates of held vertices, so it is a 3n × 3n system: factored once per contact set
-(held vertices and their normals), cached while the set stays, its symbolic analysis
-reused when only the set changes (the pattern is that of M_s + h² L_s ⊗ ones(3, 3)).
-Without held contacts the solvers use the n × n factor of the paper
+at 0; α is the mean diagonal of A, for conditioning). It is solved in tangent coordinates
+(:mod:`.tangent_system`): u = T w with T's columns the directions each free vertex may move
+in, (Tᵀ A T) w = Tᵀ r, the same minimizer with a matrix whose coordinates couple only at
+vertices held on oblique planes (three principal submatrices of M_s + h² L_s on box faces)
+instead of the pattern of (M_s + h² L_s) ⊗ ones(3, 3). It is factored once per contact set
+(held vertices and their normals) and cached while the set stays, its symbolic analysis
+reused while the pattern does (the same vertices on oblique planes, the same free
+directions elsewhere). Without held contacts the solvers use the n × n factor of the paper
 (:mod:`clothsim.solvers.system`).
 
 The iteration's residual is ‖P ∇g(x_k)‖ over the free vertices
@@ -33,6 +36,30 @@ from . import tangent_system
 from .base import Iterate
 
 log = logging.getLogger(__name__)
+
+
+def projector_blocks(vertices: np.ndarray, basis) -> tuple[np.ndarray, np.ndarray]:
+    """Each held vertex's 3 × 3 block of P, for projecting (n, 3) arrays in one pass.
+
+    Parameters
+    ----------
+    vertices : ndarray, shape (c,), int
+        The held contacts' vertices (repeated for a vertex on several planes).
+    basis : list
+        :func:`clothsim.contacts.contact_basis`.
+
+    Returns
+    -------
+    held : ndarray, shape (h,), int
+        The held vertices, increasing.
+    blocks : ndarray, shape (h, 3, 3)
+        I − Σ b bᵀ of each.
+    """
+    held = np.unique(vertices)
+    blocks = np.broadcast_to(np.eye(3), (len(held), 3, 3)).copy()
+    for v, b in basis:
+        blocks[np.searchsorted(held, v)] -= b[:, :, None] * b[:, None, :]
+    return held, blocks
 
 
 class HeldSystem:
@@ -69,11 +96,7 @@ class HeldSystem:
         self.free = sysf.free
         self.fixed = sysf.fixed
         self.basis = problem.contact_basis()
-        # each held vertex's 3 x 3 block of P, for projecting (n, 3) arrays in one pass
-        self.held = np.unique(problem.contact_vertices)
-        self.blocks = np.broadcast_to(np.eye(3), (len(self.held), 3, 3)).copy()
-        for v, b in self.basis:
-            self.blocks[np.searchsorted(self.held, v)] -= b[:, :, None] * b[:, None, :]
+        self.held, self.blocks = projector_blocks(problem.contact_vertices, self.basis)
         self.alpha = float(As.diagonal().mean())
         dof, vectors, self.oblique = tangent_system.vertex_directions(n, self.free, self.basis)
         self.present = dof >= 0                 # (n, 3): the columns of T, by vertex and slot
