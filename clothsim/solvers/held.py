@@ -9,11 +9,14 @@ directions b of each held vertex, the global step is
     (P A P + α D) u = P (b(d) − A y − A z)        over the free degrees of freedom,
 
 with A = (M_s + h² L_s) ⊗ I3 and D = Σ b bᵀ (α D fixes the constrained components of u
-at 0; α is the mean diagonal of A, for conditioning). The matrix couples the three
-coordinates of held vertices, so it is a 3n × 3n system: factored once per contact set
-(held vertices and their normals), cached while the set stays, its symbolic analysis
-reused when only the set changes (the pattern is that of M_s + h² L_s ⊗ ones(3, 3)).
-Without held contacts the solvers use the n × n factor of the paper
+at 0; α is the mean diagonal of A, for conditioning). It is solved in tangent coordinates
+(:mod:`.tangent_system`): u = T w with T's columns the directions each free vertex may move
+in, (Tᵀ A T) w = Tᵀ r, the same minimizer with a matrix whose coordinates couple only at
+vertices held on oblique planes (three principal submatrices of M_s + h² L_s on box faces)
+instead of the pattern of (M_s + h² L_s) ⊗ ones(3, 3). It is factored once per contact set
+(held vertices and their normals) and cached while the set stays, its symbolic analysis
+reused while the pattern does (the same vertices on oblique planes, the same free
+directions elsewhere). Without held contacts the solvers use the n × n factor of the paper
 (:mod:`clothsim.solvers.system`).
 
 The iteration's residual is ‖P ∇g(x_k)‖ over the free vertices
@@ -29,11 +32,34 @@ import scipy.sparse as sp
 
 from .. import contacts
 from ..factorization import Factor
+from . import tangent_system
 from .base import Iterate
 
 log = logging.getLogger(__name__)
 
-_TINY = 1e-300   # stored in the fixed pattern where P A P + α D is zero (below rounding)
+
+def projector_blocks(vertices: np.ndarray, basis) -> tuple[np.ndarray, np.ndarray]:
+    """Each held vertex's 3 × 3 block of P, for projecting (n, 3) arrays in one pass.
+
+    Parameters
+    ----------
+    vertices : ndarray, shape (c,), int
+        The held contacts' vertices (repeated for a vertex on several planes).
+    basis : list
+        :func:`clothsim.contacts.contact_basis`.
+
+    Returns
+    -------
+    held : ndarray, shape (h,), int
+        The held vertices, increasing.
+    blocks : ndarray, shape (h, 3, 3)
+        I − Σ b bᵀ of each.
+    """
+    held = np.unique(vertices)
+    blocks = np.broadcast_to(np.eye(3), (len(held), 3, 3)).copy()
+    for v, b in basis:
+        blocks[np.searchsorted(held, v)] -= b[:, :, None] * b[:, None, :]
+    return held, blocks
 
 
 class HeldSystem:
@@ -46,36 +72,43 @@ class HeldSystem:
     problem : StepProblem
         The step: h, pins and held contacts.
     previous : HeldSystem, optional
-        The system this one replaces (its symbolic analysis is reused).
+        The system this one replaces (its symbolic analysis is reused when the pattern of
+        Tᵀ A T is the same).
+
+    Attributes
+    ----------
+    As : csr_matrix, shape (n, n)
+        M_s + h² L_s over all vertices [kg].
+    free, fixed : ndarray of int
+        The solver's free and exactly pinned vertices.
+    held : ndarray of int
+        The held vertices, increasing.
+    tangent_factor : Factor
+        The factor of Tᵀ A T (:mod:`.tangent_system`), m × m.
+    factor : FreeInverse
+        (P A P + α D)⁻¹ on the free degrees of freedom, interleaved (``factor.solve``).
     """
 
     def __init__(self, solver, problem, previous: HeldSystem | None = None):
         sysf = solver.system(problem)
         n = solver.model.vertex_count
-        As = sp.csr_matrix(sysf.A)
-        self.As = As
+        self.As = As = sp.csr_matrix(sysf.A)
         self.free = sysf.free
         self.fixed = sysf.fixed
         self.basis = problem.contact_basis()
-        P, D = contacts.projector(n, self.basis)
-        # each held vertex's 3 x 3 block of P, for projecting (n, 3) arrays in one pass
-        self.held = np.unique(problem.contact_vertices)
-        self.blocks = np.broadcast_to(np.eye(3), (len(self.held), 3, 3)).copy()
-        for v, b in self.basis:
-            self.blocks[np.searchsorted(self.held, v)] -= b[:, :, None] * b[:, None, :]
-        A3 = sp.kron(As, sp.identity(3), format="csr")
-        alpha = float(As.diagonal().mean())
-        pattern = sp.kron(As, np.ones((3, 3)), format="csr")
-        pattern.data[:] = _TINY
-        K = (P @ A3 @ P + alpha * D + pattern).tocsr()
-        dofs = (3 * self.free[:, None] + np.arange(3)).ravel()
-        K_FF = K[dofs][:, dofs]
-        self.factor = Factor(K_FF, backend=solver.backend_requested,
+        self.held, self.blocks = projector_blocks(problem.contact_vertices, self.basis)
+        self.alpha = float(As.diagonal().mean())
+        dof, vectors, self.oblique = tangent_system.vertex_directions(n, self.free, self.basis)
+        self.present = dof >= 0                 # (n, 3): the columns of T, by vertex and slot
+        self.oblique_vectors = vectors[self.oblique]   # T's columns where they are not axes
+        K = tangent_system.tangent_matrix(As, dof, vectors, self.oblique)
+        self.tangent_factor = Factor(K, backend=solver.backend_requested,
                              check_conditioning=False,   # M + h² L's factor was checked
-                             cholmod_mode="supernodal",   # measured: simplicial 30x slower
-                             reuse=None if previous is None else previous.factor)
-        log.info("factored the held-contact system: %d held vertices, %d unknowns",
-                 len(np.unique(problem.contact_vertices)), len(dofs))
+                             cholmod_mode="supernodal",   # measured: docs/data/held-factor.md
+                             reuse=None if previous is None else previous.tangent_factor)
+        self.factor = FreeInverse(self)
+        log.info("factored the held-contact system: %d held vertices (%d on oblique planes), "
+                 "%d unknowns", len(self.held), len(self.oblique), K.shape[0])
 
     def prepare(self, problem) -> tuple[np.ndarray, np.ndarray]:
         """The step's feasible displacement z and A z, constant over its iterations.
@@ -112,10 +145,31 @@ class HeldSystem:
         -------
         ndarray, shape (n, 3)
         """
-        r = self.tangential(rhs - Az)
-        u = np.zeros_like(z)
-        u[self.free] = self.factor.solve(r[self.free].reshape(-1)).reshape(-1, 3)
-        return problem.y + z + self.tangential(u)
+        return problem.y + z + self.solve(self.tangential(rhs - Az))
+
+    def solve(self, r: np.ndarray) -> np.ndarray:
+        """u = (P A P + α D)⁻¹ r over the free vertices (zero at the pins), via Tᵀ A T.
+
+        Parameters
+        ----------
+        r : ndarray, shape (n, 3)
+            A right-hand side [kg·m]; its rows at the pins are ignored.
+
+        Returns
+        -------
+        u : ndarray, shape (n, 3)
+            T (Tᵀ A T)⁻¹ Tᵀ r + D r / α: tangential at the held vertices when r is.
+        """
+        held, obl, V = self.held, self.oblique, self.oblique_vectors
+        rt = np.array(r, dtype=np.float64)
+        rt[obl] = np.einsum("vsi,vi->vs", V, rt[obl])     # Tᵀ r (axis columns: r's entries)
+        w = np.zeros_like(rt)
+        w[self.present] = self.tangent_factor.solve(rt[self.present])
+        w[obl] = np.einsum("vsi,vs->vi", V, w[obl])       # T w
+        r_held = np.asarray(r, dtype=np.float64)[held]
+        normal = r_held - np.einsum("vij,vj->vi", self.blocks, r_held)   # D r
+        w[held] = np.einsum("vij,vj->vi", self.blocks, w[held]) + normal / self.alpha
+        return w
 
     def gradient_norm(self, problem, x: np.ndarray, rhs: np.ndarray) -> float:
         """The gradient on the feasible set, as the stop rule reads it.
@@ -149,6 +203,37 @@ class HeldSystem:
         """
         g[self.held] = np.einsum("vij,vj->vi", self.blocks, g[self.held])
         return g
+
+
+class FreeInverse:
+    """(P A P + α D)⁻¹ over the free degrees of freedom, interleaved (x, y, z of each free
+    vertex): :meth:`HeldSystem.solve` on a flat vector.
+
+    Parameters
+    ----------
+    held : HeldSystem
+    """
+
+    def __init__(self, held: HeldSystem):
+        self.held = held
+        self.shape = (3 * len(held.free),) * 2
+        self.backend = held.tangent_factor.backend
+
+    def solve(self, b: np.ndarray) -> np.ndarray:
+        """x = (P A P + α D)⁻¹ b.
+
+        Parameters
+        ----------
+        b : ndarray, shape (3f,)
+
+        Returns
+        -------
+        ndarray, shape (3f,)
+        """
+        held = self.held
+        r = np.zeros((len(held.As.indptr) - 1, 3))
+        r[held.free] = np.reshape(b, (-1, 3))
+        return held.solve(r)[held.free].reshape(-1)
 
 
 def constrained_matrix(problem, H, free: np.ndarray):
