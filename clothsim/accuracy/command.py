@@ -27,7 +27,7 @@ from .answer import BASELINE, TRAJECTORY, answer_table, questions, short_answer
 from .converged import warm_started
 from .decide import choose, undecided
 from .dominance import MARGIN as DOMINANCE_MARGIN
-from .limits import method_limits, worse_minimum_notes
+from .limits import limit_stops, method_limits, worse_minimum_notes
 from .parallel import check_scheduler
 from .phases import Phases
 from .problems import load_problems, record_problems, save_problems
@@ -40,6 +40,7 @@ from .report import (
     worse_than_local_global,
     write_csv,
 )
+from .runs import method_runs, run_count, stops
 from .study import (
     BUDGETS,
     DEFAULT_CAP,
@@ -233,9 +234,16 @@ def _run(scene, folder, methods, problems, frames, repeats, jobs, scheduler, tar
     configs = default_configurations(methods, budgets=budgets, tolerances=tolerances,
                                      options=options, cap=cap)
     measured = sum(1 for s in steps if s.measured)
-    with phases.phase("limits", measured * len(methods), "limit"):
+    # each method's limit run also stops at its configurations (clothsim.accuracy.runs):
+    # the error measurement reads them off it
+    limit_runs = limit_stops(steps, methods, options=options, cap=cap)
+    for key, wanted in stops(configs).items():
+        if key in limit_runs:
+            limit_runs[key] = wanted + limit_runs[key]
+    with phases.phase("limits", measured * (len(methods) + run_count(limit_runs)), "limit"):
+        ends = method_runs(model, steps, limit_runs, jobs=jobs)
         method_limits(model, steps, methods, options=options, cap=cap,  # may add minima
-                      jobs=jobs)
+                      jobs=jobs, runs=ends)
     notes = []
     nothing = not any(s.measured for s in steps)
     if nothing:  # early stop: no step can be measured, so nothing below would be used
@@ -243,8 +251,10 @@ def _run(scene, folder, methods, problems, frames, repeats, jobs, scheduler, tar
                      "were not run" + (", nor the time-step check" if quick else ""))
         results = [ConfigResult(c, np.zeros(0), np.zeros(0, dtype=int)) for c in configs]
     else:
-        with phases.phase("errors", measured * len(configs), "solve"):
-            results = measure(model, steps, configs, jobs=jobs, scheduler=scheduler)
+        rest = {k: w for k, w in stops(configs).items() if k not in limit_runs}
+        with phases.phase("errors", measured * run_count(rest), "run"):
+            results = measure(model, steps, configs, jobs=jobs, scheduler=scheduler,
+                              runs=ends)
     write_csv(rows(results, steps, h=h), out / "accuracy.csv")  # errors kept if later fails
     ts_error, ts, traj = math.nan, None, {}
     if time_steps and frames > 0 and not (nothing and quick):
