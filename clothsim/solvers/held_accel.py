@@ -69,8 +69,7 @@ class HeldStep(FusedStep):
         self.z, self.Az = held.prepare(problem)
         sysf = self.sysf
         # global_step takes b(d) − A y over all rows; the fused rhs is (b − A y)_F − A_FP z_P
-        self._coupling = (sysf.A_FP @ self.z[sysf.fixed] if len(sysf.fixed)
-                          else np.zeros((len(self.free), 3)))
+        self._coupling = sysf.A_FP @ self.z[sysf.fixed] if len(sysf.fixed) else None
         self._rhs_n = np.zeros_like(problem.y)
         self._held_pos = np.searchsorted(self.free, held.held)   # held vertices among F
         self._blocks = held.blocks                               # their 3 x 3 blocks of P
@@ -104,6 +103,9 @@ class HeldStep(FusedStep):
         ndarray, shape (3, f)
             δ̂ = x̂_F − y_F [m], x̂ on the pins and planes; P A_FF δ̂ = P rhs(x).
         """
+        if self._coupling is None:   # no pins: every row is free
+            x = self.held.global_step(self.problem, self._rhs.T, self.z, self.Az)
+            return np.subtract(x.T, self.yT)
         rhs_n = self._rhs_n
         rhs_n[self.free] = self._rhs.T
         rhs_n[self.free] += self._coupling
