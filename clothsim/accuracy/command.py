@@ -225,12 +225,18 @@ def _run(scene, folder, methods, problems, frames, repeats, jobs, scheduler, tar
                                        count=problems)
     _begin(folder, scene)  # an earlier study's files go now that this one has its steps
     save_problems(recorded, out / "problems.npz", model)
+    cap = QUICK["cap"] if quick else DEFAULT_CAP
+    # the references' local/global runs (its own limit) keep the local/global settings too
+    lg_stops = stops(default_configurations(
+        [m for m in methods if m == BASELINE], budgets=budgets, tolerances=tolerances,
+        cap=cap)).get((BASELINE, ()), [])
     with phases.phase("references", len(recorded), "step"):
-        steps = prepare_steps(model, recorded, jobs=jobs)
+        steps = prepare_steps(model, recorded, jobs=jobs, cap=cap, local_global_stops=lg_stops)
+    ends = {(s.step.index, BASELINE, (), k): v for s in steps if s.measured
+            for k, v in s.reference.local_global_runs.items()}
     options = {}
     if "chebyshev" in methods:
         options["chebyshev"] = {"rho": chebyshev_rho(model, steps)}
-    cap = QUICK["cap"] if quick else DEFAULT_CAP
     configs = default_configurations(methods, budgets=budgets, tolerances=tolerances,
                                      options=options, cap=cap)
     measured = sum(1 for s in steps if s.measured)
@@ -241,7 +247,7 @@ def _run(scene, folder, methods, problems, frames, repeats, jobs, scheduler, tar
         if key in limit_runs:
             limit_runs[key] = wanted + limit_runs[key]
     with phases.phase("limits", measured * (len(methods) + run_count(limit_runs)), "limit"):
-        ends = method_runs(model, steps, limit_runs, jobs=jobs)
+        ends |= method_runs(model, steps, limit_runs, jobs=jobs)
         method_limits(model, steps, methods, options=options, cap=cap,  # may add minima
                       jobs=jobs, runs=ends)
     notes = []
@@ -251,7 +257,8 @@ def _run(scene, folder, methods, problems, frames, repeats, jobs, scheduler, tar
                      "were not run" + (", nor the time-step check" if quick else ""))
         results = [ConfigResult(c, np.zeros(0), np.zeros(0, dtype=int)) for c in configs]
     else:
-        rest = {k: w for k, w in stops(configs).items() if k not in limit_runs}
+        rest = {k: w for k, w in stops(configs).items()
+                if k not in limit_runs and k != (BASELINE, ())}
         with phases.phase("errors", measured * run_count(rest), "run"):
             results = measure(model, steps, configs, jobs=jobs, scheduler=scheduler,
                               runs=ends)

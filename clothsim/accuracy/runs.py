@@ -82,9 +82,30 @@ class Solve:
     factorizations: int = 0
 
 
-def _run(model: Model, problem, method: str, options: dict, stops: Sequence[Stop],
-         backend: str) -> list[Solve]:
-    """The method's iterates on one step until every stop in ``stops`` has fired."""
+def run_stops(model: Model, problem, method: str, options: dict, stops: Sequence[Stop],
+              backend: str = "auto") -> list[Solve]:
+    """One run of ``method`` on one step, until every stop in ``stops`` has fired.
+
+    Parameters
+    ----------
+    model : Model
+        The cloth.
+    problem : StepProblem
+        The step (from its own initial guess).
+    method : str
+        Solver name.
+    options : dict
+        Solver options (e.g. Chebyshev's ρ).
+    stops : sequence of Stop
+        Where to keep the iterate (module text); one for Newton (:data:`OWN_STOP`).
+    backend : {"auto", "cholmod", "splu"}
+        Factorization backend.
+
+    Returns
+    -------
+    list of Solve
+        One per stop, in order (x None where the method blew up first).
+    """
     solver = make_solver(method, model, iterations=max(s.iterations for s in stops),
                          tolerance=min((s.tolerance for s in stops if s.tolerance),
                                        default=None), backend=backend, **options)
@@ -162,7 +183,7 @@ def method_runs(model: Model, steps: Sequence, stops: dict, *, backend: str = "a
             for g in ([w] for w in wanted) if m in OWN_STOP else [wanted]:
                 tasks.append((model, s.step.problem, m, dict(opts), g, backend))
                 keys.append([(s.step.index, m, opts, w) for w in g])
-    results = map_jobs(_run, tasks, jobs=jobs, scheduler=scheduler, each=lambda _: advance())
+    results = map_jobs(run_stops, tasks, jobs=jobs, scheduler=scheduler, each=lambda _: advance())
     return {k: r for ks, rs in zip(keys, results) for k, r in zip(ks, rs)}
 
 

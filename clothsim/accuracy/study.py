@@ -191,7 +191,8 @@ class ConfigResult:
 
 
 def prepare_steps(model: Model, recorded: Sequence[RecordedStep], *,
-                  backend: str = "auto", jobs: int = 1) -> list[StudyStep]:
+                  backend: str = "auto", jobs: int = 1, cap: int = DEFAULT_CAP,
+                  local_global_stops: Sequence[Stop] = ()) -> list[StudyStep]:
     """Classify each recorded step and certify the reference of those worth measuring.
 
     Parameters
@@ -204,14 +205,19 @@ def prepare_steps(model: Model, recorded: Sequence[RecordedStep], *,
         Factorization backend.
     jobs : int, default 1
         Parallel workers, one step each (:func:`~.parallel.map_jobs`; same result).
+    cap : int
+        Iteration cap of the references' local/global runs (local/global's own limit).
+    local_global_stops : sequence of Stop
+        The study's local/global settings, kept from those runs
+        (:attr:`~.reference.CertifiedReference.local_global_runs`).
 
     Returns
     -------
     list of StudyStep
         One per recorded step, in order.
     """
-    out = map_jobs(_prepare_one, [(model, rec, backend) for rec in recorded], jobs=jobs,
-                   each=lambda _: advance())
+    out = map_jobs(_prepare_one, [(model, rec, backend, cap, tuple(local_global_stops))
+                                  for rec in recorded], jobs=jobs, each=lambda _: advance())
     for s in out:
         ref = s.reference
         log.info("step %d: %s (|grad g(y)|/floor %.2e, one-iteration error %.2e%s, rho %.4f)",
@@ -221,9 +227,11 @@ def prepare_steps(model: Model, recorded: Sequence[RecordedStep], *,
     return out
 
 
-def _prepare_one(model: Model, rec: RecordedStep, backend: str) -> StudyStep:
+def _prepare_one(model: Model, rec: RecordedStep, backend: str, cap: int,
+                 local_global_stops: tuple) -> StudyStep:
     """One recorded step, classified, with its certified reference and ρ."""
-    ref = certified_reference(model, rec.problem, backend=backend)
+    ref = certified_reference(model, rec.problem, backend=backend, local_global_cap=cap,
+                              local_global_stops=local_global_stops)
     kind, ratio, err1 = classify(model, rec.problem, ref.x)
     if kind == "measured":
         if not ref.certified:
