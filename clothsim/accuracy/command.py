@@ -230,6 +230,10 @@ def _run(scene, folder, methods, problems, frames, repeats, jobs, scheduler, tar
     lg_stops = stops(default_configurations(
         [m for m in methods if m == BASELINE], budgets=budgets, tolerances=tolerances,
         cap=cap)).get((BASELINE, ()), [])
+    if lg_stops:   # and the tail of a run of cap iterations, should an answer extrapolate
+        from .extrapolate import tail_stops
+
+        lg_stops += tail_stops(cap)
     with phases.phase("references", len(recorded), "step"):
         steps = prepare_steps(model, recorded, jobs=jobs, cap=cap, local_global_stops=lg_stops)
     ends = {(s.step.index, BASELINE, (), k): v for s in steps if s.measured

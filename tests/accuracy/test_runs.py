@@ -108,3 +108,47 @@ def test_a_run_that_blows_up_marks_only_the_stops_it_did_not_reach(contact_steps
     assert [g.iterations for g in got[:2]] == [1, 3]
     assert all(g.x is not None and np.all(np.isfinite(g.x)) for g in got[:2])
     assert all(g.x is None for g in got[2:])
+
+
+def test_the_references_local_global_run_gives_the_local_global_settings(contact_steps):
+    """The reference's local/global run (its own limit, capped) keeps the study's
+    local/global settings: the same iterates as a solve per setting."""
+    model, steps = contact_steps
+    configs = default_configurations(("local-global",), budgets=(1, 7), tolerances=(1e-2,),
+                                     cap=200)
+    wanted = stops(configs)[("local-global", ())]
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        again = prepare_steps(model, [s.step for s in steps], cap=200,
+                              local_global_stops=wanted)
+    for s in again:
+        if not s.measured:
+            continue
+        ref = s.reference
+        assert ref.local_global_runs[Stop(200, 1e-6)].iterations <= 200
+        for c in configs:
+            run = ref.local_global_runs[c.stop]
+            res = c.solver(model).solve(s.step.problem)
+            assert run.iterations == res.iterations and np.array_equal(run.x, res.x)
+
+
+def test_the_extrapolation_reads_the_references_run_as_its_own_run(contact_steps):
+    """Tail iterates kept by the references' local/global runs give the same tails as
+    running local/global again."""
+    from clothsim.accuracy.extrapolate import tail_runs, tail_stops
+
+    model, steps = contact_steps
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        kept = prepare_steps(model, [s.step for s in steps], cap=120,
+                             local_global_stops=tail_stops(120))
+    fresh = [s for s in kept if s.measured]
+    for measure in ("solver error", "objective gap"):
+        read = tail_runs(model, kept, iterations=120, measure=measure)
+        for s in fresh:
+            s.reference.local_global_runs = {}
+        again = tail_runs(model, kept, iterations=120, measure=measure)
+        assert read and read == again
+        kept = prepare_steps(model, [s.step for s in steps], cap=120,
+                             local_global_stops=tail_stops(120))
+        fresh = [s for s in kept if s.measured]
