@@ -147,3 +147,27 @@ def test_settings_closer_than_their_own_scatter_are_not_told_apart():
     c = choose([row("lbfgs", 20, 0.09, [18.7e-3] * 3), row("chebyshev", 20, 0.09, cheb)],
                0.1)
     assert c.decided and c.row.method == "lbfgs"
+
+
+def test_a_setting_that_becomes_a_candidate_late_gets_its_samples(monkeypatch):
+    """The undecided rounds go on until the rows are decided, not for a fixed number of
+    rounds: a setting named only after the first one reached its cap is timed to the cap
+    too (a 21 x 21 study left a 1e-1 row "provisional" at 10 rounds)."""
+    from types import SimpleNamespace as NS
+
+    class Quiet:
+        iterations, tolerance = 1, None
+
+        def solve(self, problem):
+            return None
+
+    monkeypatch.setattr(timing, "_time_once", lambda solver, problems, clock: 1e-3)
+    results = [NS(config=NS(solver=lambda model: Quiet()), seconds=[], diverged=0)
+               for _ in range(2)]
+    steps = [NS(measured=True, step=NS(problem=None))]
+
+    def undecided():   # setting 0 until it has the cap, then setting 1
+        return {0} if len(results[0].seconds) < MAX_REPEATS else {1}
+
+    timing.time_configurations(None, steps, results, repeats=1, undecided=undecided)
+    assert [len(r.seconds) for r in results] == [MAX_REPEATS, MAX_REPEATS]
