@@ -3,7 +3,8 @@
 Runs the drop-on-square scene (a cloth dropped onto a box: free fall, then contact and
 crumpling) with its resolution set to 21 × 21, in this process, exactly as
 ``clothsim accuracy SCENE --quick --no-plots`` does, and prints the wall and CPU seconds,
-the commit and the report's first line (how many recorded steps were measured, per class).
+the commit, the report's first line (how many recorded steps were measured, per class) and
+the CPU seconds of each phase of the study (``phase_seconds`` of its ``accuracy.json``).
 The machine is shared: the wall time includes waiting for a core, the CPU time does not.
 Run: ``python -m benchmarks accuracy_quick``; it also writes
 ``docs/data/accuracy-quick.md``, which docs/accuracy.md includes.
@@ -11,6 +12,7 @@ Run: ``python -m benchmarks accuracy_quick``; it also writes
 
 from __future__ import annotations
 
+import json
 import os
 import subprocess
 import tempfile
@@ -59,12 +61,15 @@ def main() -> None:
         t0, c0 = time.perf_counter(), time.process_time()
         text = run_accuracy(scene(), Path(out), quick=True, plots=False)
         wall, cpu = time.perf_counter() - t0, time.process_time() - c0
+        phases = json.loads((Path(out) / "accuracy.json").read_text())["phase_seconds"]
     lines = [f"commit {commit()}: clothsim accuracy drop-on-square ({N}x{N}) --quick",
              text.splitlines()[0].lstrip("# "),
              f"wall {wall:.1f} s, CPU {cpu:.1f} s (target: {TARGET_SECONDS:.0f} s; "
              f"{'met' if wall <= TARGET_SECONDS else 'missed'} in wall time, "
              f"{'met' if cpu <= TARGET_SECONDS else 'missed'} in CPU time; load average "
-             f"{os.getloadavg()[0]:.2f} at the end)"]
+             f"{os.getloadavg()[0]:.2f} at the end)",
+             "CPU seconds per phase: " + ", ".join(f"{name} {spent['cpu']:.1f}"
+                                                   for name, spent in phases.items())]
     print("\n".join(f"   {line}" for line in lines))
     OUT.write_text("Printed by `.venv/bin/python -m benchmarks accuracy_quick`:\n\n```text\n"
                    + "\n".join(lines) + "\n```\n", encoding="utf-8")

@@ -27,7 +27,7 @@ from .answer import BASELINE, TRAJECTORY, answer_table, questions, short_answer
 from .converged import warm_started
 from .decide import choose, undecided
 from .dominance import MARGIN as DOMINANCE_MARGIN
-from .limits import method_limits, worse_minimum_notes
+from .limits import limit_stops, method_limits, worse_minimum_notes
 from .parallel import check_scheduler
 from .phases import Phases
 from .problems import load_problems, record_problems, save_problems
@@ -40,6 +40,7 @@ from .report import (
     worse_than_local_global,
     write_csv,
 )
+from .runs import method_runs, run_count, stops
 from .study import (
     BUDGETS,
     DEFAULT_CAP,
@@ -224,18 +225,35 @@ def _run(scene, folder, methods, problems, frames, repeats, jobs, scheduler, tar
                                        count=problems)
     _begin(folder, scene)  # an earlier study's files go now that this one has its steps
     save_problems(recorded, out / "problems.npz", model)
+    cap = QUICK["cap"] if quick else DEFAULT_CAP
+    # the references' local/global runs (its own limit) keep the local/global settings too
+    lg_stops = stops(default_configurations(
+        [m for m in methods if m == BASELINE], budgets=budgets, tolerances=tolerances,
+        cap=cap)).get((BASELINE, ()), [])
+    if lg_stops:   # and the tail of a run of cap iterations, should an answer extrapolate
+        from .extrapolate import tail_stops
+
+        lg_stops += tail_stops(cap)
     with phases.phase("references", len(recorded), "step"):
-        steps = prepare_steps(model, recorded, jobs=jobs)
+        steps = prepare_steps(model, recorded, jobs=jobs, cap=cap, local_global_stops=lg_stops)
+    ends = {(s.step.index, BASELINE, (), k): v for s in steps if s.measured
+            for k, v in s.reference.local_global_runs.items()}
     options = {}
     if "chebyshev" in methods:
         options["chebyshev"] = {"rho": chebyshev_rho(model, steps)}
-    cap = QUICK["cap"] if quick else DEFAULT_CAP
     configs = default_configurations(methods, budgets=budgets, tolerances=tolerances,
                                      options=options, cap=cap)
     measured = sum(1 for s in steps if s.measured)
-    with phases.phase("limits", measured * len(methods), "limit"):
+    # each method's limit run also stops at its configurations (clothsim.accuracy.runs):
+    # the error measurement reads them off it
+    limit_runs = limit_stops(steps, methods, options=options, cap=cap)
+    for key, wanted in stops(configs).items():
+        if key in limit_runs:
+            limit_runs[key] = wanted + limit_runs[key]
+    with phases.phase("limits", measured * (len(methods) + run_count(limit_runs)), "limit"):
+        ends |= method_runs(model, steps, limit_runs, jobs=jobs)
         method_limits(model, steps, methods, options=options, cap=cap,  # may add minima
-                      jobs=jobs)
+                      jobs=jobs, runs=ends)
     notes = []
     nothing = not any(s.measured for s in steps)
     if nothing:  # early stop: no step can be measured, so nothing below would be used
@@ -243,8 +261,11 @@ def _run(scene, folder, methods, problems, frames, repeats, jobs, scheduler, tar
                      "were not run" + (", nor the time-step check" if quick else ""))
         results = [ConfigResult(c, np.zeros(0), np.zeros(0, dtype=int)) for c in configs]
     else:
-        with phases.phase("errors", measured * len(configs), "solve"):
-            results = measure(model, steps, configs, jobs=jobs, scheduler=scheduler)
+        rest = {k: w for k, w in stops(configs).items()
+                if k not in limit_runs and k != (BASELINE, ())}
+        with phases.phase("errors", measured * run_count(rest), "run"):
+            results = measure(model, steps, configs, jobs=jobs, scheduler=scheduler,
+                              runs=ends)
     write_csv(rows(results, steps, h=h), out / "accuracy.csv")  # errors kept if later fails
     ts_error, ts, traj = math.nan, None, {}
     if time_steps and frames > 0 and not (nothing and quick):

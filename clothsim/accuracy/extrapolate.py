@@ -3,10 +3,11 @@
 When no local/global setting of the study reaches a target, :func:`tail_runs` runs plain
 local/global on every step the answer measures for as many iterations as the study's
 longest setting (its tolerance cap), and reads the error at the points of the run's last
-quarter (:data:`TAIL`). The **tail contraction** ρ_tail = (e_K / e_a)^(1/(K − a)) over
-iterations a = 3K/4 … K predicts, per step, the iterations to ε:
-K + ln(ε / e_K) / ln ρ_tail; :func:`extrapolate` reports their 90th percentile over the
-steps, like the answers' p90 errors.
+quarter (:data:`TAIL`; the study has the references' local/global runs keep these iterates,
+:func:`tail_stops`, so nothing runs again). The **tail contraction**
+ρ_tail = (e_K / e_a)^(1/(K − a)) over iterations a = 3K/4 … K predicts, per step, the
+iterations to ε: K + ln(ε / e_K) / ln ρ_tail; :func:`extrapolate` reports their 90th
+percentile over the steps, like the answers' p90 errors.
 
 Why the tail and not the early rate: local/global's error contracts fast at first and
 ever more slowly (the slowest modes remain), so ρ measured early (e.g. over iterations
@@ -31,6 +32,7 @@ from ..model import Model
 from ..solvers import LocalGlobalSolver
 from .blowups import BLOW_UPS
 from .phases import advance
+from .runs import Stop
 
 TAIL = 0.25
 """The fraction of the run (its end) whose contraction is extrapolated."""
@@ -84,9 +86,35 @@ class StepTail:
         return self.iterations + math.ceil(math.log(level / self.error) / math.log(self.rate))
 
 
-def _tail(model, problem, index, error_of, iterations) -> StepTail:
+def tail_stops(iterations: int) -> list[Stop]:
+    """The iterates :func:`tail_runs` reads in a run of ``iterations`` (its last quarter).
+
+    The study asks the references' local/global runs to keep them
+    (:attr:`~.reference.CertifiedReference.local_global_runs`), so that the extrapolation
+    reads them there instead of running local/global again.
+
+    Parameters
+    ----------
+    iterations : int
+        K, the run's length.
+
+    Returns
+    -------
+    list of Stop
+        Fixed budgets a = 3K/4 … K, :data:`SAMPLES` of them.
+    """
     a = int(round(iterations * (1 - TAIL)))
-    at = set(np.linspace(a, iterations, SAMPLES).round().astype(int).tolist())
+    return [Stop(k) for k in sorted(set(np.linspace(a, iterations, SAMPLES).round()
+                                         .astype(int).tolist()))]
+
+
+def _tail(model, problem, index, error_of, iterations, kept) -> StepTail:
+    at = {s.iterations for s in tail_stops(iterations)}
+    if all(Stop(k) in kept for k in at):   # the reference's run kept them
+        ends = [kept[Stop(k)] for k in sorted(at)]
+        if any(e.x is None for e in ends):
+            return StepTail(index, iterations, math.inf, math.nan, False)
+        return fit_tail([e.iterations for e in ends], [error_of(e.x) for e in ends], index)
     ks, es = [], []
     solver = LocalGlobalSolver(model, iterations=iterations, check_conditioning=False)
     try:
@@ -165,7 +193,8 @@ def tail_runs(model: Model, steps: Sequence, *, iterations: int,
         else:
             def error_of(x, ref=ref, problem=problem):
                 return ref.objective_gap(model, problem, x)
-        out.append(_tail(model, problem, s.step.index, error_of, iterations))
+        out.append(_tail(model, problem, s.step.index, error_of, iterations,
+                         ref.local_global_runs))
         advance()
     return out
 

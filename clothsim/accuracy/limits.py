@@ -22,6 +22,9 @@ Every certified limit joins the step's set of minima (y, x_n, each method's limi
 lower than x_best becomes x_best, and a "unique" step whose limits differ becomes
 "several-minima". A configuration's *limit error* on a step is
 ‖x − x_lim‖ / ‖x_lim − x_n‖ (:func:`limit_error`).
+
+The limit run is the longest of the method's runs on the step (:mod:`.runs`): the study
+reads the method's configurations off the same iterates (:func:`~.study.measure`).
 """
 
 from __future__ import annotations
@@ -35,12 +38,13 @@ from dataclasses import dataclass
 import numpy as np
 
 from ..model import Model
-from ..solvers import NewtonSolver, make_solver
+from ..solvers import NewtonSolver
 from ..solvers.descent import objective_difference
 from .blowups import BLOW_UPS
 from .parallel import map_jobs
 from .phases import advance
 from .reference import REFERENCE_ITERATIONS, SAME_POINT
+from .runs import Solve, Stop, method_runs
 
 log = logging.getLogger(__name__)
 
@@ -89,22 +93,60 @@ def _newton(model, backend):
                         backend=backend)
 
 
-def _own_limit(model: Model, problem, method: str, options: dict, cap: int,
-               backend: str) -> MethodLimit:
+def limit_stop(cap: int):
+    """The stop of a method's own limit run (:class:`~.runs.Stop`): ``cap`` iterations,
+    :data:`LIMIT_TOLERANCE`.
+
+    Parameters
+    ----------
+    cap : int
+        Iteration cap.
+
+    Returns
+    -------
+    Stop
+    """
+    return Stop(int(cap), LIMIT_TOLERANCE)
+
+
+def limit_stops(steps: Sequence, methods: Sequence[str], *, options: dict | None = None,
+                cap: int = LIMIT_CAP) -> dict:
+    """The runs :func:`method_limits` needs: (method, options) → [:func:`limit_stop`] for
+    each method whose limit the references do not give on some measured step.
+
+    Parameters
+    ----------
+    steps : sequence of StudyStep
+        With their references.
+    methods : sequence of str
+        Solver names.
+    options : dict, optional
+        Solver options per method.
+    cap : int
+        Iteration cap of a limit run.
+
+    Returns
+    -------
+    dict
+        As :func:`~.runs.method_runs` takes it.
+    """
+    return {(m, tuple(sorted((options or {}).get(m, {}).items()))): [limit_stop(cap)]
+            for m in methods if any(s.measured and not _known(s, m) for s in steps)}
+
+
+def _polish(model: Model, problem, method: str, run: Solve, backend: str) -> MethodLimit:
+    """Newton from the end of the method's limit run: the limit, certified."""
     try:
-        solver = make_solver(method, model, iterations=cap, tolerance=LIMIT_TOLERANCE,
-                             backend=backend, **options)
+        if run.x is None or not np.all(np.isfinite(run.x)):
+            raise FloatingPointError("non-finite limit")
         with warnings.catch_warnings(), np.errstate(all="ignore"):
             warnings.simplefilter("ignore")
-            res = solver.solve(problem)
-            if not np.all(np.isfinite(res.x)):
-                raise FloatingPointError("non-finite limit")
-            polish = _newton(model, backend).solve(problem, x0=res.x)
+            polish = _newton(model, backend).solve(problem, x0=run.x)
     except BLOW_UPS as exc:
         log.warning("%s's own limit on step: diverged (%s)", method, exc)
         return MethodLimit(method, None, False, False, math.inf)
-    return MethodLimit(method, polish.x, bool(res.converged), bool(polish.certified),
-                       iterations=int(res.iterations))
+    return MethodLimit(method, polish.x, bool(run.converged), bool(polish.certified),
+                       iterations=int(run.iterations))
 
 
 def _merge_minimum(model: Model, problem, ref, x: np.ndarray) -> bool:
@@ -133,7 +175,7 @@ def _known(step, method: str) -> bool:
 
 def method_limits(model: Model, steps: Sequence, methods: Sequence[str], *,
                   options: dict | None = None, cap: int = LIMIT_CAP,
-                  backend: str = "auto", jobs: int = 1) -> None:
+                  backend: str = "auto", jobs: int = 1, runs: dict | None = None) -> None:
     """Each method's own limit on every measured step (module text), in place.
 
     Fills ``step.limits`` (method → :class:`MethodLimit`), adds every certified limit to
@@ -157,10 +199,19 @@ def method_limits(model: Model, steps: Sequence, methods: Sequence[str], *,
     jobs : int, default 1
         Parallel workers for the methods' own runs (:func:`~.parallel.map_jobs`; the
         limits are merged in order afterwards, so the result does not depend on it).
+    runs : dict, optional
+        :func:`~.runs.method_runs` holding each method's :func:`limit_stop` (the study
+        shares its runs with the error measurement); default: run them here.
     """
-    runs = [(model, s.step.problem, m, dict((options or {}).get(m, {})), cap, backend)
-            for s in steps if s.measured for m in methods if not _known(s, m)]
-    own = iter(map_jobs(_own_limit, runs, jobs=jobs, each=lambda _: advance()))
+    stop = limit_stop(cap)
+    todo = [(s, m) for s in steps if s.measured for m in methods if not _known(s, m)]
+    opts = {m: tuple(sorted((options or {}).get(m, {}).items())) for m in methods}
+    if runs is None:
+        runs = method_runs(model, steps, limit_stops(steps, methods, options=options, cap=cap),
+                           backend=backend, jobs=jobs)
+    own = iter(map_jobs(_polish, [(model, s.step.problem, m,
+                                   runs[(s.step.index, m, opts[m], stop)], backend)
+                                  for s, m in todo], jobs=jobs, each=lambda _: advance()))
     for s in steps:
         if not s.measured:
             continue

@@ -23,20 +23,27 @@ from __future__ import annotations
 
 import math
 import warnings
+from collections.abc import Sequence
 from dataclasses import dataclass, field
 
 import numpy as np
 
 from ..model import Model
-from ..solvers import LocalGlobalSolver, NewtonSolver, StepProblem, objective_gradient
+from ..solvers import NewtonSolver, StepProblem, objective_gradient
 from ..solvers.curvature import smallest_eigenvalue as eigenvalue_in_metric
 from ..solvers.descent import objective_difference
+from .runs import Stop, run_stops
 
 SAME_POINT = 1e-6
 
 
 REFERENCE_ITERATIONS = 200
 """Newton's iteration cap for a reference (more than any step has needed)."""
+LOCAL_GLOBAL_CAP = 5000
+"""Default iteration cap of the reference's local/global run (the study passes its own cap,
+as for the other methods' own limits: 5000, ``--quick`` 1000)."""
+LOCAL_GLOBAL_TOLERANCE = 1e-6
+"""Relative residual at which that run stops (then Newton polishes)."""
 
 
 @dataclass
@@ -80,6 +87,10 @@ class CertifiedReference:
         by :func:`~clothsim.accuracy.limits.method_limits`).
     local_global_converged : bool
         Local/global reached its 1e-6 relative residual before that polish.
+    local_global_runs : dict
+        :class:`~.runs.Stop` → :class:`~.runs.Solve`: the iterates of that local/global run
+        kept at the ``local_global_stops`` asked for (the study's local/global settings,
+        read off this run instead of running them again).
     """
 
     x: np.ndarray
@@ -98,6 +109,7 @@ class CertifiedReference:
     minimum_points: list = field(default_factory=list)
     local_global: object = None
     local_global_converged: bool = False
+    local_global_runs: dict = field(default_factory=dict)
 
     def objective_gap(self, model: Model, problem: StepProblem, x: np.ndarray) -> float:
         """(g(x) − g(x_best)) / (g(y) − g(x_best)), without cancellation.
@@ -152,7 +164,9 @@ def smallest_eigenvalue(newton: NewtonSolver, problem: StepProblem, x: np.ndarra
 
 
 def certified_reference(model: Model, problem: StepProblem, *, backend: str = "auto",
-                        second_start: bool = True) -> CertifiedReference:
+                        second_start: bool = True,
+                        local_global_cap: int = LOCAL_GLOBAL_CAP,
+                        local_global_stops: Sequence[Stop] = ()) -> CertifiedReference:
     """Newton to the rounding floor from y, certified, with the minima of other starts.
 
     Parameters
@@ -166,6 +180,11 @@ def certified_reference(model: Model, problem: StepProblem, *, backend: str = "a
     second_start : bool
         Also solve from x_n and from the converged local/global point (the uncertainty
         and several-minima checks).
+    local_global_cap : int
+        Iteration cap of that local/global run (to relative residual 1e-6).
+    local_global_stops : sequence of Stop
+        Iterates of that run to keep besides (:attr:`CertifiedReference.local_global_runs`;
+        the run goes on until each is reached).
 
     Returns
     -------
@@ -191,9 +210,13 @@ def certified_reference(model: Model, problem: StepProblem, *, backend: str = "a
         if second_start:
             x_n = replace(problem, start="x_n").initial_guess()
             ends.append(newton().solve(problem, x0=x_n))
-            lg = LocalGlobalSolver(model, iterations=5000, tolerance=1e-6, backend=backend,
-                                   check_conditioning=False)
-            lg_end = lg.solve(problem)
+            own = Stop(int(local_global_cap), LOCAL_GLOBAL_TOLERANCE)
+            kept = list(dict.fromkeys([own, *local_global_stops]))
+            lg_runs = dict(zip(kept, run_stops(model, problem, "local-global", {}, kept,
+                                               backend)))
+            lg_end = lg_runs[own]
+            if lg_end.x is None:
+                raise FloatingPointError("local/global blew up on the reference's step")
             ends.append(newton().solve(problem, x0=lg_end.x))
     minima = []  # distinct certified minima, x* first when certified
     for r in ends:
@@ -215,4 +238,5 @@ def certified_reference(model: Model, problem: StepProblem, *, backend: str = "a
                               bool(res.at_floor), bool(res.positive_definite), len(minima),
                               x_best, float(objective_scale), minima,
                               ends[2] if second_start else None,
-                              bool(second_start and lg_end.converged))
+                              bool(second_start and lg_end.converged),
+                              lg_runs if second_start else {})

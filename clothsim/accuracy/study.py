@@ -30,7 +30,6 @@ from __future__ import annotations
 
 import logging
 import math
-import warnings
 from collections.abc import Sequence
 from dataclasses import dataclass, field
 
@@ -44,6 +43,7 @@ from .parallel import map_jobs
 from .phases import advance
 from .problems import RecordedStep, classify
 from .reference import CertifiedReference, certified_reference
+from .runs import Solve, Stop, method_runs, stops
 
 log = logging.getLogger(__name__)
 
@@ -92,6 +92,11 @@ class Configuration:
         """
         return make_solver(self.method, model, iterations=self.iterations,
                            tolerance=self.tolerance, **dict(self.options))
+
+    @property
+    def stop(self) -> Stop:
+        """Where its ``solve`` stops (:class:`~.runs.Stop`)."""
+        return Stop(self.iterations, self.tolerance)
 
     @property
     def label(self) -> str:
@@ -186,7 +191,8 @@ class ConfigResult:
 
 
 def prepare_steps(model: Model, recorded: Sequence[RecordedStep], *,
-                  backend: str = "auto", jobs: int = 1) -> list[StudyStep]:
+                  backend: str = "auto", jobs: int = 1, cap: int = DEFAULT_CAP,
+                  local_global_stops: Sequence[Stop] = ()) -> list[StudyStep]:
     """Classify each recorded step and certify the reference of those worth measuring.
 
     Parameters
@@ -199,14 +205,19 @@ def prepare_steps(model: Model, recorded: Sequence[RecordedStep], *,
         Factorization backend.
     jobs : int, default 1
         Parallel workers, one step each (:func:`~.parallel.map_jobs`; same result).
+    cap : int
+        Iteration cap of the references' local/global runs (local/global's own limit).
+    local_global_stops : sequence of Stop
+        The study's local/global settings, kept from those runs
+        (:attr:`~.reference.CertifiedReference.local_global_runs`).
 
     Returns
     -------
     list of StudyStep
         One per recorded step, in order.
     """
-    out = map_jobs(_prepare_one, [(model, rec, backend) for rec in recorded], jobs=jobs,
-                   each=lambda _: advance())
+    out = map_jobs(_prepare_one, [(model, rec, backend, cap, tuple(local_global_stops))
+                                  for rec in recorded], jobs=jobs, each=lambda _: advance())
     for s in out:
         ref = s.reference
         log.info("step %d: %s (|grad g(y)|/floor %.2e, one-iteration error %.2e%s, rho %.4f)",
@@ -216,9 +227,11 @@ def prepare_steps(model: Model, recorded: Sequence[RecordedStep], *,
     return out
 
 
-def _prepare_one(model: Model, rec: RecordedStep, backend: str) -> StudyStep:
+def _prepare_one(model: Model, rec: RecordedStep, backend: str, cap: int,
+                 local_global_stops: tuple) -> StudyStep:
     """One recorded step, classified, with its certified reference and ρ."""
-    ref = certified_reference(model, rec.problem, backend=backend)
+    ref = certified_reference(model, rec.problem, backend=backend, local_global_cap=cap,
+                              local_global_stops=local_global_stops)
     kind, ratio, err1 = classify(model, rec.problem, ref.x)
     if kind == "measured":
         if not ref.certified:
@@ -289,32 +302,29 @@ def chebyshev_rho(model: Model, steps: Sequence[StudyStep], *, backend: str = "a
     return max(rhos, default=0.0)
 
 
-def _solve_one(model: Model, config: Configuration, study_step: StudyStep) -> tuple:
+def _result(model: Model, study_step: StudyStep, config: Configuration, run: Solve) -> tuple:
     """(relative error, iterations, factorizations, diverged, objective gap, limit error,
-    relative residual) of one solve."""
-    problem = study_step.step.problem
-    try:
-        solver = config.solver(model)
-        with warnings.catch_warnings(), np.errstate(all="ignore"):
-            warnings.simplefilter("ignore")
-            res = solver.solve(problem)
-    except BLOW_UPS as exc:
-        log.warning("%s diverged on step %d: %s", config.label, study_step.step.index, exc)
+    relative residual) of one configuration's solve."""
+    if run.x is None:
         return math.inf, 0, 0, True, math.inf, math.inf, math.inf
+    problem = study_step.step.problem
     x_star = study_step.reference.x
     scale = float(np.linalg.norm(x_star - problem.x)) or 1.0
-    err = float(np.linalg.norm(res.x - x_star)) / scale
+    err = float(np.linalg.norm(run.x - x_star)) / scale
     if not math.isfinite(err):
-        return math.inf, int(res.iterations), 0, True, math.inf, math.inf, math.inf
-    gap = study_step.reference.objective_gap(model, problem, res.x)
-    return err, int(res.iterations), \
-        int(getattr(solver, "factor_count", 0) if config.method == "newton" else 0), \
-        False, gap, limit_error(study_step, config.method, res.x), float(res.residual)
+        return math.inf, run.iterations, 0, True, math.inf, math.inf, math.inf
+    gap = study_step.reference.objective_gap(model, problem, run.x)
+    return err, run.iterations, run.factorizations if config.method == "newton" else 0, \
+        False, gap, limit_error(study_step, config.method, run.x), run.residual
 
 
 def measure(model: Model, steps: Sequence[StudyStep], configs: Sequence[Configuration], *,
-            jobs: int = 1, scheduler: str | None = None) -> list[ConfigResult]:
+            jobs: int = 1, scheduler: str | None = None,
+            runs: dict | None = None) -> list[ConfigResult]:
     """Solver error and iterations of every configuration on every measured step.
+
+    The configurations of one method are read off one run per step (:mod:`.runs`): the
+    iterate where each one's ``solve`` would stop, the same bit for bit.
 
     Parameters
     ----------
@@ -325,9 +335,12 @@ def measure(model: Model, steps: Sequence[StudyStep], configs: Sequence[Configur
     configs : sequence of Configuration
         What to run.
     jobs : int
-        Parallel workers (joblib, loky backend); 1 runs serially.
+        Parallel workers (joblib, loky backend), one run each; 1 runs serially.
     scheduler : str, optional
         Address of a Dask scheduler: run through joblib's dask backend instead.
+    runs : dict, optional
+        :func:`~.runs.method_runs` already made (the study's limit runs, which hold their
+        method's configurations too); the methods it lacks are run here.
 
     Returns
     -------
@@ -336,13 +349,14 @@ def measure(model: Model, steps: Sequence[StudyStep], configs: Sequence[Configur
     """
     measured = [s for s in steps if s.measured]
     unique = np.array([s.kind == "unique" for s in measured], dtype=bool)
-    tasks = [(model, c, s) for c in configs for s in measured]
-    results = map_jobs(_solve_one, tasks, jobs=jobs, scheduler=scheduler,
-                       each=lambda _: advance())
-    out, i = [], 0
+    runs = dict(runs or {})
+    todo = {key: wanted for key, wanted in stops(configs).items()
+            if any((s.step.index, *key, w) not in runs for s in measured for w in wanted)}
+    runs |= method_runs(model, steps, todo, jobs=jobs, scheduler=scheduler)
+    out = []
     for c in configs:
-        chunk = results[i:i + len(measured)]
-        i += len(measured)
+        chunk = [_result(model, s, c, runs[(s.step.index, c.method, c.options, c.stop)])
+                 for s in measured]
         out.append(ConfigResult(c, np.array([r[0] for r in chunk]),
                                 np.array([r[1] for r in chunk]),
                                 factorizations=float(np.mean([r[2] for r in chunk]))

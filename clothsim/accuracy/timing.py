@@ -164,7 +164,9 @@ def time_configurations(model: Model, steps: Sequence[StudyStep],
                                     levels=levels, against=typical)
                 shrink(len(skipped) * (repeats - 2))
             one_round(i for i in range(len(results)) if i not in skipped)
-        for _ in range(cap):
+        # until decided: a setting that became a close candidate late (the leader changed)
+        # gets its samples too; each round adds one to every setting it times, so this ends
+        for _ in range(cap * len(results)):
             again = (set() if undecided is None
                      else {i for i in undecided() if len(results[i].seconds) < cap} - broken)
             if not again:

@@ -38,8 +38,7 @@ from scipy.linalg import lapack
 from ..errors import InputError
 from ..model import Model
 from .base import Iterate, StepProblem
-from .fused import FusedStep
-from .held_accel import anderson_iterates
+from .held_accel import fused_step
 from .local_global import LocalGlobalSolver
 
 
@@ -100,10 +99,7 @@ class AndersonSolver(LocalGlobalSolver):
             k, x of shape (n, 3) [m] (the solver's array: copy it to keep it) and
             ‖∇g(x)‖ over the free degrees of freedom [N·s²].
         """
-        if problem.has_contacts:   # held contacts: on the contact planes (.held_accel)
-            yield from anderson_iterates(self, problem, x0)
-            return
-        step = FusedStep(self, problem, x0, energy=True)
+        step = fused_step(self, problem, x0, energy=True)   # held contacts: .held_accel
         yield Iterate(0, step.x, step.norm0, d=step.current_directions())
         shape, m = step.delta.shape, step.delta.size
         # in δ = x − y over the free vertices, coordinate-major; each point is kept as the

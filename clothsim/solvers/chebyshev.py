@@ -68,8 +68,7 @@ import numpy as np
 from ..errors import InputError, check_finite
 from ..model import Model
 from .base import Iterate, StepProblem, gradient_noise_floor
-from .fused import FusedStep
-from .held_accel import chebyshev_iterates
+from .held_accel import fused_step
 from .local_global import LocalGlobalSolver
 
 log = logging.getLogger(__name__)
@@ -293,11 +292,8 @@ class ChebyshevSolver(LocalGlobalSolver):
             self.rho = estimate_spectral_radius(self.model, problem, solver=self)
             self.rho_estimations += 1
             self._rho_provisional = self.rho == 0.0  # see the ``rho`` parameter
-        if problem.has_contacts:   # held contacts: the same update on the contact planes
-            yield from chebyshev_iterates(self, problem, x0)
-            return
         gamma = self.gamma
-        step = FusedStep(self, problem, x0)
+        step = fused_step(self, problem, x0)   # held contacts: on the planes (.held_accel)
         yield Iterate(0, step.x, step.norm0, d=step.current_directions())
         # rows [δ | a] of G(x_k), x_k, x_{k−1} (δ_F = x_F − y_F, a = A_FF δ_F): the update
         # is one linear combination of the three rows, and A_FF δ̂ = rhs(x_k) gives a for

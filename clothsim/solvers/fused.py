@@ -246,8 +246,38 @@ class FusedStep:
             self.dirs.vectors_into(xT, self.eT)
             self._local()
 
+    def tangential(self, vT: np.ndarray) -> np.ndarray:
+        """``vT`` itself: without held contacts every direction is free
+        (:class:`~.held_accel.HeldStep` projects onto the contact planes).
+
+        Parameters
+        ----------
+        vT : ndarray, shape (3, f)
+
+        Returns
+        -------
+        vT : ndarray, shape (3, f)
+        """
+        return vT
+
+    def gradient(self, aT: np.ndarray, out: np.ndarray) -> np.ndarray:
+        """∇g(x) over the free vertices from A_FF δ_F, without a product with A_FF.
+
+        Parameters
+        ----------
+        aT : ndarray, shape (3, f)
+            a = A_FF δ_F of the current x [kg·m] (carried by the caller).
+        out : ndarray, shape (3, f)
+            Receives a − rhs(x) [N·s²].
+
+        Returns
+        -------
+        out : ndarray, shape (3, f)
+        """
+        return np.subtract(aT, self._rhs, out=out)
+
     def gradient_norm(self, aT: np.ndarray) -> float:
-        """‖∇g(x)‖ over the free vertices from A_FF δ_F, without a product with A_FF.
+        """‖∇g(x)‖ over the free vertices (:meth:`gradient`).
 
         Parameters
         ----------
@@ -257,10 +287,9 @@ class FusedStep:
         Returns
         -------
         float
-            ‖a − rhs(x)‖ [N·s²]; ∇g itself is left in :attr:`grad`.
+            ‖∇g(x)‖ [N·s²]; ∇g itself is left in :attr:`grad`.
         """
-        np.subtract(aT, self._rhs, out=self.grad)
-        return _norm(self.grad)
+        return _norm(self.gradient(aT, self.grad))
 
     # -- energy differences (Anderson, L-BFGS) ---------------------------------------------
     def _setup_energy(self, solver, problem) -> None:
@@ -273,7 +302,7 @@ class FusedStep:
         if len(problem.anchor_vertices):
             self._anchor = (problem.anchor_vertices, problem.anchor_positions.T,
                             problem.anchor_stiffness)
-        self._dxT = np.empty_like(self.yT)
+        self._dxT = np.zeros_like(self.yT)
         self._dpT = np.empty_like(self.eT)
         # spring ends of all three coordinates at once, in (3, n) arrays read flat
         n = self.yT.shape[1]
@@ -296,7 +325,7 @@ class FusedStep:
         flat.take(self._b3, out=self._tmp, mode="clip")
         np.subtract(out, self._tmp, out=out)
 
-    def trial(self, deltaT: np.ndarray) -> float:
+    def trial(self, deltaT: np.ndarray, step: np.ndarray | None = None) -> float:
         """g(y + δ) − g(x) without cancellation, x the current iterate [J·s²].
 
         Puts the candidate x' in the spare buffer with its spring vectors p' = p + Δp;
@@ -310,6 +339,10 @@ class FusedStep:
         ----------
         deltaT : ndarray, shape (3, f)
             The candidate's δ_F [m].
+        step : ndarray, shape (3, f), optional
+            The move δ' − δ as the caller formed it (a line search's α p, exact): then Δx
+            is this step, not x' − x, which carries the rounding of y + δ' (eps |y|: deep in
+            a solve, that noise swamps g's change; :class:`~.held_accel.HeldStep`'s L-BFGS).
 
         Returns
         -------
@@ -319,7 +352,10 @@ class FusedStep:
         """
         xT = self._place(deltaT)
         p, pn, dxT, dp = self._p, self._p_trial, self._dxT, self._dpT
-        np.subtract(xT, self._xT, out=dxT)
+        if step is None:
+            np.subtract(xT, self._xT, out=dxT)
+        else:   # zero at the pins (dxT starts zero there and only free columns are set)
+            dxT[:, self.free] = step
         self._vectors(dxT, dp)
         np.add(p, dp, out=pn)                          # p' = p + Δp (accept re-syncs)
         ln = self._l_spare                             # |p'|, kept for accept

@@ -34,8 +34,7 @@ from ..errors import InputError
 from ..model import Model
 from .base import Iterate, StepProblem
 from .descent import ARMIJO_C, MAX_HALVINGS
-from .fused import FusedStep
-from .held_accel import lbfgs_iterates
+from .held_accel import fused_step
 from .local_global import LocalGlobalSolver
 
 
@@ -97,13 +96,14 @@ class LBFGSSolver(LocalGlobalSolver):
             k, x of shape (n, 3) [m] (the solver's array: copy it to keep it) and
             ‖∇g(x)‖ over the free degrees of freedom [N·s²].
         """
-        if problem.has_contacts:   # held contacts: on the contact planes (.held_accel)
-            yield from lbfgs_iterates(self, problem, x0)
-            return
-        step = FusedStep(self, problem, x0, energy=True)
+        # held contacts (.held_accel): gradients and directions projected onto the planes
+        step = fused_step(self, problem, x0, energy=True)
+        # held: the Armijo test measures the exact step s (limit runs go to 1e-10 there);
+        # without contacts, x' − x as measured (docs/data counts)
+        exact = problem.has_contacts
         shape = step.delta.shape
         a = step.a0.copy()                 # A_FF δ_F of the current iterate
-        grad = a - step.rhs                # ∇g over the free vertices, coordinate-major
+        grad = step.gradient(a, np.empty(shape))   # ∇g over F, coordinate-major
         k = 0
         yield Iterate(k, step.x, step.norm0)
         hist = _Pairs(self.window, grad.size)
@@ -114,6 +114,7 @@ class LBFGSSolver(LocalGlobalSolver):
         sf, tf, uf = s.reshape(-1), t.reshape(-1), u.reshape(-1)     # flat views
         while True:
             r, r_parts = hist.inverse_hessian_times(grad, step.solve_columns)
+            r = step.tangential(r)   # exactly tangential: s = −α r stays in the planes
             slope = -float(np.dot(grad.reshape(-1), r.reshape(-1)))
             if not slope < 0.0:
                 return  # no descent direction at working precision: optimal to rounding
@@ -121,7 +122,7 @@ class LBFGSSolver(LocalGlobalSolver):
             for _ in range(MAX_HALVINGS):   # backtracking Armijo (descent.armijo), fused
                 np.multiply(r, -alpha, out=s)           # s = −α r: exact (α a power of 2)
                 np.add(delta, s, out=cand)              # δ − α r
-                if step.trial(cand) <= ARMIJO_C * alpha * slope:
+                if step.trial(cand, s if exact else None) <= ARMIJO_C * alpha * slope:
                     break
                 alpha *= 0.5
             else:
@@ -131,7 +132,7 @@ class LBFGSSolver(LocalGlobalSolver):
             # with A_FF r = q + Σ c_j A_FF s_j (H₀ = A_FF⁻¹; the pairs keep A_FF s_j)
             np.multiply(hist.apply_a(r_parts), -alpha, out=u)
             np.add(a, u, out=a)
-            np.subtract(a, step.rhs, out=grad_new)
+            step.gradient(a, grad_new)
             np.subtract(grad_new, grad, out=t)
             st = float(np.dot(sf, tf))
             if st > 0.0:

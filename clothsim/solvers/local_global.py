@@ -43,8 +43,7 @@ from ..factorization import single_threaded
 from ..model import Model
 from .base import Iterate, Solver, StepProblem, StepResult
 from .directions import SpringDirections
-from .fused import FusedStep
-from .held import held_iterates
+from .held_accel import fused_step
 from .system import SystemFactor, factor_system
 
 log = logging.getLogger(__name__)
@@ -357,10 +356,8 @@ class LocalGlobalSolver(Solver):
         Iterate
             k, x_k (n, 3) [m] and ‖∇g(x_k)‖ [N·s²].
         """
-        if problem.has_contacts:   # held contacts: the constrained global step
-            yield from held_iterates(self, problem, x0)
-            return
-        step = FusedStep(self, problem, x0)
+        # held contacts: the constrained global step on the planes (.held_accel.HeldStep)
+        step = fused_step(self, problem, x0)
         yield Iterate(0, step.x, step.norm0, d=step.current_directions())
         k = 0
         while True:

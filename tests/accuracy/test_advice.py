@@ -27,6 +27,25 @@ def test_chebyshev_worse_than_local_global_at_small_budgets_is_noted():
                     "iterations per step")
 
 
+def test_a_gap_raised_while_the_solver_error_falls_is_noted():
+    # unique steps (the table shows the solver error), where Chebyshev is ahead, but its
+    # objective gap at 5 and 10 iterations is above local/global's: said in the gap
+    table = rows({"local-global": {5: 0.3, 10: 0.29, 20: 0.27},
+                  "chebyshev": {5: 0.26, 10: 0.17, 20: 0.1}}, unique=3)
+    for r in table:
+        r.objective_gap_p90 = {("local-global", 5): 4.6e-3, ("local-global", 10): 2.4e-3,
+                               ("local-global", 20): 1.4e-3, ("chebyshev", 5): 1.6e-2,
+                               ("chebyshev", 10): 7.2e-3,
+                               ("chebyshev", 20): 7.3e-4}[(r.method, r.iterations)]
+    (note,) = worse_than_local_global(table)
+    assert note.startswith("chebyshev is less accurate than plain local/global at 5, 10 "
+                           "iterations per step (objective gap p90 1.6e-02, 7.2e-03")
+    assert note.endswith("chebyshev is ahead from 20 iterations per step")
+    for r in table:   # and no note where it is ahead in both
+        r.objective_gap_p90 = r.solver_error_p90
+    assert worse_than_local_global(table) == []
+
+
 def test_no_note_where_the_accelerated_methods_are_ahead_or_unmeasured():
     # hanging: Chebyshev better than local/global at every budget
     table = rows({"local-global": {5: 0.38, 10: 0.38}, "chebyshev": {5: 0.37, 10: 0.31}},

@@ -36,23 +36,27 @@ def read(path):
 
 def test_a_configuration_that_blows_up_is_a_diverged_row_and_the_rest_is_measured(
         tmp_path, monkeypatch):
-    original = AndersonSolver.solve
+    original = AndersonSolver.iterates
 
-    def blow_up(self, problem, x0=None):
-        if self.iterations == 5:  # one configuration only, as a nan force would
-            raise InputError("external_force[0, 0]: must be a finite number, got nan")
-        return original(self, problem, x0)
+    def blow_up(self, problem, x0=None):   # Anderson's 5th iterate has a nan force
+        for it in original(self, problem, x0):
+            if it.k == 5:
+                raise InputError("external_force[0, 0]: must be a finite number, got nan")
+            yield it
 
-    monkeypatch.setattr(AndersonSolver, "solve", blow_up)
+    monkeypatch.setattr(AndersonSolver, "iterates", blow_up)
     text = study(tmp_path, time_steps=True)
     table = {(r["method"], r["iterations"], r["tolerance"]): r
              for r in read(tmp_path / "accuracy.csv")}
-    bad = table[("anderson", "5", "")]
-    assert bad["status"] == "diverged" and int(bad["steps_diverged"]) >= 1
-    assert math.isinf(float(bad["solver_error_max"]))
-    assert math.isinf(float(bad["trajectory_error"]))
-    others = [r for k, r in table.items() if k != ("anderson", "5", "")]
-    assert len(others) == 5
+    # its settings that stop before the 5th iterate are measured, the others diverged
+    bad = [r for r in table.values() if r["status"] == "diverged"]
+    assert table[("anderson", "5", "")] in bad and len(bad) <= 2
+    assert all(r["method"] == "anderson" for r in bad)
+    for r in bad:
+        assert int(r["steps_diverged"]) >= 1 and math.isinf(float(r["solver_error_max"]))
+    assert math.isinf(float(table[("anderson", "5", "")]["trajectory_error"]))
+    others = [r for r in table.values() if r not in bad]
+    assert len(others) >= 4 and table[("anderson", "1", "")] in others
     for r in others:
         assert r["status"] == "ok" and math.isfinite(float(r["solver_error_max"]))
         assert math.isfinite(float(r["seconds_per_step_median"]))
