@@ -22,34 +22,27 @@ are p' = p + Δp, Δp = Δx_a − Δx_b gathered from the exact position change 
 gather instead of two). They differ from x'_a − x'_b by rounding, which would add up over
 accepted moves: :meth:`FusedStep.accept` therefore gathers p from the positions on the
 first move (where x_0's pins may jump to their targets and pinned-together ends become
-exactly coincident) and every :data:`RESYNC`-th after it, so the spring vectors are never
-more than RESYNC additions (each one rounding of p) away from the positions' own.
+exactly coincident) and every :data:`~.fused_energy.RESYNC`-th after it, so the spring
+vectors are never more than RESYNC additions (each one rounding of p) away from the
+positions' own. Those two comparisons live in :mod:`clothsim.solvers.fused_energy`.
 
 Every iterate after x_0 has its exactly pinned vertices at their targets (the x_0 a caller
 passes may not: its gradient is then computed from the definition; the default x_0 has
-them there, and its gradient is the one product A_FF δ_F − rhs(x_0), about 7× cheaper than
-the definition's spring gather at 129² and 257², docs/data/cpp-side-by-side.md).
+them there, and its gradient is the one product A_FF δ_F − rhs(x_0), cheaper than
+the definition's spring gather (docs/data/cpp-side-by-side.md times both).
 """
 
 from __future__ import annotations
 
-import math
-
 import numpy as np
 
 from ..factorization import spmv_add
+from .fused_energy import RESYNC, EnergyDifferences, _norm
 
-#: :meth:`FusedStep.accept` gathers the spring vectors from the positions on the first
-#: accepted move and every RESYNC-th after it; in between p' = p + Δp (trial)
-RESYNC = 8
-
-
-def _norm(aT: np.ndarray) -> float:
-    flat = aT.reshape(-1)
-    return math.sqrt(float(np.dot(flat, flat)))
+__all__ = ["RESYNC", "FusedStep"]
 
 
-class FusedStep:
+class FusedStep(EnergyDifferences):
     """One step of the fused local/global iteration (see the module docstring).
 
     Parameters
@@ -290,117 +283,3 @@ class FusedStep:
             ‖∇g(x)‖ [N·s²]; ∇g itself is left in :attr:`grad`.
         """
         return _norm(self.gradient(aT, self.grad))
-
-    # -- energy differences (Anderson, L-BFGS) ---------------------------------------------
-    def _setup_energy(self, solver, problem) -> None:
-        model = solver.model
-        self._mF = np.ascontiguousarray(model.vertex_mass[self.free])
-        self._k = model.springs.spring_stiffness
-        self._two_r = 2.0 * model.springs.spring_rest_length
-        self._fT = None if problem.f_ext is None else np.ascontiguousarray(problem.f_ext.T)
-        self._anchor = None
-        if len(problem.anchor_vertices):
-            self._anchor = (problem.anchor_vertices, problem.anchor_positions.T,
-                            problem.anchor_stiffness)
-        self._dxT = np.zeros_like(self.yT)
-        self._dpT = np.empty_like(self.eT)
-        # spring ends of all three coordinates at once, in (3, n) arrays read flat
-        n = self.yT.shape[1]
-        shift = (np.arange(3) * n)[:, None]
-        self._a3 = np.ascontiguousarray((self.dirs.a[None, :] + shift).reshape(-1))
-        self._b3 = np.ascontiguousarray((self.dirs.b[None, :] + shift).reshape(-1))
-        self._tmp = np.empty(self.eT.size)
-        self._accepted = 0
-        self._w = self._tmp.reshape(self.eT.shape)       # p + p' (after the gathers)
-        self._s, self._num = np.empty(len(self._k)), np.empty(len(self._k))
-        self._mv = np.empty((3, len(self._mF)))
-        if self.runs is not None:   # Δx over the free vertices: views of its runs
-            self._dx_runs = [self._dxT[:, start:stop] for start, stop, _ in self.runs]
-            self._dxF = np.empty_like(self._mv)
-
-    def _vectors(self, xT: np.ndarray, pT: np.ndarray) -> None:
-        """p = x_a − x_b into pT, all coordinates in two takes (as SpringDirections does)."""
-        flat, out = xT.reshape(-1), pT.reshape(-1)
-        flat.take(self._a3, out=out, mode="clip")
-        flat.take(self._b3, out=self._tmp, mode="clip")
-        np.subtract(out, self._tmp, out=out)
-
-    def trial(self, deltaT: np.ndarray, step: np.ndarray | None = None) -> float:
-        """g(y + δ) − g(x) without cancellation, x the current iterate [J·s²].
-
-        Puts the candidate x' in the spare buffer with its spring vectors p' = p + Δp;
-        :meth:`accept` then moves there without recomputing them (until the next
-        :meth:`trial`; see the module docstring for how p' is kept in step with x'). As in
-        :func:`~.descent.objective_difference`, everything is formed from Δx = x' − x (exact:
-        a difference of nearby floats) and the spring vectors' changes Δp = Δx_a − Δx_b, so
-        the comparison still resolves g's change far below 1e-8 relative residual.
-
-        Parameters
-        ----------
-        deltaT : ndarray, shape (3, f)
-            The candidate's δ_F [m].
-        step : ndarray, shape (3, f), optional
-            The move δ' − δ as the caller formed it (a line search's α p, exact): then Δx
-            is this step, not x' − x, which carries the rounding of y + δ' (eps |y|: deep in
-            a solve, that noise swamps g's change; :class:`~.held_accel.HeldStep`'s L-BFGS).
-
-        Returns
-        -------
-        float
-            ½ Δxᵀ M (2(x − y) + Δx) + h² [Σ ½ k (l' − l)(l' + l − 2r) + anchors − Δxᵀ f],
-            with l' − l = (2p + Δp)·Δp / (l + l').
-        """
-        xT = self._place(deltaT)
-        p, pn, dxT, dp = self._p, self._p_trial, self._dxT, self._dpT
-        if step is None:
-            np.subtract(xT, self._xT, out=dxT)
-        else:   # zero at the pins (dxT starts zero there and only free columns are set)
-            dxT[:, self.free] = step
-        self._vectors(dxT, dp)
-        np.add(p, dp, out=pn)                          # p' = p + Δp (accept re-syncs)
-        ln = self._l_spare                             # |p'|, kept for accept
-        np.einsum("ij,ij->j", pn, pn, out=ln)
-        np.sqrt(ln, out=ln)
-        self._trial_delta = deltaT
-        s, num, w = self._s, self._num, self._w
-        np.add(self._l, ln, out=s)
-        np.add(p, pn, out=w)
-        np.einsum("ij,ij->j", w, dp, out=num)        # (2p + Δp)·Δp, Δp exact to rounding
-        if s.min() > 0:
-            np.divide(num, s, out=num)
-        else:                                          # springs whose ends coincide twice
-            np.divide(num, s, out=num, where=s > 0)
-            num[~(s > 0)] = 0.0
-        np.multiply(num, self._k, out=num)
-        np.subtract(s, self._two_r, out=s)
-        e = 0.5 * float(np.dot(num, s))
-        if self._fT is not None:
-            e -= float(np.vdot(dxT, self._fT))
-        if self._anchor is not None:
-            av, qT, k = self._anchor
-            da = dxT[:, av]
-            e += float(np.sum(k * da * (self._xT[:, av] - qT + 0.5 * da)))
-        # ½ Δxᵀ M (2(x − y) + Δx), 2(x − y) + Δx = δ + δ' to rounding (a factor, not a
-        # difference): over the free vertices, where Δx lives
-        if self.runs is None:
-            dxF = dxT[:, self.free]
-        else:
-            dxF = np.concatenate(self._dx_runs, axis=1, out=self._dxF)
-        mv = self._mv
-        np.add(self.delta, deltaT, out=mv)
-        np.multiply(mv, self._mF, out=mv)
-        mass = 0.5 * float(np.dot(dxF.reshape(-1), mv.reshape(-1)))
-        return mass + self.h2 * e
-
-    def accept(self) -> None:
-        """Move to the last :meth:`trial`'s candidate: local step there and its rhs."""
-        deltaT = self._trial_delta
-        self._swap(deltaT)
-        self._p, self._p_trial = self._p_trial, self._p
-        self._l, self._l_spare = self._l_spare, self._l
-        self._accepted += 1
-        if self._accepted % RESYNC == 1:   # the first move and every RESYNC-th: p(x) afresh
-            self._vectors(self._xT, self._p)
-            np.einsum("ij,ij->j", self._p, self._p, out=self._l)
-            np.sqrt(self._l, out=self._l)
-        self._local(self._l, self._p)

@@ -33,7 +33,6 @@ import scipy.sparse as sp
 from .. import contacts
 from ..factorization import Factor
 from . import tangent_system
-from .base import Iterate
 
 log = logging.getLogger(__name__)
 
@@ -310,35 +309,3 @@ def held_start(solver, problem, x0: np.ndarray | None = None):
     x = (problem.initial_guess() if x0 is None
          else feasible(problem, np.array(x0, dtype=np.float64)))
     return held, x
-
-
-def held_iterates(solver, problem, x0: np.ndarray | None = None):
-    """Local/global iterates of a step with held contacts (see the module docstring).
-
-    Parameters
-    ----------
-    solver : LocalGlobalSolver
-        Caches the :class:`HeldSystem` of the current contact set.
-    problem : StepProblem
-        A step whose :attr:`~clothsim.problem.StepProblem.has_contacts`.
-    x0 : ndarray, shape (n, 3), optional
-        Initial guess [m]; moved onto the pins and contact planes. Default
-        :meth:`StepProblem.initial_guess`.
-
-    Yields
-    ------
-    Iterate
-        k, x_k (n, 3) [m], ‖P ∇g(x_k)‖ [N·s²] and d(x_k).
-    """
-    held, x = held_start(solver, problem, x0)
-    d = solver.local_step(x)
-    rhs = solver.displacement_right_hand_side(problem, d)
-    yield Iterate(0, x, held.gradient_norm(problem, x, rhs), d=d)
-    z, Az = held.prepare(problem)
-    k = 0
-    while True:
-        x = held.global_step(problem, rhs, z, Az)
-        d = solver.local_step(x)
-        rhs = solver.displacement_right_hand_side(problem, d)
-        k += 1
-        yield Iterate(k, x, held.gradient_norm(problem, x, rhs), d=d)
