@@ -48,8 +48,8 @@ from .factorization import CHOLMOD_MODES
 #: and flop counts of the factor, so the model predicts from n. The supernodal factor is
 #: ordered by AMD alone: on the cloth grids it factors about 1.5× faster than CHOLMOD's
 #: default (which also tries METIS) at 513² and 1025², and its solves are as fast.
-MODE_COSTS = {"simplicial": ((1.369e-08, 1.671), (1.474e-08, 1.279)),
-              "supernodal": ((6.916e-07, 1.214), (2.715e-08, 1.245))}
+MODE_COSTS = {"simplicial": ((1.296e-08, 1.676), (1.675e-08, 1.269)),
+              "supernodal": ((8.604e-07, 1.194), (3.626e-08, 1.218))}
 OTHER = {"simplicial": "supernodal", "supernodal": "simplicial"}
 
 
