@@ -250,8 +250,9 @@ class RunFolder(OutputFolder):
         info = copy.deepcopy(self.info)      # run.json as of now, whatever changes next
         if wait:
             self._write_frame(k, x, v, record, info)
-            return
-        self._job.start(self._write_frame, k, x, v, record, info, name=f"clothsim frame {k}")
+        else:
+            self._job.start(self._write_frame, k, x, v, record, info,
+                            name=f"clothsim frame {k}")
 
     def _write_frame(self, k: int, x, v, record: dict | None, info: dict) -> None:
         self.writer.write(k, k / self._fps, x, v)
