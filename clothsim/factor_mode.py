@@ -117,11 +117,16 @@ def break_even(n: int, mode: str, costs: dict | None = None) -> int | None:
         F_other + N s_other < F_mode + N s_mode (0 when it is cheaper for every count);
         None otherwise (the other mode is never the cheaper one).
     """
+    gap = _solve_gap(n, mode, costs)
+    return None if gap is None else max(0, math.floor(_settle((gap[1] - gap[0]) / gap[2])) + 1)
+
+
+def _solve_gap(n: int, mode: str, costs: dict | None) -> tuple[float, float, float] | None:
+    """(F_mode, F_other, s_mode − s_other), or None when the other mode's solves are not the
+    faster ones."""
     pred = predicted_costs(n, costs)
     (f, s), (f_o, s_o) = pred[mode], pred[OTHER[mode]]
-    if s_o >= s:
-        return None
-    return max(0, math.floor(_settle((f_o - f) / (s - s_o))) + 1)
+    return None if s_o >= s else (f, f_o, s - s_o)
 
 
 def _settle(x: float) -> float:
@@ -148,11 +153,8 @@ def switch_point(n: int, mode: str, costs: dict | None = None) -> int | None:
     int or None
         N* (at least 1), or None when the other mode's solves are not the faster ones.
     """
-    pred = predicted_costs(n, costs)
-    (_, s), (f_o, s_o) = pred[mode], pred[OTHER[mode]]
-    if s_o >= s:
-        return None
-    return max(1, math.ceil(_settle(f_o / (s - s_o))))
+    gap = _solve_gap(n, mode, costs)
+    return None if gap is None else max(1, math.ceil(_settle(gap[1] / gap[2])))
 
 
 def choose_cholmod_mode(n: int, requested: str = "auto", expected_solves: int | None = None,
