@@ -82,15 +82,21 @@ def main(argv: list[str] | None = None) -> None:
             print(name, "513² clothsim run", res[name]["run"][-1], flush=True)
 
     print(f"\n{args.repeats} interleaved repeats; load average {load} at the start\n")
-    print("| quantity | old wall | new wall | new / old | old CPU | new CPU | new / old |")
-    print("|---|---|---|---|---|---|---|")
+    print("\n".join(table(res)))
+
+
+def table(res: dict) -> list[str]:
+    """The Markdown lines: medians of each tree's runs, wall and CPU, and new / old."""
+    lines = ["| quantity | old wall | new wall | new / old | old CPU | new CPU | new / old |",
+             "|---|---|---|---|---|---|---|"]
     for label, key, w, c in (("1025² setup", "first", "setup", "setup_cpu"),
                              ("1025² first step", "first", "first", "first_cpu"),
                              ("513² clothsim run, 5 frames", "run", "wall", "cpu")):
         ow, nw = (statistics.median([x[w] for x in res[k][key]]) for k in ("old", "new"))
         oc, nc = (statistics.median([x[c] for x in res[k][key]]) for k in ("old", "new"))
-        print(f"| {label} | {ow:.1f} s | {nw:.1f} s | {nw / ow:.2f} | {oc:.1f} s | "
-              f"{nc:.1f} s | {nc / oc:.2f} |")
+        lines.append(f"| {label} | {ow:.1f} s | {nw:.1f} s | {nw / ow:.2f} | {oc:.1f} s | "
+                     f"{nc:.1f} s | {nc / oc:.2f} |")
+    return lines
 
 
 if __name__ == "__main__":

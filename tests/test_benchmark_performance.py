@@ -100,3 +100,19 @@ def test_factor_modes_rows_compare_the_automatic_mode_with_both(capsys):
             assert lo - 0.005 <= float(cells[5]) <= hi + 0.005, row
         assert cells[6] == "simplicial"
     assert any("auto's reason | simplicial: " in line for line in lines)
+
+
+def test_large_vs_table_takes_medians_and_ratios():
+    """benchmarks/large_vs.py's table from made-up runs (the runs themselves take minutes)."""
+    from benchmarks import large_vs
+
+    def first(s, f):
+        return {"setup": s, "setup_cpu": s / 2, "first": f, "first_cpu": f / 2}
+
+    res = {"old": {"first": [first(4, 30), first(6, 50)], "run": [{"wall": 20, "cpu": 18}]},
+           "new": {"first": [first(3, 24), first(3, 26)], "run": [{"wall": 15, "cpu": 17}]}}
+    lines = large_vs.table(res)
+    assert lines[2] == "| 1025² setup | 5.0 s | 3.0 s | 0.60 | 2.5 s | 1.5 s | 0.60 |"
+    assert lines[3] == "| 1025² first step | 40.0 s | 25.0 s | 0.62 | 20.0 s | 12.5 s | 0.62 |"
+    assert lines[4] == ("| 513² clothsim run, 5 frames | 20.0 s | 15.0 s | 0.75 | 18.0 s | "
+                        "17.0 s | 0.94 |")
