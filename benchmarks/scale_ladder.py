@@ -21,7 +21,8 @@ matrices (M + h²L over the free vertices, each size in a fresh process, one thr
 fastest of 3 factorizations and of 15 three-column solves (the modes interleaved), in CPU
 seconds (so that other processes on the machine count less), fits each as a power law
 t = c · n^p of the free vertices n, and writes the table, the fits and the mode that cost
-model chooses at each size for a few solve counts to ``docs/data/cholmod-modes.md``. The
+model chooses at each size for a few solve counts and for an unknown count (the ski-rental
+rule of :mod:`clothsim.factor_mode`) to ``docs/data/cholmod-modes.md``. The
 constants of :data:`clothsim.factor_mode.MODE_COSTS` are that file's fits.
 """
 
@@ -163,11 +164,16 @@ def mode_table(sizes: list[int]) -> list[str]:
             lines.append(f"| {mode} {what} | {c:.3e} | {p:.3f} |")
         costs[mode] = tuple(pair)
     lines += ["", "The mode `choose_cholmod_mode` picks with these fits, by the run's expected "
-              "solves (factor + solves, predicted):", "",
-              "| free vertices | 50 solves | 600 solves | 6 000 solves | 60 000 solves |",
-              "|---|---|---|---|---|"]
+              "solves (factor + solves, predicted), and for an unknown count (the ski-rental "
+              "rule: the mode cheaper to factor, then the faster solves after as many solves "
+              "as cost the other mode's factorization):", "",
+              "| free vertices | 50 solves | 600 solves | 6 000 solves | 60 000 solves | "
+              "unknown count |", "|---|---|---|---|---|---|"]
     for n in (33 ** 2, 129 ** 2, 257 ** 2, 385 ** 2, 513 ** 2, 1025 ** 2):
         picks = [choose_cholmod_mode(n, "auto", s, costs).mode for s in (50, 600, 6000, 60000)]
+        ski = choose_cholmod_mode(n, "auto", None, costs, final=False)
+        picks.append(ski.mode + ("" if ski.switch_after is None else
+                                 f", {ski.switch_to} after {ski.switch_after} solves"))
         lines.append(f"| {n:,} | " + " | ".join(picks) + " |")
     return lines
 

@@ -124,7 +124,8 @@ def run_scene(scene, out_dir, *, frames: int | None = None,
     frames : int, optional
         Frames after the initial one (default ``scene.frames``).
     progress : callable, optional
-        ``progress(frame, frames)`` after each frame is written (the CLI's progress bar).
+        ``progress(frame, frames)`` after each frame is written (the CLI's progress bar; a
+        frame is written on a background thread during the next frame's steps).
     resume : bool
         Continue from the last complete frame in ``out_dir`` (positions and velocities read
         back from its .vtu file, time = index / fps, the solver's saved state restored).
@@ -221,19 +222,24 @@ def _run_in(folder: RunFolder, scene, model, sim, frames: int, progress, resume:
     info["solver_state"] = get_state()
     folder.save_npz(force=True)
     folder.mark("writing")
-    for k in range(start + 1 if resuming else 1, frames + 1):
+    first = start + 1 if resuming else 1
+    for k in range(first, frames + 1):
         # canonical start time of the frame: identical in fresh and resumed runs
         sim.state = State(x.copy(), v.copy(), (k - 1) / fps, (k - 1) * substeps)
-        steps = _advance(sim, substeps, k)
+        steps = _advance(sim, substeps, k)   # meanwhile frame k - 1 is written (background)
         x, v = sim.state.positions, sim.state.velocities
         record = _frame_record(k, fps, steps, sim.solver.tolerance)
+        folder.wait()
+        if progress is not None and k > first:
+            progress(k - 1, frames)          # frame k - 1 is on disk
         with signals_deferred():
             info["backend"] = info["solver"]["backend"] = getattr(sim.solver, "backend", None)
             info["factorization"] = getattr(sim.solver, "factorization", None)
             info["solver_state"] = get_state()
-            folder.write_frame(k, x, v, record)
-        if progress is not None:
-            progress(k, frames)
+            folder.write_frame(k, x, v, record, wait=False)
+    folder.wait()
+    if progress is not None and frames >= first:
+        progress(frames, frames)
     with signals_deferred():
         folder.end("complete", None)
     files = folder.frame_files()

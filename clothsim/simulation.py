@@ -265,23 +265,27 @@ class Simulation:
     def expect_steps(self, steps: int | None, *, final: bool = True) -> None:
         """Tell the solver how many steps follow, so that its next factorization's mode
         (:func:`clothsim.factor_mode.choose_cholmod_mode`) weighs the solves ahead:
-        ``steps`` × iterations (at most, with a tolerance). :func:`clothsim.run_scene`
-        passes the whole run (``final``); :meth:`run` passes its steps as a lower bound,
-        since more may follow. Solvers without a factorization ignore it.
+        ``steps`` × iterations. :func:`clothsim.run_scene` passes the whole run (``final``);
+        :meth:`run` passes its steps as a lower bound, since more may follow (with a
+        tolerance, a step may stop after one iteration: the bound is then ``steps``).
+        Solvers without a factorization ignore it.
 
         Parameters
         ----------
         steps : int or None
             Steps of length h still to come; None: unknown.
         final : bool, default True
-            Whether ``steps`` is the whole run. When False, the mode is chosen for at least
-            that many, and a factor whose solves are the slower ones is refactored in the
-            other mode once it has served the break-even count.
+            Whether ``steps`` is the whole run. When False, the count is a lower bound and
+            the ski-rental rule decides: a factor in the mode cheaper to factor is
+            refactored in the mode with the faster solves once it has served its switch
+            point.
         """
-        if hasattr(self.solver, "expected_solves"):
-            self.solver.expected_solves = (None if steps is None
-                                           else max(int(steps), 1) * self.solver.iterations)
-            self.solver.expected_final = bool(final) and steps is not None
+        solver = self.solver
+        if hasattr(solver, "expected_solves"):
+            final = bool(final) and steps is not None
+            per_step = solver.iterations if final or solver.tolerance is None else 1
+            solver.expected_solves = None if steps is None else max(int(steps), 1) * per_step
+            solver.expected_final = final
 
     def step(self) -> StepRecord:
         """Advance one time step h.

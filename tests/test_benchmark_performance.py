@@ -48,6 +48,26 @@ def test_numpy_parts_leave_the_measured_solver_untouched():
     np.testing.assert_array_equal(case.solver.solve(case.problem).x, before)
 
 
+def test_the_iteration_is_measured_after_the_automatic_modes_switch(monkeypatch):
+    """Along run(3) and stepping on, the benchmark steps past a pending ski-rental switch
+    (here a toy cost model: supernodal first, simplicial after 250 solves) and measures the
+    factor the path settles in; without a pending switch it stops at 10 steps."""
+    from benchmarks import performance
+    from clothsim import factor_mode
+
+    toy = {"simplicial": ((2.5e-4, 1.0), (1e-6, 1.0)), "supernodal": ((1e-9, 1.0), (2e-6, 1.0))}
+    monkeypatch.setattr(factor_mode, "MODE_COSTS", toy)
+    assert factor_mode.switch_point(79, "supernodal") == 250   # 9² minus two pinned corners
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        case = performance.Case(9)
+        assert (case.mode, case.steps, case.solver.factor_count) == ("simplicial", 25, 2)
+        both = {"simplicial": toy["simplicial"], "supernodal": ((1e-9, 1.0), (5e-7, 1.0))}
+        monkeypatch.setattr(factor_mode, "MODE_COSTS", both)
+        case = performance.Case(9)          # supernodal cheaper to factor and to solve: final
+        assert (case.mode, case.steps, case.solver.factor_count) == ("supernodal", 10, 1)
+
+
 def test_iteration_cost_ratios_are_complete(monkeypatch):
     """The per-iteration ratio benchmark's arithmetic on a tiny cloth (timings not asserted)."""
     from benchmarks import iteration_cost
@@ -74,5 +94,25 @@ def test_factor_modes_rows_compare_the_automatic_mode_with_both(capsys):
     for row in rows:
         cells = [c.strip() for c in row.strip("|").split("|")]
         assert all(c.endswith(" s") and float(c[:-2]) >= 0 for c in cells[2:5]), row
-        assert cells[5] == "simplicial"
+        auto, better = float(cells[2][:-2]), min(float(cells[3][:-2]), float(cells[4][:-2]))
+        if better > 0.005:                  # the cells are rounded to 0.01 s
+            lo, hi = (auto - 0.005) / (better + 0.005), (auto + 0.005) / (better - 0.005)
+            assert lo - 0.005 <= float(cells[5]) <= hi + 0.005, row
+        assert cells[6] == "simplicial"
     assert any("auto's reason | simplicial: " in line for line in lines)
+
+
+def test_large_vs_table_takes_medians_and_ratios():
+    """benchmarks/large_vs.py's table from made-up runs (the runs themselves take minutes)."""
+    from benchmarks import large_vs
+
+    def first(s, f):
+        return {"setup": s, "setup_cpu": s / 2, "first": f, "first_cpu": f / 2}
+
+    res = {"old": {"first": [first(4, 30), first(6, 50)], "run": [{"wall": 20, "cpu": 18}]},
+           "new": {"first": [first(3, 24), first(3, 26)], "run": [{"wall": 15, "cpu": 17}]}}
+    lines = large_vs.table(res)
+    assert lines[2] == "| 1025² setup | 5.0 s | 3.0 s | 0.60 | 2.5 s | 1.5 s | 0.60 |"
+    assert lines[3] == "| 1025² first step | 40.0 s | 25.0 s | 0.62 | 20.0 s | 12.5 s | 0.62 |"
+    assert lines[4] == ("| 513² clothsim run, 5 frames | 20.0 s | 15.0 s | 0.75 | 18.0 s | "
+                        "17.0 s | 0.94 |")

@@ -61,3 +61,35 @@ def test_spmv_add_accumulates_like_the_product(shape):
     expected = out + A @ v
     spmv_add(A, v, out)
     np.testing.assert_allclose(out, expected, rtol=1e-15, atol=1e-15)
+
+
+@pytest.mark.parametrize("backend", ["splu", "cholmod"])
+def test_a_known_eigenvalue_floor_bounds_the_condition_and_skips_the_estimate(backend):
+    """Factor(eigenvalue_floor=λ): √n ‖A‖₁ / λ bounds the exact cond₁ from above; at or
+    below the warning threshold the estimate (its solves) is skipped, above it it runs."""
+    import warnings
+
+    from clothsim.errors import ConditioningWarning
+    from clothsim.factorization import CONDITION_WARNING_THRESHOLD, Factor
+
+    if backend == "cholmod" and not cholmod_available():
+        pytest.skip("CHOLMOD (scikit-sparse) is not installed")
+    rng = np.random.default_rng(1)
+    n = 40
+    for mass_scale in (1.0, 1e-15):              # well conditioned, then cond ≈ 1e16
+        m = rng.uniform(0.5, 2.0, n) * mass_scale
+        m[0] = mass_scale * 0.5
+        lap = sp.diags([-np.ones(n - 1), 2 * np.ones(n), -np.ones(n - 1)], [-1, 0, 1])
+        A = (sp.diags(m) + 1e-3 * lap).tocsc()
+        exact = np.linalg.cond(A.toarray(), 1)
+        with warnings.catch_warnings(record=True) as caught:
+            warnings.simplefilter("always", ConditioningWarning)
+            f = Factor(A, backend=backend, eigenvalue_floor=m.min())
+        assert f.condition_bound >= exact * (1 - 1e-12)
+        proven = f.condition_bound <= CONDITION_WARNING_THRESHOLD
+        assert proven == (mass_scale == 1.0)
+        assert ("condition_estimate" in f.__dict__) == (not proven)   # the estimate ran
+        assert any(issubclass(w.category, ConditioningWarning) for w in caught) == (
+            exact > CONDITION_WARNING_THRESHOLD)
+    plain = Factor(A, backend=backend)            # without a floor: always estimated
+    assert plain.condition_bound is None and "condition_estimate" in plain.__dict__

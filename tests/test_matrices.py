@@ -164,3 +164,30 @@ def test_system_matrix_with_anchors_and_expand():
     Aa = matrices.system_matrix(model, h, anchor_vertices=[2], anchor_stiffness=[7.0])
     assert (Aa - A)[2, 2] == pytest.approx(h * h * 7.0)
     assert (Aa - A).count_nonzero() == 1
+
+
+def test_L_and_J_are_canonical_and_equal_the_triplet_sums():
+    """stiffness_matrix sums each vertex's diagonal before the triplets are sorted, and
+    spring_matrix is built column by column: both equal the plain triplet construction (4s
+    and 2s triplets summed by scipy), with sorted indices, J bit for bit, L's diagonal to
+    its last bit (scipy sums a row's duplicates in an order of its own)."""
+    mesh = cs.grid(9, 7, size=(1.0, 0.7), plane="xz")
+    family = cs.Model.build(mesh, cs.grid_springs(mesh, structural=800.0, shear=80.0,
+                                                  bending=0.3))
+    for model in (family, small_model(9, 7, seed=3)):
+        n, s = model.vertex_count, model.spring_count
+        a, b = model.springs.spring_vertices.T
+        k = model.springs.spring_stiffness
+        L_ref = sp.coo_matrix((np.concatenate([k, k, -k, -k]),
+                               (np.concatenate([a, b, a, b]), np.concatenate([a, b, b, a]))),
+                              shape=(n, n)).tocsr()
+        cols = np.arange(s)
+        J_ref = sp.coo_matrix((np.concatenate([k, -k]), (np.concatenate([a, b]),
+                                                         np.concatenate([cols, cols]))),
+                              shape=(n, s)).tocsr()
+        for got, ref, rtol in ((matrices.stiffness_matrix(model, expand=False), L_ref, 4e-16),
+                               (matrices.spring_matrix(model, expand=False), J_ref, 0)):
+            assert got.has_canonical_format and got.format == "csr"
+            np.testing.assert_array_equal(got.indptr, ref.indptr)
+            np.testing.assert_array_equal(got.indices, ref.indices)
+            np.testing.assert_allclose(got.data, ref.data, rtol=rtol, atol=0)

@@ -12,6 +12,7 @@ runner computes frames and hands them over; it never touches a file itself.
 
 from __future__ import annotations
 
+import copy
 import logging
 import time as _time
 from datetime import UTC, datetime
@@ -20,6 +21,7 @@ from pathlib import Path
 import numpy as np
 
 from ..errors import InputError
+from .background import BackgroundJob
 from .diskspace import check_run_plan, file_bytes, run_plan
 from .folders import RUN_RECORD
 from .frames import OBSTACLES_NAME, PVD_NAME, FrameWriter, read_frame
@@ -72,6 +74,7 @@ class RunFolder(OutputFolder):
         self._npz_cost = 0.0     # seconds that took
         self._model = None
         self._fps = 1.0
+        self._job = BackgroundJob()    # the frame being written in the background, if any
 
     def __enter__(self) -> RunFolder:
         super().__enter__()
@@ -82,6 +85,7 @@ class RunFolder(OutputFolder):
         try:
             super().__exit__(exc_type, exc, tb)
         finally:
+            self._job.join()           # never leave a frame half-handled behind the lock
             if self.store is not None:
                 self.store.close()
 
@@ -222,7 +226,8 @@ class RunFolder(OutputFolder):
         """
         self.writer.add_static(name)
 
-    def write_frame(self, k: int, positions, velocities, record: dict | None = None) -> None:
+    def write_frame(self, k: int, positions, velocities, record: dict | None = None, *,
+                    wait: bool = True) -> None:
         """Frame k: its ``.vtu`` file, the store, its record (none for frame 0) and run.json
         with ``last_frame`` = k (trajectory.npz every few seconds, :meth:`save_npz`).
 
@@ -231,18 +236,43 @@ class RunFolder(OutputFolder):
         k : int
             The frame's index; frame k is at time k / fps.
         positions, velocities : ndarray, shape (n, 3)
-            [m] and [m/s].
+            [m] and [m/s] (copied: the caller may reuse them).
         record : dict, optional
             The frame's record (iterations, residual, ...).
+        wait : bool, default True
+            False: return at once and write the frame on a background thread (see the
+            module docstring); the previous frame handed over is waited for first, and its
+            error, if any, raised here.
         """
-        self.writer.write(k, k / self._fps, positions, velocities)
-        self.store.append(positions, velocities)
+        self.wait()
+        x = np.array(positions, dtype=np.float64)
+        v = np.array(velocities, dtype=np.float64)
+        info = copy.deepcopy(self.info)      # run.json as of now, whatever changes next
+        if wait:
+            self._write_frame(k, x, v, record, info)
+        else:
+            self._job.start(self._write_frame, k, x, v, record, info,
+                            name=f"clothsim frame {k}")
+
+    def _write_frame(self, k: int, x, v, record: dict | None, info: dict) -> None:
+        self.writer.write(k, k / self._fps, x, v)
+        self.store.append(x, v)
         if record is not None:
             self.records.append(record)
         self.done = k
         if k > 0:
-            self.save_npz()
-            self.mark("writing")
+            self._save_npz()
+            self._mark("writing", info=info)
+
+    def wait(self) -> None:
+        """Wait for the frame being written in the background, if any.
+
+        Raises
+        ------
+        Exception
+            The background write's error (e.g. OSError: the disk is full).
+        """
+        self._job.wait()
 
     def save_npz(self, force: bool = False) -> None:
         """Rebuild trajectory.npz from the store when forced, or when the time since the
@@ -256,6 +286,10 @@ class RunFolder(OutputFolder):
         -------
         None
         """
+        self.wait()
+        self._save_npz(force)
+
+    def _save_npz(self, force: bool = False) -> None:
         now = _time.perf_counter()
         if not force and now - self._npz_at < max(2.0, 20 * self._npz_cost):
             return
@@ -280,7 +314,11 @@ class RunFolder(OutputFolder):
         error : str, optional
             One line, for interrupted and failed.
         """
-        data = dict(self.info)
+        self.wait()
+        self._mark(status, error=error)
+
+    def _mark(self, status: str, *, error: str | None = None, info: dict | None = None) -> None:
+        data = dict(self.info if info is None else info)
         data.update(status=None, last_frame=self.done if self.done >= 0 else None,
                     trajectory_frames=self.npz_frames, error=error,
                     wall_seconds=_time.perf_counter() - self._wall,
@@ -297,10 +335,23 @@ class RunFolder(OutputFolder):
         status : {"complete", "interrupted", "failed"}
         error : str or None
             One line, for interrupted and failed.
+
+        Raises
+        ------
+        Exception
+            When ``status`` is "complete", the error of a frame written in the background
+            (then nothing is marked: the caller's failure handling marks the run). For
+            another status it is logged: the run already stops for a reason of its own.
         """
+        error_in_flight = self._job.join()
+        if error_in_flight is not None:
+            if status == "complete":
+                raise error_in_flight
+            log.info("the frame being written when %s stopped failed too: %s", self.path,
+                     error_in_flight)
         if self.done >= 0:
-            self.save_npz(force=True)
-        self.mark(status, error=error)
+            self._save_npz(force=True)
+        self._mark(status, error=error)
 
     def trajectory(self, name: str = "positions", count: int | None = None) -> np.ndarray:
         """A read-only memory map of the frames in the store.

@@ -79,14 +79,15 @@ class LocalGlobalSolver(Solver):
         :meth:`clothsim.Simulation.expect_steps`); None: unknown.
     expected_final : bool
         True when ``expected_solves`` is the whole run's count (``clothsim run``); False
-        when it is a lower bound or unknown: then a factor whose solves are the slower ones
-        is refactored in the other mode once it has served the break-even count of solves
-        (:class:`~clothsim.factor_mode.ModeChoice`).
+        when it is a lower bound or unknown: then the ski-rental rule decides, and a factor
+        in the mode cheaper to factor is refactored in the mode with the faster solves once
+        it has served its switch point (:class:`~clothsim.factor_mode.ModeChoice`).
     solve_count : int
         Solves served by this solver's factors (one per iteration of :meth:`solve`).
     factorization : str or None
-        The mode of the last factorization and why, e.g. "simplicial: 439 free vertices, 600
-        solves assumed (…): predicted factor … s + 600 x … ms = … s, supernodal …".
+        The mode of the last factorization and why, e.g. "supernodal: 16639 free vertices,
+        the run's count is unknown, at least 30: cheaper to factor (…); simplicial after …
+        solves, …".
     analysis_count : int
         CHOLMOD symbolic analyses done: a refactorization with the same free vertices (h or
         the penalty pins changed) reuses the last one.
@@ -170,15 +171,15 @@ class LocalGlobalSolver(Solver):
             served = self.solve_count - self._factored_at
             return ModeChoice(self._switch_to, switched_reason(free, self._switch_to, served))
         return choose_cholmod_mode(free, self.cholmod_mode, self.expected_solves,
-                                   final=self.expected_final, served=self.solve_count)
+                                   final=self.expected_final)
 
     def _count_solves(self, iterations: int) -> None:
-        """Count a step's solves; past the factor's break-even, refactor in the other mode."""
+        """Count a step's solves; past the factor's switch point, refactor in the other mode."""
         self.solve_count += iterations
         mode = None if self._cache is None else self._cache.mode
         if (mode is not None and mode.switch_after is not None
                 and self.solve_count - self._factored_at >= mode.switch_after):
-            log.info("the %s factor served %d solves, past its break-even (%d): refactoring in "
+            log.info("the %s factor served %d solves, past its switch point (%d): refactoring in "
                      "%s mode", mode.mode, self.solve_count - self._factored_at,
                      mode.switch_after, mode.switch_to)
             self.invalidate()

@@ -100,14 +100,18 @@ def factor_system(model: Model, problem: StepProblem, Js: sp.csr_matrix, a: np.n
                                anchor_stiffness=problem.anchor_stiffness)
     fixed = np.unique(problem.fixed_vertices)
     free = np.flatnonzero(problem.free_mask(n))
-    A_csr = A.tocsr()
-    A_FF = A_csr[free][:, free]
-    A_FP = A_csr[free][:, fixed]
+    rows = A.tocsr()[free]
+    A_FF = rows[:, free]
+    A_FP = rows[:, fixed]
     mode = (ModeChoice("simplicial", "simplicial") if choose_mode is None
             else choose_mode(len(free)))
+    # h² (L + K_anchor) is positive semidefinite: A_FF's eigenvalues are at least the
+    # smallest free mass, which bounds the condition number without a solve
+    floor = float(model.vertex_mass[free].min()) if len(free) else None
     factor = Factor(A_FF, backend=backend, check_conditioning=check_conditioning,
                     cholmod_mode=mode.mode,
-                    reuse=None if previous is None else previous.A_FF_factor)
+                    reuse=None if previous is None else previous.A_FF_factor,
+                    eigenvalue_floor=floor)
     factor.mode_reason = mode.reason if factor.backend == "cholmod" else "SuperLU (no CHOLMOD)"
     log.info("factored M + h^2 L: %d free of %d vertices, h=%g, backend=%s (%s)",
              len(free), n, problem.h, factor.backend, factor.mode_reason)
