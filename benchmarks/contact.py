@@ -15,8 +15,10 @@ or ``"post-solve"`` (the seed's projection after the solve). Measured per run
 (:func:`measure_contact`): the largest spring stretch |p|/r and the largest 99th
 percentile of the stretch over the springs, both over the frames of the last second; the
 deepest any vertex ended a step inside an obstacle (whole run); the largest |v| over the
-last second, of all vertices and of those in contact with an obstacle; vertices ending on
-the sphere below its equator; wall seconds per frame.
+last second, of all vertices and of those in contact with an obstacle; the deepest any
+obstacle lies in front of the cloth's triangles over the last second (an edge of the box
+or the sphere's cap between vertices, :func:`through_cloth`); vertices ending on the
+sphere below its equator; wall seconds per frame.
 
 Runs are stored one per row in ``docs/data/contact.json`` (a run replaces the row of the
 same scene, size and mode), and ``docs/data/contact.md`` is rewritten from all rows, so
@@ -39,6 +41,7 @@ from clothsim.io.common import atomic_path
 from clothsim.scene import Scene, builtin_scene_text
 
 from . import ROOT
+from .cloth_depth import depth_through_cloth
 from .iteration_cost import commit
 
 SCENES = ("drop-on-square", "drape-sphere")
@@ -56,6 +59,25 @@ def _depth(effect, x: np.ndarray) -> float:
         return 0.0
     q, _ = effect.closest(x[inside])
     return float(np.linalg.norm(x[inside] - q, axis=1).max())
+
+
+def through_cloth(obstacles, x: np.ndarray, triangles: np.ndarray) -> float:
+    """How far the obstacles lie in front of the cloth's triangles [m] (0 when none do).
+
+    Parameters
+    ----------
+    obstacles : list of Obstacle
+    x : ndarray, shape (n, 3)
+        Cloth positions [m].
+    triangles : ndarray, shape (T, 3), int
+
+    Returns
+    -------
+    float
+        The largest :func:`~benchmarks.cloth_depth.depth_through_cloth` over the obstacles:
+        measured against each solid as declared, without its contact thickness.
+    """
+    return max([0.0] + [depth_through_cloth(e, x, triangles) for e in obstacles])
 
 
 def measure_contact(scene: str, resolution: int, contact: str, *, frames: int | None = None,
@@ -78,7 +100,9 @@ def measure_contact(scene: str, resolution: int, contact: str, *, frames: int | 
     -------
     dict
         ``max_stretch`` and ``p99_stretch`` (largest over the last window), ``max_inside``
-        [m] (whole run), ``max_speed`` [m/s] and ``max_contact_speed`` (of the vertices in
+        [m] (whole run), ``through_cloth`` [m] (:func:`through_cloth`, over the last
+        window), ``margins`` (each obstacle's contact thickness in use [m]),
+        ``max_speed`` [m/s] and ``max_contact_speed`` (of the vertices in
         contact) over the last window, ``below_equator`` (vertices on
         the sphere below its centre at the end; 0 without a sphere), ``seconds_per_frame``
         [s], ``factorizations`` and the run's settings.
@@ -93,7 +117,8 @@ def measure_contact(scene: str, resolution: int, contact: str, *, frames: int | 
     rest = sim.model.springs.spring_rest_length
     obstacles = [e for e in sim.effects if hasattr(e, "inside")]
     sim.expect_steps(frames * sc.substeps)
-    stretch = p99 = speed = inside = contact_speed = 0.0
+    stretch = p99 = speed = inside = contact_speed = through = 0.0
+    triangles = sim.model.mesh.triangles
     seconds = 0.0
     for f in range(frames):
         t0 = time.perf_counter()
@@ -106,6 +131,7 @@ def measure_contact(scene: str, resolution: int, contact: str, *, frames: int | 
             ratio = energy.spring_lengths(sim.model, x) / rest
             stretch = max(stretch, float(ratio.max()))
             p99 = max(p99, float(np.percentile(ratio, 99)))
+            through = max(through, through_cloth(obstacles, x, triangles))
             v = np.linalg.norm(sim.state.velocities, axis=1)
             speed = max(speed, float(v.max()))
             touching = np.unique(np.concatenate([np.zeros(0, np.int64)] + [
@@ -115,10 +141,11 @@ def measure_contact(scene: str, resolution: int, contact: str, *, frames: int | 
     below = 0
     for e in obstacles:
         if e.kind == "sphere":
-            gap = np.linalg.norm(x - e.center, axis=1) - e.radius
+            gap = np.linalg.norm(x - e.center, axis=1) - e.radius - e.margin
             below += int(np.count_nonzero((gap < 1e-6) & (x[:, 1] < e.center[1])))
     return {"scene": scene, "resolution": resolution, "contact": contact, "frames": frames,
             "max_stretch": stretch, "p99_stretch": p99, "max_inside": inside,
+            "through_cloth": through, "margins": [e.margin for e in obstacles],
             "max_speed": speed, "max_contact_speed": contact_speed, "below_equator": below,
             "seconds_per_frame": seconds / frames,
             "factorizations": int(getattr(sim.solver, "factor_count", 0))}
@@ -165,16 +192,22 @@ def page(runs: list[dict]) -> str:
     out = ["Printed by `.venv/bin/python -m benchmarks contact` (sizes run separately with "
            "`--sizes`; each row names the commit it was measured at).", "",
            "| scene | n² | mode | max stretch | 99th pct stretch | max depth inside [m] | "
+           "obstacle through cloth [m] | "
            "max \\|v\\| last second [m/s] | in contact [m/s] | on sphere below equator | "
            "s per frame | factorizations | commit |",
-           "|---|---|---|---|---|---|---|---|---|---|---|---|"]
+           "|---|---|---|---|---|---|---|---|---|---|---|---|---|"]
     for r in runs:
         out.append(f"| {r['scene']} | {r['resolution']}² | {r['contact']} | "
                    f"{r['max_stretch']:.3f} | {r['p99_stretch']:.3f} | {r['max_inside']:.1e} | "
+                   f"{_cell(r.get('through_cloth'))} | "
                    f"{r['max_speed']:.3f} | {r.get('max_contact_speed', float('nan')):.3f} | "
                    f"{r['below_equator']} | "
                    f"{r['seconds_per_frame']:.3f} | {r['factorizations']} | {r['commit']} |")
     return "\n".join(out) + "\n"
+
+
+def _cell(value) -> str:
+    return "—" if value is None else f"{value:.1e}"
 
 
 def main(argv=None) -> None:
@@ -205,7 +238,8 @@ def main(argv=None) -> None:
                 r["commit"] = where
                 r["load"] = round(os.getloadavg()[0], 2)
                 print(f"{scene} {n}^2 {mode}: max stretch {r['max_stretch']:.3f}, 99th pct "
-                      f"{r['p99_stretch']:.3f}, max depth {r['max_inside']:.1e} m, max |v| "
+                      f"{r['p99_stretch']:.3f}, max depth {r['max_inside']:.1e} m, obstacle "
+                      f"through cloth {r['through_cloth']:.1e} m, max |v| "
                       f"{r['max_speed']:.3f} m/s ({r['max_contact_speed']:.3f} in contact), "
                       f"below equator {r['below_equator']}, "
                       f"{r['seconds_per_frame']:.3f} s/frame, {r['factorizations']} factors",
