@@ -12,7 +12,7 @@ BENCHMARKS = ("stiffness", "stability_figures", "performance", "factor_modes", "
 #: run only when named: the 257² × 500-frame memory run, the scale ladder up to 1025² and
 #: the full accuracy study at 41² take minutes each; accuracy_docs regenerates the accuracy
 #: page's two study reports (minutes)
-LONG = ("memory", "scale_ladder", "accuracy_full", "accuracy_docs", "contact",
+LONG = ("memory", "scale_ladder", "accuracy_full", "accuracy_docs", "contact", "contact_thickness",
         "fuzz_scenes")  # fuzz_scenes: the fuzz behind docs/data/fuzz.md (a minute)
 
 

@@ -81,7 +81,7 @@ def through_cloth(obstacles, x: np.ndarray, triangles: np.ndarray) -> float:
 
 
 def measure_contact(scene: str, resolution: int, contact: str, *, frames: int | None = None,
-                    last: int | None = None) -> dict:
+                    last: int | None = None, thickness=None) -> dict:
     """Run a built-in obstacle scene at ``resolution``² in a contact mode; measure it.
 
     Parameters
@@ -95,6 +95,8 @@ def measure_contact(scene: str, resolution: int, contact: str, *, frames: int | 
         Frames to run (default: the scene's, 90).
     last : int, optional
         Frames of the final window (default: one second).
+    thickness : float or "auto", optional
+        The box's and the sphere's ``thickness`` [m] (default: the scene's, ``"auto"``).
 
     Returns
     -------
@@ -110,6 +112,10 @@ def measure_contact(scene: str, resolution: int, contact: str, *, frames: int | 
     doc = tomllib.loads(builtin_scene_text(scene))
     doc["cloth"]["resolution"] = [resolution, resolution]
     doc["contact"] = {"mode": contact}
+    if thickness is not None:
+        for e in doc["effects"]:
+            if e["kind"] in ("box", "sphere"):
+                e["thickness"] = thickness
     sc = Scene.from_dict(doc, source=f"{scene}.toml")
     sim = sc.build_simulation()
     frames = sc.frames if frames is None else frames

@@ -56,10 +56,12 @@ def interior(mesh) -> np.ndarray:
     return (i > 0) & (i < ny - 1) & (j > 0) & (j < nx - 1)
 
 
-def resting_in_view(mesh, x, surface, view, *, facing: float = 0.3) -> np.ndarray:
-    """Interior vertices on the obstacle's surface (within 0.1 mm) whose surface faces the
-    camera (outward normal · direction to the camera > ``facing``)."""
-    on = np.abs(solid_depth(surface, x)) < 1e-4
+def resting_in_view(mesh, x, surface, view, *, facing: float = 0.3,
+                    margin: float = 0.0) -> np.ndarray:
+    """Interior vertices on the obstacle's contact surface (within 0.1 mm; ``margin`` [m]
+    off the drawn solid, its contact thickness) whose surface faces the camera (outward
+    normal · direction to the camera > ``facing``)."""
+    on = np.abs(solid_depth(surface, x) + margin) < 1e-4
     if surface.kind == "sphere":
         center = surface.vertices.mean(axis=0)
         normal = (x - center) / np.linalg.norm(x - center, axis=1, keepdims=True)
@@ -78,7 +80,9 @@ def test_cloth_resting_on_an_obstacle_is_drawn_on_it(name, kind, at_least):
     sim = last_frame(name)
     mesh, x, view = sim.model.mesh, sim.state.positions, View()
     surface = next(s for s in obstacle_surfaces(sim.effects, x) if s.kind == kind)
-    on = resting_in_view(mesh, x, surface, view)
+    margin = next(e for e in sim.effects if e.kind == kind).margin     # the "auto" thickness
+    assert margin > 0
+    on = resting_in_view(mesh, x, surface, view, margin=margin)
     assert on.sum() >= at_least  # a set of vertices: the top and the camera-facing sides
     # and the centroids of the triangles with three such corners, folds over a front edge
     # of the box included (their centroid is inside the solid)

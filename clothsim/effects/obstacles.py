@@ -53,7 +53,7 @@ from ..contacts import ContactSet
 from ..errors import InputError, check_finite
 from .base import Effect
 from .holding import CONTACT_MODES, Holding, friction_force, hold_step
-from .thickness import STRETCH_ALLOWANCE, auto_thickness, covering_radius
+from .thickness import STRETCH_ALLOWANCE, auto_thickness, check_thickness, covering_radius
 
 
 def _vector3(name: str, value) -> np.ndarray:
@@ -70,14 +70,6 @@ def _non_negative(name: str, value) -> float:
     if a < 0:
         raise InputError(f"{name}: must be non-negative, got {float(a)!r}")
     return float(a)
-
-
-def _thickness(name: str, value) -> float | str:
-    if isinstance(value, str):
-        if value != "auto":
-            raise InputError(f"{name}: must be a number >= 0 [m] or 'auto', got {value!r}")
-        return value
-    return _non_negative(name, value)
 
 
 def _rowdot(a: np.ndarray, b: np.ndarray) -> np.ndarray:
@@ -109,7 +101,7 @@ class Obstacle(Effect):
 
     def __init__(self, friction: float = 0.0, contact: str = "hold", thickness=0.0):
         self.friction = _non_negative(f"{self.kind}.friction", friction)
-        self.thickness = _thickness(f"{self.kind}.thickness", thickness)
+        self.thickness = check_thickness(f"{self.kind}.thickness", thickness)
         self.margin = 0.0 if thickness == "auto" else self.thickness
         if contact not in CONTACT_MODES:
             raise InputError(f"{self.kind}.contact: must be one of "
@@ -123,16 +115,12 @@ class Obstacle(Effect):
 
     # -- geometry, implemented by each shape ---------------------------------------------
     def set_margin(self, margin: float) -> None:
-        """Use the contact thickness ``margin`` [m]: the surface the geometry below tests.
+        """Use the contact thickness ``margin`` in the geometry below.
 
         Parameters
         ----------
         margin : float
             δ >= 0 [m].
-
-        Returns
-        -------
-        None
         """
         self.margin = float(margin)
 
@@ -322,10 +310,11 @@ class Obstacle(Effect):
         inside = massless[self.inside(model.mesh.vertices[massless])] if len(massless) else []
         if len(inside):  # mass 0 means exactly pinned: the contact response would move it
             key = {"sphere": "center", "box": "min", "plane": "point"}.get(self.kind, "kind")
+            within = f" (within its thickness {self.margin:.3g} m)" if self.margin else ""
             raise InputError(f"{self.kind}.{key}: vertex {inside[0]} has mass 0, which pins it "
                              f"exactly at its initial position, but it starts inside the "
-                             f"{self.kind}, whose contact response would move it; move the "
-                             f"obstacle or give the vertex a mass",
+                             f"{self.kind}{within}, whose contact response would move it; "
+                             f"move the obstacle or give the vertex a mass",
                              field=f"{self.kind}.{key}")
         self._holding = Holding()
 
@@ -335,74 +324,3 @@ class Obstacle(Effect):
 
     def _shape(self) -> dict:
         raise NotImplementedError
-
-
-class Plane(Obstacle):
-    """A static half-space: the solid lies behind a plane, ``normal`` points to free space.
-
-    Parameters
-    ----------
-    point : (3,) array_like
-        A point on the plane [m].
-    normal : (3,) array_like
-        Direction of free space (normalized here; must not be zero).
-    friction : float, default 0
-        Coulomb coefficient μ.
-    thickness : float or "auto", default 0
-        Contact thickness δ [m]: vertices are kept at least this far in front of the plane
-        (the contact surface is the plane moved by δ along the normal). ``"auto"`` is 0: a
-        triangle whose corners are in front of a plane lies wholly in front of it.
-
-    Notes
-    -----
-    The whole solid lies behind the plane, so the end-of-step signed distance
-    φ(x) = (x − point)·n − δ already detects every crossing (a sign change of φ
-    along the step): no tunnelling is possible and the contact point is x − φ n.
-    """
-
-    kind = "plane"
-
-    def __init__(self, point, normal, *, friction: float = 0.0, thickness=0.0,
-                 contact: str = "hold"):
-        super().__init__(friction, contact, thickness)
-        self.point = _vector3("plane.point", point)
-        normal = _vector3("plane.normal", normal)
-        scale = float(np.abs(normal).max())
-        if scale == 0.0:
-            raise InputError("plane.normal: must not be the zero vector")
-        normal = normal / scale          # largest entry ±1: the norm cannot overflow
-        self.normal = normal / float(np.linalg.norm(normal))
-        self.set_margin(self.margin)
-
-    def set_margin(self, margin):
-        super().set_margin(margin)
-        self._offset = float(self.point @ self.normal) + self.margin
-
-    def signed_distance(self, x: np.ndarray) -> np.ndarray:
-        """φ(x) = n·x − n·point − δ, negative inside (δ the thickness in use).
-
-        Parameters
-        ----------
-        x : ndarray, shape (k, 3), points [m]
-
-        Returns
-        -------
-        ndarray, shape (k,), signed distances [m]
-        """
-        return x @ self.normal - self._offset
-
-    def contacts(self, x0, x):
-        phi = self.signed_distance(x)
-        index = np.flatnonzero(phi < 0)
-        n = np.broadcast_to(self.normal, (len(index), 3))
-        return index, x[index] - phi[index, None] * n, n
-
-    def inside(self, x):
-        return self.signed_distance(x) < 0
-
-    def closest(self, x):
-        n = np.broadcast_to(self.normal, x.shape)
-        return x - self.signed_distance(x)[:, None] * n, n
-
-    def _shape(self):
-        return {"point": self.point.tolist(), "normal": self.normal.tolist()}

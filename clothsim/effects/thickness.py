@@ -19,10 +19,35 @@ from __future__ import annotations
 
 import numpy as np
 
+from ..errors import InputError, check_finite
+
 #: The ``"auto"`` thickness covers triangles up to this scale of their rest shape: the
 #: cloth in resting contact stretches a few per cent (docs/data/contact.md), and over a
 #: sphere the bound is tight, so the rest shape alone leaves a sagitta of that order.
 STRETCH_ALLOWANCE = 1.1
+
+
+def check_thickness(name: str, value) -> float | str:
+    """``value`` checked as a thickness: ``"auto"`` or one number >= 0 [m].
+
+    Parameters
+    ----------
+    name : str
+        The key, e.g. ``"box.thickness"``, for the error.
+    value : object
+
+    Returns
+    -------
+    float or "auto"
+    """
+    if isinstance(value, str):
+        if value != "auto":
+            raise InputError(f"{name}: must be a number >= 0 [m] or 'auto', got {value!r}")
+        return value
+    a = check_finite(name, value)
+    if a.ndim != 0 or a < 0:
+        raise InputError(f"{name}: must be one number >= 0 [m] or 'auto', got {value!r}")
+    return float(a)
 
 
 def covering_radius(points: np.ndarray, triangles: np.ndarray,
@@ -104,4 +129,4 @@ def auto_thickness(kind: str, r: float, *, radius: float = 0.0) -> float:
     return 0.0
 
 
-__all__ = ["STRETCH_ALLOWANCE", "auto_thickness", "covering_radius"]
+__all__ = ["STRETCH_ALLOWANCE", "auto_thickness", "check_thickness", "covering_radius"]
