@@ -212,6 +212,17 @@ def page(runs: list[dict]) -> str:
     return "\n".join(out) + "\n"
 
 
+def store(runs: list[dict], row: dict, key: tuple, json_path, page_path, page_of) -> list:
+    """``runs`` with ``row`` in place of the run of the same ``key`` fields, written at
+    once to ``json_path`` and, as ``page_of(runs)``, to ``page_path`` (atomically)."""
+    runs = [q for q in runs if [q[k] for k in key] != [row[k] for k in key]] + [row]
+    with atomic_path(json_path) as tmp:
+        tmp.write_text(json.dumps({"runs": runs}, indent=1) + "\n", encoding="utf-8")
+    with atomic_path(page_path) as tmp:
+        tmp.write_text(page_of(runs), encoding="utf-8")
+    return runs
+
+
 def _cell(value) -> str:
     return "—" if value is None else f"{value:.1e}"
 
@@ -250,13 +261,7 @@ def main(argv=None) -> None:
                       f"below equator {r['below_equator']}, "
                       f"{r['seconds_per_frame']:.3f} s/frame, {r['factorizations']} factors",
                       flush=True)
-                runs = [q for q in runs if (q["scene"], q["resolution"], q["contact"])
-                        != (scene, n, mode)] + [r]
-                with atomic_path(JSON) as tmp:
-                    tmp.write_text(json.dumps({"runs": runs}, indent=1) + "\n",
-                                   encoding="utf-8")
-                with atomic_path(PAGE) as tmp:
-                    tmp.write_text(page(runs), encoding="utf-8")
+                runs = store(runs, r, ("scene", "resolution", "contact"), JSON, PAGE, page)
 
 
 if __name__ == "__main__":

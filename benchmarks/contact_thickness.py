@@ -23,10 +23,8 @@ import argparse
 import json
 import warnings
 
-from clothsim.io.common import atomic_path
-
 from . import ROOT
-from .contact import SCENES, measure_contact
+from .contact import SCENES, measure_contact, store
 from .iteration_cost import commit
 
 CHOICES = ("0", "0.25l", "0.35l", "auto")
@@ -81,13 +79,7 @@ def main(argv=None) -> None:
                       f"through cloth {r['through_cloth']:.1e} m, max stretch "
                       f"{r['max_stretch']:.3f}, max depth inside {r['max_inside']:.1e} m",
                       flush=True)
-                runs = [q for q in runs if (q["scene"], q["resolution"], q["choice"])
-                        != (scene, n, choice)] + [r]
-                with atomic_path(JSON) as tmp:
-                    tmp.write_text(json.dumps({"runs": runs}, indent=1) + "\n",
-                                   encoding="utf-8")
-                with atomic_path(PAGE) as tmp:
-                    tmp.write_text(page(runs), encoding="utf-8")
+                runs = store(runs, r, ("scene", "resolution", "choice"), JSON, PAGE, page)
 
 
 if __name__ == "__main__":
