@@ -17,10 +17,12 @@ or ``"post-solve"`` (the seed's projection after the solve). Measured per run
 percentile of the stretch over the springs, both over the frames of the last second; the
 deepest any vertex ended a step inside an obstacle (whole run); the largest |v| over the
 last second, of all vertices and of those in contact with an obstacle, and whether the
-first is below :data:`REST_SPEED` ("at rest"); vertices ending on the sphere below its
-equator; the frames whose contact set changed (each refactors the held-contact system);
-wall seconds per frame. "hold" runs the scene as shipped, with its declared damping;
-"post-solve" runs it without, as the seed did (:data:`SEED_DAMPING`).
+first is below :data:`REST_SPEED` ("at rest"); the deepest any obstacle lies in front of
+the cloth's triangles over the last second (an edge of the box or the sphere's cap between
+vertices, :func:`through_cloth`); vertices ending on the sphere below its equator; the
+frames whose contact set changed (each refactors the held-contact system); wall seconds
+per frame. "hold" runs the scene as shipped, with its declared damping and contact
+thickness; "post-solve" runs it without damping, as the seed did (:data:`SEED_DAMPING`).
 ``--trace`` prints, frame by frame, what the contacts do (:func:`trace_contact`).
 
 Runs are stored one per row in ``docs/data/contact.json`` (a run replaces the row of the
@@ -44,6 +46,7 @@ from clothsim.io.common import atomic_path
 from clothsim.scene import Scene, builtin_scene_text
 
 from . import ROOT
+from .cloth_depth import depth_through_cloth
 from .iteration_cost import commit
 
 SCENES = ("drop-on-square", "drape-sphere")
@@ -69,13 +72,18 @@ def _depth(effect, x: np.ndarray) -> float:
 
 
 def _scene(scene: str, resolution: int, contact: str, damping=None,
-           iterations: int | None = None) -> Scene:
+           iterations: int | None = None, thickness=None) -> Scene:
     """The built-in ``scene`` at ``resolution``² in ``contact`` mode; ``damping``: None keeps
     the scene's own damping, False removes it, a dict replaces it (``[[effects]]`` keys);
-    ``iterations``: the solver's, when given."""
+    ``iterations``: the solver's, when given; ``thickness``: the box's and the sphere's,
+    when given."""
     doc = tomllib.loads(builtin_scene_text(scene))
     doc["cloth"]["resolution"] = [resolution, resolution]
     doc["contact"] = {"mode": contact}
+    if thickness is not None:
+        for e in doc["effects"]:
+            if e["kind"] in ("box", "sphere"):
+                e["thickness"] = thickness
     if iterations is not None:
         doc["solver"]["iterations"] = iterations
     if damping is not None:
@@ -101,8 +109,28 @@ def _fastest(speed: np.ndarray, vertices: set) -> float:
     return float(speed[sorted(vertices)].max()) if len(vertices) else 0.0
 
 
+def through_cloth(obstacles, x: np.ndarray, triangles: np.ndarray) -> float:
+    """How far the obstacles lie in front of the cloth's triangles [m] (0 when none do).
+
+    Parameters
+    ----------
+    obstacles : list of Obstacle
+    x : ndarray, shape (n, 3)
+        Cloth positions [m].
+    triangles : ndarray, shape (T, 3), int
+
+    Returns
+    -------
+    float
+        The largest :func:`~benchmarks.cloth_depth.depth_through_cloth` over the obstacles:
+        measured against each solid as declared, without its contact thickness.
+    """
+    return max([0.0] + [depth_through_cloth(e, x, triangles) for e in obstacles])
+
+
 def trace_contact(scene: str, resolution: int, contact: str = "hold", *,
-                  frames: int | None = None, damping=None, iterations: int | None = None):
+                  frames: int | None = None, damping=None, iterations: int | None = None,
+                  thickness=None):
     """Run an obstacle scene frame by frame and say what its contacts do (a diagnostic).
 
     Parameters
@@ -117,6 +145,8 @@ def trace_contact(scene: str, resolution: int, contact: str = "hold", *,
         The scene's damping (None), none (False), or this ``[[effects]]`` table.
     iterations : int, optional
         Solver iterations per step (default: the scene's).
+    thickness : float or "auto", optional
+        The box's and the sphere's ``thickness`` [m] (default: the scene's, ``"auto"``).
 
     Yields
     ------
@@ -130,7 +160,7 @@ def trace_contact(scene: str, resolution: int, contact: str = "hold", *,
         ``stick_speed`` (max |v| of all, held and sticking vertices [m/s]),
         ``factorizations`` (so far).
     """
-    sc = _scene(scene, resolution, contact, damping, iterations)
+    sc = _scene(scene, resolution, contact, damping, iterations, thickness)
     sim = sc.build_simulation()
     frames = sc.frames if frames is None else frames
     obstacles = [e for e in sim.effects if hasattr(e, "inside")]
@@ -157,12 +187,12 @@ def trace_contact(scene: str, resolution: int, contact: str = "hold", *,
 
 
 def measure_contact(scene: str, resolution: int, contact: str, *, frames: int | None = None,
-                    last: int | None = None, damping=None) -> dict:
+                    last: int | None = None, damping=None, thickness=None) -> dict:
     """Run a built-in obstacle scene at ``resolution``² in a contact mode; measure it.
 
     Parameters
     ----------
-    scene, resolution, contact, frames, damping
+    scene, resolution, contact, frames, damping, thickness
         As :func:`trace_contact` (``contact`` is ``[contact] mode``; frames default to
         the scene's 90).
     last : int, optional
@@ -173,17 +203,20 @@ def measure_contact(scene: str, resolution: int, contact: str, *, frames: int | 
     dict
         ``max_stretch`` and ``p99_stretch`` (largest over the last window), ``max_inside``
         [m] (whole run), ``max_speed`` [m/s] and ``max_contact_speed`` (of the vertices in
-        contact) over the last window, ``at_rest`` (``max_speed`` below
+        contact) over the last window, ``through_cloth`` [m] (:func:`through_cloth`, over
+        the last window), ``margins`` (each obstacle's contact thickness in use [m]),
+        ``at_rest`` (``max_speed`` below
         :data:`REST_SPEED`), ``set_changes`` (frames whose contact set changed, whole run),
         ``below_equator`` (vertices on the sphere below its centre at the end; 0 without a
         sphere), ``seconds_per_frame`` [s], ``factorizations`` and the run's settings.
     """
-    sc = _scene(scene, resolution, contact, damping)
+    sc = _scene(scene, resolution, contact, damping, thickness=thickness)
     frames = sc.frames if frames is None else frames
     last = round(sc.fps) if last is None else last
-    stretch = p99 = speed = inside = contact_speed = seconds = 0.0
+    stretch = p99 = speed = inside = contact_speed = seconds = through = 0.0
     changes = 0
-    for r in trace_contact(scene, resolution, contact, frames=frames, damping=damping):
+    for r in trace_contact(scene, resolution, contact, frames=frames, damping=damping,
+                           thickness=thickness):
         x, obstacles = r["x"], r["obstacles"]
         seconds += r["seconds"]
         changes += r["set_changed"]
@@ -193,6 +226,7 @@ def measure_contact(scene: str, resolution: int, contact: str, *, frames: int | 
             ratio = energy.spring_lengths(model, x) / model.springs.spring_rest_length
             stretch = max(stretch, float(ratio.max()))
             p99 = max(p99, float(np.percentile(ratio, 99)))
+            through = max(through, through_cloth(obstacles, x, r["model"].mesh.triangles))
             speed = max(speed, r["speed"])
             if len(r["touching"]):
                 v = np.linalg.norm(r["v"][r["touching"]], axis=1)
@@ -200,10 +234,11 @@ def measure_contact(scene: str, resolution: int, contact: str, *, frames: int | 
     below = 0
     for e in obstacles:
         if e.kind == "sphere":
-            gap = np.linalg.norm(x - e.center, axis=1) - e.radius
+            gap = np.linalg.norm(x - e.center, axis=1) - e.radius - e.margin
             below += int(np.count_nonzero((gap < 1e-6) & (x[:, 1] < e.center[1])))
     return {"scene": scene, "resolution": resolution, "contact": contact, "frames": frames,
             "max_stretch": stretch, "p99_stretch": p99, "max_inside": inside,
+            "through_cloth": through, "margins": [e.margin for e in obstacles],
             "max_speed": speed, "max_contact_speed": contact_speed,
             "at_rest": speed < REST_SPEED, "set_changes": changes, "below_equator": below,
             "seconds_per_frame": seconds / frames, "factorizations": r["factorizations"]}
@@ -312,18 +347,35 @@ def page(runs: list[dict]) -> str:
            "seed's scene, without it. Contact set changes: frames whose held planes differ from "
            "the previous frame's (each one refactors the held-contact system).", "",
            "| scene | n² | mode | max stretch | 99th pct stretch | max depth inside [m] | "
+           "obstacle through cloth [m] | "
            "max \\|v\\| last second [m/s] | at rest | in contact [m/s] | "
            "on sphere below equator | contact set changes | s per frame | factorizations | "
            "commit |",
-           "|---|---|---|---|---|---|---|---|---|---|---|---|---|---|"]
+           "|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|"]
     for r in runs:
         out.append(f"| {r['scene']} | {r['resolution']}² | {r['contact']} | "
                    f"{r['max_stretch']:.3f} | {r['p99_stretch']:.3f} | {r['max_inside']:.1e} | "
+                   f"{_cell(r.get('through_cloth'))} | "
                    f"{r['max_speed']:.3f} | {_rest(r)} | "
                    f"{r.get('max_contact_speed', float('nan')):.3f} | "
                    f"{r['below_equator']} | {r.get('set_changes', '')} | "
                    f"{r['seconds_per_frame']:.3f} | {r['factorizations']} | {r['commit']} |")
     return "\n".join(out) + "\n"
+
+
+def store(runs: list[dict], row: dict, key: tuple, json_path, page_path, page_of) -> list:
+    """``runs`` with ``row`` in place of the run of the same ``key`` fields, written at
+    once to ``json_path`` and, as ``page_of(runs)``, to ``page_path`` (atomically)."""
+    runs = [q for q in runs if [q[k] for k in key] != [row[k] for k in key]] + [row]
+    with atomic_path(json_path) as tmp:
+        tmp.write_text(json.dumps({"runs": runs}, indent=1) + "\n", encoding="utf-8")
+    with atomic_path(page_path) as tmp:
+        tmp.write_text(page_of(runs), encoding="utf-8")
+    return runs
+
+
+def _cell(value) -> str:
+    return "—" if value is None else f"{value:.1e}"
 
 
 def main(argv=None) -> None:
@@ -374,19 +426,14 @@ def main(argv=None) -> None:
                 r["commit"] = where
                 r["load"] = round(os.getloadavg()[0], 2)
                 print(f"{scene} {n}^2 {mode}: max stretch {r['max_stretch']:.3f}, 99th pct "
-                      f"{r['p99_stretch']:.3f}, max depth {r['max_inside']:.1e} m, max |v| "
+                      f"{r['p99_stretch']:.3f}, max depth {r['max_inside']:.1e} m, obstacle "
+                      f"through cloth {r['through_cloth']:.1e} m, max |v| "
                       f"{r['max_speed']:.3f} m/s ({r['max_contact_speed']:.3f} in contact), "
                       f"below equator {r['below_equator']}, at rest {_rest(r)}, "
                       f"contact set changed in {r['set_changes']} frames, "
                       f"{r['seconds_per_frame']:.3f} s/frame, {r['factorizations']} factors",
                       flush=True)
-                runs = [q for q in runs if (q["scene"], q["resolution"], q["contact"])
-                        != (scene, n, mode)] + [r]
-                with atomic_path(JSON) as tmp:
-                    tmp.write_text(json.dumps({"runs": runs}, indent=1) + "\n",
-                                   encoding="utf-8")
-                with atomic_path(PAGE) as tmp:
-                    tmp.write_text(page(runs), encoding="utf-8")
+                runs = store(runs, r, ("scene", "resolution", "contact"), JSON, PAGE, page)
 
 
 if __name__ == "__main__":

@@ -321,7 +321,8 @@ SPHERE_RADIUS = 0.01                      # sphere radius [m]
 SPHERE_SPEED = 5 * 2 * SPHERE_RADIUS / CONTACT_H         # 5 diameters per step: 3 m/s
 
 
-def measure_sphere_tunnelling(friction: float = 0.0, *, steps: int = 8) -> dict:
+def measure_sphere_tunnelling(friction: float = 0.0, *, steps: int = 8,
+                              thickness="auto") -> dict:
     """Drop the cloth on the small sphere; record the depth and the contacts of every step.
 
     Returns
@@ -330,13 +331,15 @@ def measure_sphere_tunnelling(friction: float = 0.0, *, steps: int = 8) -> dict:
         ``max_depth`` [m]: largest SPHERE_RADIUS − |x − c| over all vertices and steps (≤ 0: never
         inside); ``contacts``: contact vertex count per step; ``caught`` (vertex indices
         caught on the crossing step); ``caught_height``: their lowest y after that step [m];
-        ``would_end`` (their y without the sphere, same step) [m].
+        ``would_end`` (their y without the sphere, same step) [m]; ``caught_gap``: their
+        distance beyond the contact surface, radius + the sphere's contact thickness [m];
+        ``margin``: that thickness [m].
     """
     mesh = cs.grid(6, 6, size=(0.05, 0.05), center=(0.0, 0.06, 0.0), plane="xz")
     springs = cs.grid_springs(mesh, structural=50.0, shear=50.0, bending=5.0)
     model = cs.Model.build(mesh, springs, total_mass=0.01)
     v0 = np.tile([0.0, -SPHERE_SPEED, 0.0], (model.vertex_count, 1))
-    sphere = Sphere((0.0, 0.0, 0.0), SPHERE_RADIUS, friction=friction)
+    sphere = Sphere((0.0, 0.0, 0.0), SPHERE_RADIUS, friction=friction, thickness=thickness)
     sims = {name: cs.Simulation(model, h=CONTACT_H, effects=effects,
                                 state=cs.State(mesh.vertices.copy(), v0.copy()))
             for name, effects in (("sphere", [cs.Gravity(), sphere]), ("free", [cs.Gravity()]))}
@@ -351,7 +354,9 @@ def measure_sphere_tunnelling(friction: float = 0.0, *, steps: int = 8) -> dict:
         if out["caught"] is None and len(sphere.contact_vertices):
             out["caught"] = sphere.contact_vertices.copy()
             out["caught_height"] = float(x[out["caught"], 1].min())
-            out["caught_gap"] = np.linalg.norm(x[out["caught"]], axis=1) - SPHERE_RADIUS
+            out["caught_gap"] = (np.linalg.norm(x[out["caught"]], axis=1) - SPHERE_RADIUS
+                                 - sphere.margin)
+            out["margin"] = sphere.margin
             out["would_end"] = float(sims["free"].state.positions[out["caught"], 1].max())
     return out
 

@@ -63,7 +63,7 @@ def kept_below_equator(contact):
     run.state.velocities[:] = [0.0, -2.0, 0.0]
     run.run(60)
     x = run.state.positions
-    on = np.linalg.norm(x - ball.center, axis=1) < ball.radius + 1e-6
+    on = np.linalg.norm(x - ball.center, axis=1) < ball.radius + ball.margin + 1e-6
     return int(np.count_nonzero(on & (x[:, 1] < 0.0)))
 
 

@@ -79,7 +79,8 @@ def test_a_massless_vertex_stays_exactly_put_under_every_effect():
                cs.Damping(model="velocity", coefficient=0.1),
                cs.StrainLimit(max_strain=0.05),
                cs.Impulse(x[top[0]], 0.3, (0.0, 5.0, 1.0)),
-               cs.Sphere(x[top[0]] + [0.0, 0.0, 0.2], 0.2)]  # touches vertex 20, no overlap
+               # touches vertex 20, no overlap (no contact thickness either)
+               cs.Sphere(x[top[0]] + [0.0, 0.0, 0.2], 0.2, thickness=0.0)]
     sim = cs.Simulation(model, h=1 / 30, effects=effects, iterations=10)
     sim.run(30)
     assert sim.state.positions[top].tolist() == x[top].tolist()

@@ -123,9 +123,11 @@ def test_record_converged_is_none_without_tolerance_and_a_bool_with_one():
 def test_obstacle_overlapping_the_cloth_at_start_warns_with_the_count(caplog):
     model = grid_cloth(5, center=(0.0, 0.0, 0.0))          # flat in xz at y = 0
     with caplog.at_level(logging.WARNING, logger="clothsim.simulation"):
-        cs.Simulation(model, h=0.1, effects=[cs.Gravity(GRAVITY),
-                                             cs.Sphere((0.0, 0.0, 0.0), 0.3)])
-    inside = int(np.count_nonzero(np.linalg.norm(model.mesh.vertices, axis=1) < 0.3))
+        sphere = cs.Sphere((0.0, 0.0, 0.0), 0.3)
+        cs.Simulation(model, h=0.1, effects=[cs.Gravity(GRAVITY), sphere])
+    # inside the contact surface: the sphere grown by its "auto" thickness
+    inside = int(np.count_nonzero(np.linalg.norm(model.mesh.vertices, axis=1)
+                                  < 0.3 + sphere.margin))
     assert inside > 0
     assert f"{inside} of 25 cloth vertices start inside" in caplog.text
     caplog.clear()

@@ -18,18 +18,23 @@ from benchmarks.measure_stability import SPHERE_RADIUS as R
 from benchmarks.measure_stability import measure_contact_strain, measure_sphere_tunnelling
 
 
-@pytest.mark.parametrize("friction", [0.0, 1.0])
-def test_small_sphere_no_tunnelling_in_simulation(friction):
+@pytest.mark.parametrize("friction, thickness", [(0.0, "auto"), (1.0, "auto"), (1.0, 0.0)])
+def test_small_sphere_no_tunnelling_in_simulation(friction, thickness):
     """Measured: the 4 centre vertices are caught on step 1 and end on the surface (gap
     ~1e-17 m) where the free cloth ends at y = −0.051 m, 5 radii below the centre; with
-    μ = 1 they stick at the entry point y = R/√2; max depth over 8 steps −7e-18 m."""
-    r = measure_sphere_tunnelling(friction)
+    μ = 1 and thickness 0 they stick at the entry point y = R/√2; max depth over 8 steps
+    −7e-18 m."""
+    r = measure_sphere_tunnelling(friction, thickness=thickness)
     assert r["max_depth"] <= 1e-9
     assert sorted(r["caught"].tolist()) == [14, 15, 20, 21]     # the 4 centre vertices
     assert r["contacts"][0] == 4                                # caught on the first step
     assert r["would_end"] < -R                # without the sphere they end below it
-    assert np.all(r["caught_gap"] >= 0) and np.all(r["caught_gap"] <= 1e-12)   # held on it
-    if friction >= 1.0:                       # sticking: exactly at the entry point
+    # held on the contact surface, the sphere grown by its thickness ("auto": a 6² grid of
+    # spacing 0.01 m has covering radius 0.01/√2; × 1.1, docs/effects.md)
+    auto = np.hypot(R, 1.1 * 0.01 / np.sqrt(2)) - R
+    assert r["margin"] == pytest.approx(auto if thickness == "auto" else 0.0, rel=1e-12)
+    assert np.all(r["caught_gap"] >= 0) and np.all(r["caught_gap"] <= 1e-12)
+    if thickness == 0.0:                      # sticking: exactly at the entry point
         assert r["caught_height"] == pytest.approx(R / np.sqrt(2), abs=1e-12)
 
 

@@ -11,8 +11,9 @@ from .damping import Damping
 from .force import Force
 from .gravity import Gravity
 from .impulse import Impulse
-from .obstacles import Obstacle, Plane
+from .obstacles import Obstacle
 from .pins import Pin
+from .plane import Plane
 from .sphere import Sphere
 from .strain_limit import StrainLimit
 from .wind import Wind

@@ -29,12 +29,19 @@ tested against the solid:
    contact is removed: v ← v − min(0, v·n) n (perfectly inelastic contact; resting
    vertices keep v·n = 0 instead of carrying the approach speed into the next step).
 
-Limitations: obstacles are static and rigid; only vertices are tested (an edge or a
-triangle can still pass over a sharp box corner or a sphere smaller than the mesh spacing
-between vertices); several obstacles are applied one after another, so a vertex squeezed
-between two overlapping ones may end inside the first. Pinned vertices are moved like any
-other vertex if they lie inside an obstacle, except a vertex of mass 0 (pinned exactly): one
-that starts inside an obstacle is an :class:`~clothsim.errors.InputError` when the obstacle
+Thickness: each obstacle tests the surface moved out by its contact thickness δ
+(``thickness``; :mod:`clothsim.effects.thickness`). Only vertices are tested, so with δ = 0
+a triangle between a vertex on a box's top face and one on its side cuts the box's edge,
+and a chord over a sphere dips inside it; the default ``"auto"`` δ of a box and a sphere
+is the least margin that keeps every obstacle point out of every triangle at the cloth's
+rest shape.
+
+Limitations: obstacles are static and rigid; a sphere smaller than the mesh spacing
+between vertices can pass between them; several obstacles are applied one after another,
+so a vertex squeezed between two overlapping ones may end inside the first. Pinned vertices
+are moved like any other vertex if they lie inside an obstacle, except a vertex of mass 0
+(pinned exactly): one that starts inside an obstacle is an
+:class:`~clothsim.errors.InputError` when the obstacle
 is bound.
 """
 
@@ -46,6 +53,7 @@ from ..contacts import ContactSet
 from ..errors import InputError, check_finite
 from .base import Effect
 from .holding import CONTACT_MODES, Holding, friction_force, hold_step
+from .thickness import STRETCH_ALLOWANCE, auto_thickness, check_thickness, covering_radius
 
 
 def _vector3(name: str, value) -> np.ndarray:
@@ -78,6 +86,11 @@ class Obstacle(Effect):
     ----------
     friction : float
         Coulomb coefficient μ (dimensionless, >= 0).
+    thickness : float or "auto"
+        The contact thickness as given [m] (:mod:`clothsim.effects.thickness`).
+    margin : float
+        The thickness in use, δ [m]: ``"auto"`` is resolved when the obstacle is bound to a
+        model (0 before, and 0 in ``"post-solve"`` mode, which reproduces the seed).
     contact_vertices : ndarray, shape (c,), int
         Vertices in contact during the last step.
     contact_normals : ndarray, shape (c, 3)
@@ -86,8 +99,10 @@ class Obstacle(Effect):
 
     kind = "obstacle"
 
-    def __init__(self, friction: float = 0.0, contact: str = "hold"):
+    def __init__(self, friction: float = 0.0, contact: str = "hold", thickness=0.0):
         self.friction = _non_negative(f"{self.kind}.friction", friction)
+        self.thickness = check_thickness(f"{self.kind}.thickness", thickness)
+        self.margin = 0.0 if thickness == "auto" else self.thickness
         if contact not in CONTACT_MODES:
             raise InputError(f"{self.kind}.contact: must be one of "
                              f"{', '.join(map(repr, CONTACT_MODES))}, got {contact!r}")
@@ -99,6 +114,33 @@ class Obstacle(Effect):
         self._holding = Holding()
 
     # -- geometry, implemented by each shape ---------------------------------------------
+    def set_margin(self, margin: float) -> None:
+        """Use the contact thickness ``margin`` in the geometry below.
+
+        Parameters
+        ----------
+        margin : float
+            δ >= 0 [m].
+        """
+        self.margin = float(margin)
+
+    def auto_margin(self, r: float) -> float:
+        """The ``"auto"`` thickness for cells of covering radius ``r`` [m].
+
+        Parameters
+        ----------
+        r : float
+            The covering radius to cover [m]: :data:`~clothsim.effects.thickness.
+            STRETCH_ALLOWANCE` × :func:`~clothsim.effects.thickness.covering_radius` of the
+            cloth at rest.
+
+        Returns
+        -------
+        float
+            δ [m] (:func:`~clothsim.effects.thickness.auto_thickness`).
+        """
+        return auto_thickness(self.kind, r)
+
     def contacts(self, x0: np.ndarray, x: np.ndarray):
         """Vertices whose step segment x0 → x touches the solid.
 
@@ -258,83 +300,27 @@ class Obstacle(Effect):
 
     def bind(self, model, h):
         super().bind(model, h)
+        if self.thickness == "auto":
+            mesh = model.mesh
+            r = STRETCH_ALLOWANCE * covering_radius(mesh.vertices, mesh.triangles, mesh.strands)
+            self.set_margin(0.0 if self.contact == "post-solve" else self.auto_margin(r))
         self.contact_vertices = np.zeros(0, np.int64)
         self.contact_normals = np.zeros((0, 3))
         massless = model.massless_vertices
         inside = massless[self.inside(model.mesh.vertices[massless])] if len(massless) else []
         if len(inside):  # mass 0 means exactly pinned: the contact response would move it
             key = {"sphere": "center", "box": "min", "plane": "point"}.get(self.kind, "kind")
+            within = f" (within its thickness {self.margin:.3g} m)" if self.margin else ""
             raise InputError(f"{self.kind}.{key}: vertex {inside[0]} has mass 0, which pins it "
                              f"exactly at its initial position, but it starts inside the "
-                             f"{self.kind}, whose contact response would move it; move the "
-                             f"obstacle or give the vertex a mass",
+                             f"{self.kind}{within}, whose contact response would move it; "
+                             f"move the obstacle or give the vertex a mass",
                              field=f"{self.kind}.{key}")
         self._holding = Holding()
 
-
-class Plane(Obstacle):
-    """A static half-space: the solid lies behind a plane, ``normal`` points to free space.
-
-    Parameters
-    ----------
-    point : (3,) array_like
-        A point on the plane [m].
-    normal : (3,) array_like
-        Direction of free space (normalized here; must not be zero).
-    friction : float, default 0
-        Coulomb coefficient μ.
-    thickness : float, default 0
-        Contact margin [m]: vertices are kept at least this far in front of the plane
-        (the surface of the solid is the plane moved by ``thickness`` along the normal).
-
-    Notes
-    -----
-    The whole solid lies behind the plane, so the end-of-step signed distance
-    φ(x) = (x − point)·n − thickness already detects every crossing (a sign change of φ
-    along the step): no tunnelling is possible and the contact point is x − φ n.
-    """
-
-    kind = "plane"
-
-    def __init__(self, point, normal, *, friction: float = 0.0, thickness: float = 0.0,
-                 contact: str = "hold"):
-        super().__init__(friction, contact)
-        self.point = _vector3("plane.point", point)
-        normal = _vector3("plane.normal", normal)
-        scale = float(np.abs(normal).max())
-        if scale == 0.0:
-            raise InputError("plane.normal: must not be the zero vector")
-        normal = normal / scale          # largest entry ±1: the norm cannot overflow
-        self.normal = normal / float(np.linalg.norm(normal))
-        self.thickness = _non_negative("plane.thickness", thickness)
-        self._offset = float(self.point @ self.normal) + self.thickness
-
-    def signed_distance(self, x: np.ndarray) -> np.ndarray:
-        """φ(x) = n·x − n·point − thickness, negative inside.
-
-        Parameters
-        ----------
-        x : ndarray, shape (k, 3), points [m]
-
-        Returns
-        -------
-        ndarray, shape (k,), signed distances [m]
-        """
-        return x @ self.normal - self._offset
-
-    def contacts(self, x0, x):
-        phi = self.signed_distance(x)
-        index = np.flatnonzero(phi < 0)
-        n = np.broadcast_to(self.normal, (len(index), 3))
-        return index, x[index] - phi[index, None] * n, n
-
-    def inside(self, x):
-        return self.signed_distance(x) < 0
-
-    def closest(self, x):
-        n = np.broadcast_to(self.normal, x.shape)
-        return x - self.signed_distance(x)[:, None] * n, n
-
     def describe(self):
-        return {"kind": self.kind, "point": self.point.tolist(), "normal": self.normal.tolist(),
-                "friction": self.friction, "thickness": self.thickness, "contact": self.contact}
+        return {"kind": self.kind, **self._shape(), "friction": self.friction,
+                "thickness": self.thickness, "margin": self.margin, "contact": self.contact}
+
+    def _shape(self) -> dict:
+        raise NotImplementedError

@@ -6,6 +6,7 @@ import numpy as np
 
 from ..errors import InputError, check_finite
 from .obstacles import Obstacle, _rowdot, _vector3
+from .thickness import auto_thickness
 
 #: Largest sphere radius [m]: R² and the contact quadratic stay far inside float range.
 MAX_RADIUS = 1e100
@@ -22,6 +23,12 @@ class Sphere(Obstacle):
         R [m], > 0.
     friction : float, default 0
         Coulomb coefficient μ.
+    thickness : float or "auto", default "auto"
+        Contact thickness δ [m]: the cloth's vertices are held on the sphere of radius
+        R + δ. ``"auto"``: √(R² + r²) − R ≈ r²/(2R), r the covering radius of the cloth's
+        triangles at rest × 1.1, the least δ that provably keeps the ball out of every triangle
+        (the sagitta of a chord; :func:`~clothsim.effects.thickness.auto_thickness`); 0
+        in ``"post-solve"`` mode (the seed's).
 
     Notes
     -----
@@ -32,8 +39,9 @@ class Sphere(Obstacle):
 
     kind = "sphere"
 
-    def __init__(self, center, radius, *, friction: float = 0.0, contact: str = "hold"):
-        super().__init__(friction, contact)
+    def __init__(self, center, radius, *, friction: float = 0.0, thickness="auto",
+                 contact: str = "hold"):
+        super().__init__(friction, contact, thickness)
         self.center = _vector3("sphere.center", center)
         r = check_finite("sphere.radius", radius)
         if r.ndim != 0 or r <= 0:
@@ -42,10 +50,18 @@ class Sphere(Obstacle):
             raise InputError(f"sphere.radius: must be at most {MAX_RADIUS:g} m (its square "
                              f"must stay far from overflow), got {float(r)!r}")
         self.radius = float(r)
+        self.set_margin(self.margin)
+
+    def set_margin(self, margin):
+        super().set_margin(margin)
+        self._r = self.radius + self.margin       # the contact surface's radius
+
+    def auto_margin(self, r):
+        return auto_thickness(self.kind, r, radius=self.radius)
 
     def inside(self, x):
         q = x - self.center
-        return _rowdot(q, q) < self.radius ** 2
+        return _rowdot(q, q) < self._r ** 2
 
     def closest(self, x):
         q = x - self.center
@@ -55,10 +71,10 @@ class Sphere(Obstacle):
         n[ok] = q[ok] / length[ok, None]
         n[~ok] = (0.0, 1.0, 0.0)  # the centre itself: any direction is nearest
         # a few ulps outside, so that rounding never leaves a placed point inside
-        return self.center + (self.radius * (1.0 + 4 * np.finfo(float).eps)) * n, n
+        return self.center + (self._r * (1.0 + 4 * np.finfo(float).eps)) * n, n
 
     def contacts(self, x0, x):
-        R2 = self.radius ** 2
+        R2 = self._r ** 2
         q0 = x0 - self.center
         c0 = _rowdot(q0, q0) - R2                       # > = 0: x_n outside or on
         d = x - x0
@@ -73,7 +89,7 @@ class Sphere(Obstacle):
         p = x0[i] + s[:, None] * d[i]
         n = p - self.center
         n /= np.linalg.norm(n, axis=1)[:, None]
-        p = self.center + self.radius * n
+        p = self.center + self._r * n
         # started inside (initial overlap): nearest surface point of x
         j = np.flatnonzero(~start_out & self.inside(x))
         pj, nj = self.closest(x[j])
@@ -82,6 +98,5 @@ class Sphere(Obstacle):
     def settle(self, x, normal):
         return self.closest(x)
 
-    def describe(self):
-        return {"kind": self.kind, "center": self.center.tolist(), "radius": self.radius,
-                "friction": self.friction, "contact": self.contact}
+    def _shape(self):
+        return {"center": self.center.tolist(), "radius": self.radius}

@@ -19,6 +19,10 @@ trajectory
     ``trajectory.npz`` (positions, velocities (frames, n, 3), time); ``positions.txt``,
     ``velocities.txt`` (one frame a line of 3n numbers, %.17g); ``positions.f64``,
     ``velocities.f64`` (raw little-endian float64, frame after frame, x y z per vertex).
+contacts (scenes with obstacles in ``"hold"`` mode)
+    ``contacts.txt`` (``step vertex nx ny nz offset`` a line: in step k, frame k → k + 1,
+    the vertex is held on the plane n · x = offset) and ``contacts.npz`` (the same columns
+    as arrays ``step``, ``vertex``, ``normal``, ``offset``).
 iterates
     ``iterates/step_KKKK.npz`` for the first steps: ``x`` (K + 1, n, 3) the local/global
     iterates x_0 (the initial guess) … x_K, ``d`` (K + 1, s, 3) with d_k = local step of
@@ -38,6 +42,7 @@ from ..io.outfolder import OutputFolder
 from ..io.runfiles import read_json
 from ..solvers.local_global import LocalGlobalSolver
 from .check import as_simulation, system_condition_number
+from .contact_planes import held_planes, write_held_planes
 from .model_folder import damping_text
 
 LAYOUT = ("x in R^{3n} is stacked per vertex (x0 y0 z0 x1 y1 z1 ...): index 3*i + c; "
@@ -327,11 +332,17 @@ def _export_locked(source, sim, folder: OutputFolder, frames: int, iterate_steps
     xs, vs = [None] * (frames + 1), [None] * (frames + 1)
     # the iterate steps already advanced the simulation: replay from the start
     sim = as_simulation(source)
+    holding = [e for e in sim.effects if getattr(e, "contact", None) == "hold"]
+    held = []
     xs[0], vs[0] = sim.state.positions.copy(), sim.state.velocities.copy()
     for f in range(1, frames + 1):
+        if holding:
+            held.append(held_planes(holding, f - 1, sim.state.time + h))
         sim.step()
         xs[f], vs[f] = sim.state.positions.copy(), sim.state.velocities.copy()
     X, V = np.stack(xs), np.stack(vs)
+    if holding:
+        write_held_planes(put, files, held)
     put("trajectory.npz", lambda tmp: np.savez(tmp, positions=X, velocities=V,
                                                time=h * np.arange(frames + 1)))
     for name, arr in (("positions", X), ("velocities", V)):

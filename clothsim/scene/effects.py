@@ -95,6 +95,8 @@ def check_parameter(kind: str, key: str, v, path: str, base_dir: Path):
         return number(v, path)
     if t == "nonneg":
         return number(v, path, nonnegative=True)
+    if t == "margin":
+        return "auto" if v == "auto" else number(v, path, nonnegative=True)
     if t in ("positive", "time"):
         if t == "time":
             return number(v, path, nonnegative=True)

@@ -222,7 +222,8 @@ KEYS: tuple[Key, ...] = (
 # [[effects]]: kind -> key -> (type, unit). The type words are checked by
 # clothsim.scene.effects: "vec3"/"point" 3 numbers (a point within ±1e100 m), "number",
 # "nonneg" (>= 0), "positive" (> 0), "time" (>= 0), "length" (> 0, <= 1e100), "string",
-# "strings", "count" (an iteration count), "vertices" (indices or a file), "region", "base",
+# "strings", "margin" (>= 0 or "auto"), "count" (an iteration count), "vertices" (indices
+# or a file), "region", "base",
 # "file" (a file name, resolved against the scene's folder), "cells" ([row, column] pairs of a
 # grid cloth, negative from the end).
 EFFECT_KEYS: dict[str, dict[str, tuple[str, str]]] = {
@@ -233,9 +234,11 @@ EFFECT_KEYS: dict[str, dict[str, tuple[str, str]]] = {
             "stiffness": ("positive", "N/m"), "release": ("time", "s"),
             "velocity": ("vec3", "m/s"), "index_base": ("base", ""), "grid": ("cells", "")},
     "plane": {"point": ("point", "m"), "normal": ("vec3", ""), "friction": ("nonneg", ""),
-              "thickness": ("nonneg", "m")},
-    "sphere": {"center": ("point", "m"), "radius": ("length", "m"), "friction": ("nonneg", "")},
-    "box": {"min": ("point", "m"), "max": ("point", "m"), "friction": ("nonneg", "")},
+              "thickness": ("margin", "m")},
+    "sphere": {"center": ("point", "m"), "radius": ("length", "m"), "friction": ("nonneg", ""),
+               "thickness": ("margin", "m")},
+    "box": {"min": ("point", "m"), "max": ("point", "m"), "friction": ("nonneg", ""),
+            "thickness": ("margin", "m")},
     "impulse": {"center": ("point", "m"), "radius": ("length", "m"), "force": ("vec3", "N"),
                 "start": ("number", "s"), "duration": ("positive", "s")},
     "wind": {"velocity": ("vec3", "m/s"), "drag": ("nonneg", ""),
@@ -245,7 +248,8 @@ EFFECT_KEYS: dict[str, dict[str, tuple[str, str]]] = {
                      "families": ("strings", "")},
 }
 _TYPE_WORDS = {"vec3": "[3] numbers", "point": "[3] numbers", "number": "number",
-               "nonneg": "number ≥ 0", "positive": "number > 0", "time": "number ≥ 0",
+               "nonneg": "number ≥ 0", "margin": "number ≥ 0 or `\"auto\"`",
+               "positive": "number > 0", "time": "number ≥ 0",
                "length": "number > 0", "string": "string", "strings": "array of strings",
                "count": "integer ≥ 1", "vertices": "array of integers, or a file",
                "region": "table `{min, max}`, or an array of them", "base": "0 or 1 (with a file)",

@@ -106,21 +106,29 @@ def test_thin_box_no_tunnelling_direct():
     np.testing.assert_allclose(out[:, [0, 2]], x[:, [0, 2]], rtol=0, atol=1e-15)
 
 
-def test_thin_box_no_tunnelling_in_simulation():
-    """A cloth falling at 1.5 m/s (0.05 m per step) onto a 0.01 m slab never crosses it."""
+@pytest.mark.parametrize("thickness", [0.0, "auto"])
+def test_thin_box_no_tunnelling_in_simulation(thickness):
+    """A cloth falling at 1.5 m/s (0.05 m per step) onto a 0.01 m slab never crosses it.
+
+    With the ``"auto"`` thickness (1.1 × 0.06/√2 = 0.047 m for this 6² grid of 0.06 m
+    spacing) it is caught on the slab grown by δ, already on step 1 (at y = 0.03 < 0.057).
+    """
     model = grid_model(6, size=0.3, center=(0.0, 0.08, 0.0))
-    box = Box((-1, 0, -1), (1, 0.01, 1))
+    box = Box((-1, 0, -1), (1, 0.01, 1), thickness=thickness)
     v0 = (0.0, -5 * 0.01 / H, 0.0)
     sim = cs.Simulation(model, h=H, effects=[box], state=state_of(model, v0))
+    top = box.max[1] + box.margin
+    assert (box.margin == 0.0) == (thickness == 0.0)
     contacts = []
     for _ in range(6):
         sim.step()
-        assert sim.state.positions[:, 1].min() >= 0.01 - 1e-9
+        assert sim.state.positions[:, 1].min() >= top - 1e-9
         contacts.append(len(box.contact_vertices))
         if contacts[-1]:                                  # inelastic: no inward speed kept
             assert np.all(sim.state.velocities[:, 1] >= 0)
-    assert contacts[:2] == [0, 36]          # step 2 would have ended at y = −0.02, past the slab
-    np.testing.assert_array_equal(sim.state.positions[:, 1], 0.01)
+    # step 2 would have ended at y = −0.02, past the slab; step 1 at 0.03, inside the margin
+    assert contacts[:2] == ([0, 36] if thickness == 0.0 else [36, 36])
+    np.testing.assert_array_equal(sim.state.positions[:, 1], top)
     assert np.abs(sim.state.velocities).max() < 1e-12    # inelastic: it stays on top
 
 
