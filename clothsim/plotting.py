@@ -7,7 +7,9 @@ global state or needs a display. The cloth is drawn in 2-D through an orthograph
 than mplot3d; the artists: :mod:`clothsim.painter`, layers and shading:
 :mod:`clothsim.camera`), together with the obstacles
 (plane, sphere, box; :mod:`clothsim.display`) and the pinned vertices (red dots). A cloth
-of more than :data:`MAX_TRIANGLES` triangles is drawn decimated, and the title says so.
+of more than :data:`MAX_TRIANGLES` triangles is drawn decimated, and the title says so; only
+the vertices drawn are then projected, shaded and framed
+(:func:`clothsim.display.picture_mesh`), so a picture's cost does not grow with the cloth.
 The picture is framed on the cloth and its obstacles, and its axes are the screen axes of
 the view, in metres.
 
@@ -31,7 +33,7 @@ from pathlib import Path
 import numpy as np
 
 from .camera import View
-from .display import decimate, obstacle_surfaces
+from .display import obstacle_surfaces, picture_mesh
 from .io.common import atomic_path
 from .painter import SceneArtist, frame_axes
 
@@ -77,7 +79,8 @@ def draw(ax, mesh, positions, *, effects=(), view: View | None = None, t: float 
     t : float
         Time [s] (for pins released at some time).
     frame_on : ndarray, shape (..., 3), optional
-        Points to frame the picture on (default: ``positions`` and the obstacles).
+        Points to frame the picture on (default: the vertices drawn, all of ``positions``
+        unless the cloth is decimated, and the obstacles).
     edges : bool, optional
         Draw triangle edges (default: when the mesh has fewer than ``EDGE_LIMIT`` = 3000
         triangles).
@@ -117,12 +120,15 @@ def _draw(ax, mesh, positions, effects, view, t, frame_on, edges, shading,
     """:func:`draw`; returns the decimation note ("" when the whole cloth is drawn)."""
     x = np.asarray(positions, dtype=np.float64)
     view = view or View()
-    X = x if frame_on is None else np.asarray(frame_on, dtype=np.float64)
+    drawn, take, note = picture_mesh(mesh, max_triangles)
+    # framed on what is drawn: a decimated cloth keeps its outline (display.decimate)
+    X = (x if take is None else x[take]) if frame_on is None else np.asarray(
+        frame_on, dtype=np.float64)
     surfaces = obstacle_surfaces(effects, X)
     depth_range = frame_axes(ax, view, X, surfaces)
     edges = mesh.triangle_count < EDGE_LIMIT if edges is None else edges
-    drawn, note = decimate(mesh, max_triangles)
-    SceneArtist(ax, drawn, view, x, edges, surfaces, effects, shading, depth_range).update(x, t)
+    SceneArtist(ax, drawn, view, x, edges, surfaces, effects, shading, depth_range,
+                take).update(x, t)
     return note
 
 
@@ -186,15 +192,16 @@ def write_preview(path, positions, mesh, *, times=None, effects=(), max_frames: 
         ``path``.
     """
     path = Path(path)
-    X = np.asarray(positions, dtype=np.float64)
-    drawn, note = decimate(mesh, MAX_TRIANGLES)
+    X = np.asarray(positions, dtype=np.float64)  # a memory map stays one: frames load
+    drawn, take, note = picture_mesh(mesh, MAX_TRIANGLES)
     idx = preview_frame_indices(len(X), drawn.triangle_count, max_frames=max_frames)
     fig, ax = _figure(size, dpi)
     view = View()
-    surfaces = obstacle_surfaces(effects, X[idx])
-    depth_range = frame_axes(ax, view, X[idx], surfaces)
+    shown = X[idx] if take is None else X[idx[:, None], take]  # the vertices drawn
+    surfaces = obstacle_surfaces(effects, shown)
+    depth_range = frame_axes(ax, view, shown, surfaces)
     art = SceneArtist(ax, drawn, view, X[idx[0]], mesh.triangle_count < EDGE_LIMIT, surfaces,
-                  effects, True, depth_range)
+                      effects, True, depth_range, take)
     title = fig.suptitle(note, fontsize=9)
 
     def frame(j):
