@@ -130,3 +130,38 @@ def test_a_decimated_picture_is_the_picture_from_the_whole_vertex_array(tmp_path
         images.append(np.asarray(canvas.buffer_rgba()).copy())
     assert mesh.triangle_count > MAX_TRIANGLES
     np.testing.assert_array_equal(images[0], images[1])
+
+
+def test_pictures_vs_table_takes_medians_and_ratios():
+    """benchmarks/pictures_vs.py's table from made-up runs (the runs take a minute)."""
+    from benchmarks import pictures_vs
+
+    def run(i, p, f):
+        return {"import": i, "preview": p, "final": f, "all": i + p + f}
+
+    res = {"old": [run(0.4, 1.0, 0.2), run(0.6, 1.4, 0.3), run(0.5, 1.2, 0.2)],
+           "new": [run(0.4, 0.6, 0.1), run(0.4, 0.5, 0.2)]}
+    lines = pictures_vs.table(res, True)
+    assert lines[2] == "| matplotlib import | 0.500 s | 0.400 s | 0.80 |"
+    assert lines[3] == "| preview.gif | 1.200 s | 0.550 s | 0.46 |"
+    assert lines[5] == "| pictures in all | 1.900 s | 1.100 s | 0.58 |"
+    assert lines[-1].endswith("yes.")
+    assert pictures_vs.table(res, False)[-1].endswith("NO.")
+
+
+def test_pictures_vs_tells_one_changed_pixel(tmp_path):
+    from PIL import Image
+
+    from benchmarks.pictures_vs import same_pixels
+
+    rgb = np.zeros((8, 8, 3), np.uint8)
+    changed = rgb.copy()
+    changed[3, 4] = (255, 0, 0)
+    for name, last in (("a", rgb), ("b", rgb), ("c", changed)):
+        (tmp_path / name).mkdir()
+        frames = [Image.fromarray(f) for f in (changed, rgb)]
+        frames[0].save(tmp_path / name / "preview.gif", save_all=True,
+                       append_images=frames[1:])
+        Image.fromarray(last).save(tmp_path / name / "final.png")  # one pixel differs in c
+    assert same_pixels(tmp_path / "a", tmp_path / "b")
+    assert not same_pixels(tmp_path / "a", tmp_path / "c")
