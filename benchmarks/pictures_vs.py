@@ -8,21 +8,24 @@ with the clothsim source tree at OLD_TREE (e.g. ``/work/main``, or ``git archive
 -C /tmp/old``) and this one, each in a fresh process. It reports the thread CPU seconds of
 the matplotlib import and of the two pictures (medians; CPU, not wall: the machine may be
 shared), and whether the two trees' pictures are the same pixel for pixel. Prints a
-Markdown table.
+Markdown table and writes it to ``docs/data/pictures-vs.md`` (``--out`` elsewhere).
 """
 
 from __future__ import annotations
 
 import argparse
 import json
-import os
 import statistics
 import subprocess
 import sys
 import tempfile
 from pathlib import Path
 
+from .large_vs import env_for
+from .scale_ladder import commit
+
 ROOT = Path(__file__).resolve().parents[1]
+OUT = ROOT / "docs" / "data" / "pictures-vs.md"
 FRAMES = 5
 
 CHILD = r"""
@@ -47,12 +50,6 @@ write_final_image(out / "final.png", np.array(positions[-1]), sim.model.mesh,
 c3 = time.thread_time()
 print(json.dumps({"import": c1 - c0, "preview": c2 - c1, "final": c3 - c2}))
 """
-
-
-def env_for(tree: Path) -> dict:
-    env = dict(os.environ)
-    env["PYTHONPATH"] = str(tree)
-    return env
 
 
 def make_run(folder: Path, n: int) -> None:
@@ -100,6 +97,7 @@ def main(argv: list[str] | None = None) -> None:
     parser.add_argument("old", type=Path)
     parser.add_argument("--size", type=int, default=513)
     parser.add_argument("--repeats", type=int, default=3)
+    parser.add_argument("--out", type=Path, default=OUT)
     args = parser.parse_args(sys.argv[1:] if argv is None else argv)
     trees = {"old": args.old.resolve(), "new": ROOT}
     res = {k: [] for k in trees}
@@ -114,9 +112,14 @@ def main(argv: list[str] | None = None) -> None:
                 res[name].append(t)
                 print(name, json.dumps({k: round(v, 3) for k, v in t.items()}), flush=True)
         same = same_pixels(Path(tmp) / "old", Path(tmp) / "new")
-    print(f"\n{args.size}² hanging, {FRAMES} frames; {args.repeats} interleaved repeats; load "
-          f"average {load} at the start\n")
-    print("\n".join(table(res, same)))
+    lines = [f"Measured by `python -m benchmarks.pictures_vs OLD_TREE --size {args.size} "
+             f"--repeats {args.repeats}` at commit {commit()} against {args.old.name}/ "
+             f"({args.size}² `hanging`, {FRAMES} frames; median thread CPU of fresh processes, "
+             f"interleaved; load average {load} at the start).", ""] + table(res, same)
+    print("\n" + "\n".join(lines))
+    args.out.write_text("\n".join(lines) + "\n")
+    print(f"written to {args.out}")
+
 
 
 if __name__ == "__main__":
