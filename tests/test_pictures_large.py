@@ -31,6 +31,16 @@ def test_picture_mesh_is_the_decimated_mesh_on_the_vertices_it_uses(shape):
     assert len(take) < mesh.vertex_count / 3
 
 
+def test_a_513_grid_is_drawn_from_8192_triangles_on_4225_vertices():
+    """The figures picture_mesh's docstring gives."""
+    from clothsim.plotting import MAX_TRIANGLES
+
+    mesh = cs.grid(513, 513)
+    drawn, take, note = picture_mesh(mesh, MAX_TRIANGLES)
+    assert (drawn.triangle_count, len(take), mesh.vertex_count) == (8192, 4225, 263169)
+    assert note == "every 8th row and column drawn"
+
+
 def test_picture_mesh_of_a_small_cloth_is_the_cloth():
     mesh = cs.grid(20, 20)
     assert picture_mesh(mesh, 10_000) == (mesh, None, "")
