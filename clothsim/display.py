@@ -316,10 +316,8 @@ def picture_mesh(mesh: Mesh, budget: int) -> tuple[Mesh, np.ndarray | None, str]
 
     Parameters
     ----------
-    mesh : Mesh
-        The cloth.
-    budget : int
-        Triangles allowed, >= 2.
+    mesh, budget
+        The cloth and the triangles allowed, as for :func:`decimate`.
 
     Returns
     -------
