@@ -22,12 +22,12 @@ def hanging(n: int):
 def pictures_of_trajectory(scene, out, tmp):
     """preview.gif and final.png drawn afterwards from the run's trajectory.npz."""
     sim = scene.build_simulation()
-    z = np.load(out / "trajectory.npz")
-    times = z["time"]
+    with np.load(out / "trajectory.npz") as z:
+        positions, times = z["positions"], z["time"]
     tmp.mkdir()
-    write_preview(tmp / "preview.gif", z["positions"], sim.model.mesh, times=times,
+    write_preview(tmp / "preview.gif", positions, sim.model.mesh, times=times,
                   effects=sim.effects)
-    write_final_image(tmp / "final.png", z["positions"][-1], sim.model.mesh,
+    write_final_image(tmp / "final.png", positions[-1], sim.model.mesh,
                       title=f"{scene.name}, t = {times[-1]:.2f} s", effects=sim.effects,
                       t=float(times[-1]))
     return {name: (tmp / name).read_bytes() for name in ("preview.gif", "final.png")}
