@@ -27,11 +27,12 @@ class SceneArtist:
     ax : matplotlib.axes.Axes
         Target axes (already framed, see :func:`frame_axes`).
     mesh : Mesh
-        Triangles and strands to draw (possibly decimated).
+        Triangles and strands to draw (possibly decimated, on its own vertices: ``take``).
     view : clothsim.camera.View
         Camera and light.
     x : ndarray, shape (n, 3)
-        Positions [m] of a first frame (its size sets the tolerance of the hidden layer).
+        Positions [m] of the cloth in a first frame (its size sets the tolerance of the
+        hidden layer).
     edges : bool
         Draw the cloth's triangle edges.
     surfaces : sequence of clothsim.display.Surface
@@ -43,12 +44,17 @@ class SceneArtist:
     depth_range : (float, float), optional
         Depths [m] of the picture's nearest and farthest points, for the depth cue
         (default: those of ``x`` and the obstacles).
+    take : ndarray of int, optional
+        Indices in ``x`` of ``mesh``'s vertices (:func:`clothsim.display.picture_mesh`):
+        only those are projected and shaded; default all, ``mesh`` indexes ``x``.
     """
 
     def __init__(self, ax, mesh, view: View, x: np.ndarray, edges: bool, surfaces=(),
-                 effects=(), shading: bool = True, depth_range=None):
+                 effects=(), shading: bool = True, depth_range=None, take=None):
         from matplotlib.collections import LineCollection, PolyCollection
 
+        self.take = take
+        x = self._drawn(x)
         self.view = view
         self.tris = np.asarray(mesh.triangles)
         self.strands = np.asarray(mesh.strands)
@@ -96,6 +102,10 @@ class SceneArtist:
         if any(getattr(e, "kind", "") == "pin" for e in self.effects):
             self.pins = ax.plot([], [], "o", ms=4, color=PIN_COLOR, zorder=4)[0]
 
+    def _drawn(self, x: np.ndarray) -> np.ndarray:
+        """The positions of the vertices drawn, from the cloth's."""
+        return np.asarray(x) if self.take is None else np.asarray(x)[self.take]
+
     def moving(self) -> list:
         """The artists :meth:`update` changes (the rest of the figure stays as drawn).
 
@@ -112,10 +122,14 @@ class SceneArtist:
         Parameters
         ----------
         x : ndarray, shape (n, 3)
-            Positions [m].
+            Positions [m] of the cloth.
         t : float
             Time [s] (pins released in time).
         """
+        if self.pins is not None:  # pinned vertices, drawn or not
+            q = self.view.project(pinned_points(self.effects, x, t))
+            self.pins.set_data(q[:, 0], q[:, 1])
+        x = self._drawn(x)
         p = self.view.project(x)
         if self.poly is not None:
             t3 = self.tris
@@ -143,9 +157,6 @@ class SceneArtist:
             self.lines.set_segments(p[self.strands][..., :2])
         if self.points is not None:
             self.points.set_data(p[:, 0], p[:, 1])
-        if self.pins is not None:
-            q = self.view.project(pinned_points(self.effects, x, t))
-            self.pins.set_data(q[:, 0], q[:, 1])
 
 
 def frame_axes(ax, view: View, X: np.ndarray, surfaces=()) -> tuple[float, float]:

@@ -7,7 +7,9 @@ global state or needs a display. The cloth is drawn in 2-D through an orthograph
 than mplot3d; the artists: :mod:`clothsim.painter`, layers and shading:
 :mod:`clothsim.camera`), together with the obstacles
 (plane, sphere, box; :mod:`clothsim.display`) and the pinned vertices (red dots). A cloth
-of more than :data:`MAX_TRIANGLES` triangles is drawn decimated, and the title says so.
+of more than :data:`MAX_TRIANGLES` triangles is drawn decimated, and the title says so; only
+the vertices drawn are then projected, shaded and framed
+(:func:`clothsim.display.picture_mesh`), so a picture's cost does not grow with the cloth.
 The picture is framed on the cloth and its obstacles, and its axes are the screen axes of
 the view, in metres.
 
@@ -21,17 +23,22 @@ write_preview
     (blitting), saved with Pillow.
 write_final_image
     ``final.png``: one frame, 600 × 600 px.
+draw_run_pictures, write_run_pictures
+    Both pictures of a run drawn in memory, then written (the runner draws them while the
+    last frame is written on its background thread, and writes them once the run is
+    complete).
 """
 
 from __future__ import annotations
 
+import io
 import logging
 from pathlib import Path
 
 import numpy as np
 
 from .camera import View
-from .display import decimate, obstacle_surfaces
+from .display import obstacle_surfaces, picture_mesh
 from .io.common import atomic_path
 from .painter import SceneArtist, frame_axes
 
@@ -77,7 +84,8 @@ def draw(ax, mesh, positions, *, effects=(), view: View | None = None, t: float 
     t : float
         Time [s] (for pins released at some time).
     frame_on : ndarray, shape (..., 3), optional
-        Points to frame the picture on (default: ``positions`` and the obstacles).
+        Points to frame the picture on (default: the vertices drawn, all of ``positions``
+        unless the cloth is decimated, and the obstacles).
     edges : bool, optional
         Draw triangle edges (default: when the mesh has fewer than ``EDGE_LIMIT`` = 3000
         triangles).
@@ -117,12 +125,15 @@ def _draw(ax, mesh, positions, effects, view, t, frame_on, edges, shading,
     """:func:`draw`; returns the decimation note ("" when the whole cloth is drawn)."""
     x = np.asarray(positions, dtype=np.float64)
     view = view or View()
-    X = x if frame_on is None else np.asarray(frame_on, dtype=np.float64)
+    drawn, take, note = picture_mesh(mesh, max_triangles)
+    # framed on what is drawn: a decimated cloth keeps its outline (display.decimate)
+    X = (x if take is None else x[take]) if frame_on is None else np.asarray(
+        frame_on, dtype=np.float64)
     surfaces = obstacle_surfaces(effects, X)
     depth_range = frame_axes(ax, view, X, surfaces)
     edges = mesh.triangle_count < EDGE_LIMIT if edges is None else edges
-    drawn, note = decimate(mesh, max_triangles)
-    SceneArtist(ax, drawn, view, x, edges, surfaces, effects, shading, depth_range).update(x, t)
+    SceneArtist(ax, drawn, view, x, edges, surfaces, effects, shading, depth_range,
+                take).update(x, t)
     return note
 
 
@@ -167,8 +178,9 @@ def write_preview(path, positions, mesh, *, times=None, effects=(), max_frames: 
     ----------
     path : str or Path
         Output ``.gif``.
-    positions : ndarray, shape (F, n, 3)
-        Positions of every frame [m].
+    positions : ndarray, shape (F, n, 3), or sequence of F arrays (n, 3)
+        Positions of every frame [m] (a memory map, or a list of frames: only the frames
+        drawn are read).
     mesh : Mesh
         Triangles and strands to draw.
     times : ndarray, shape (F,), optional
@@ -186,32 +198,47 @@ def write_preview(path, positions, mesh, *, times=None, effects=(), max_frames: 
         ``path``.
     """
     path = Path(path)
-    X = np.asarray(positions, dtype=np.float64)
-    drawn, note = decimate(mesh, MAX_TRIANGLES)
-    idx = preview_frame_indices(len(X), drawn.triangle_count, max_frames=max_frames)
+    data, count = _preview_gif(positions, mesh, times, effects, max_frames, size, dpi)
+    _write(path, data)
+    log.info("wrote %s (%d frames)", path, count)
+    return path
+
+
+def _preview_gif(positions, mesh, times, effects, max_frames: int, size: float,
+                 dpi: int) -> tuple[bytes, int]:
+    """:func:`write_preview`'s GIF file content, and the number of frames drawn."""
+    drawn, take, note = picture_mesh(mesh, MAX_TRIANGLES)
+    idx = preview_frame_indices(len(positions), drawn.triangle_count, max_frames=max_frames)
+    X = [np.asarray(positions[i], dtype=np.float64) for i in idx]  # only these frames load
     fig, ax = _figure(size, dpi)
     view = View()
-    surfaces = obstacle_surfaces(effects, X[idx])
-    depth_range = frame_axes(ax, view, X[idx], surfaces)
-    art = SceneArtist(ax, drawn, view, X[idx[0]], mesh.triangle_count < EDGE_LIMIT, surfaces,
-                  effects, True, depth_range)
+    shown = np.stack(X if take is None else [x[take] for x in X])  # the vertices drawn
+    surfaces = obstacle_surfaces(effects, shown)
+    depth_range = frame_axes(ax, view, shown, surfaces)
+    art = SceneArtist(ax, drawn, view, X[0], mesh.triangle_count < EDGE_LIMIT, surfaces,
+                      effects, True, depth_range, take)
     title = fig.suptitle(note, fontsize=9)
 
     def frame(j):
         t = float(times[idx[j]]) if times is not None else 0.0
-        art.update(X[idx[j]], t)
+        art.update(X[j], t)
         if times is not None:
             title.set_text(f"t = {t:.2f} s" + (f" ({note})" if note else ""))
 
     span = float(times[idx[-1]] - times[idx[0]]) if times is not None and len(idx) > 1 else 0
     fps = max(1.0, min(30.0, (len(idx) - 1) / span)) if span > 0 else 10.0
+    out = io.BytesIO()
+    _save_gif(fig, art.moving() + [title], frame, len(idx), out, fps)
+    return out.getvalue(), len(idx)
+
+
+def _write(path: Path, data: bytes) -> None:
+    """Write a picture's bytes atomically (:func:`clothsim.io.common.atomic_path`)."""
     with atomic_path(path) as tmp:
-        _save_gif(fig, art.moving() + [title], frame, len(idx), tmp, fps)
-    log.info("wrote %s (%d frames)", path, len(idx))
-    return path
+        tmp.write_bytes(data)
 
 
-def _save_gif(fig, moving: list, frame, count: int, path: Path, fps: float) -> None:
+def _save_gif(fig, moving: list, frame, count: int, path, fps: float) -> None:
     """Draw the figure's still parts (axes, ticks, planes) once, then for each frame only
     the ``moving`` artists over a copy of them (blitting), and save the frames as a looping
     GIF (Pillow, as :class:`matplotlib.animation.PillowWriter` does)."""
@@ -265,14 +292,72 @@ def write_final_image(path, positions, mesh, *, title: str = "", effects=(), t: 
         ``path``.
     """
     path = Path(path)
+    _write(path, _final_png(positions, mesh, title, effects, t, size, dpi))
+    return path
+
+
+def _final_png(positions, mesh, title: str, effects, t: float, size: float,
+               dpi: int) -> bytes:
+    """:func:`write_final_image`'s PNG file content."""
     fig, ax = _figure(size, dpi)
     note = _draw(ax, mesh, positions, effects, None, t, None, None, True, MAX_TRIANGLES)
     if title or note:
         fig.suptitle(", ".join(x for x in (title, note) if x), fontsize=10)
-    with atomic_path(path) as tmp:
-        fig.savefig(tmp, format="png")
-    return path
+    out = io.BytesIO()
+    fig.savefig(out, format="png")
+    return out.getvalue()
 
 
-__all__ = ["draw", "write_preview", "write_final_image", "preview_frame_indices",
+def draw_run_pictures(positions, mesh, *, times, effects=(), title: str = "") -> dict:
+    """A run's ``preview.gif`` and ``final.png``, drawn in memory (nothing is written).
+
+    Parameters
+    ----------
+    positions : ndarray, shape (F, n, 3), or sequence of F arrays (n, 3)
+        Every frame's positions [m] (see :func:`write_preview`); the last one is
+        ``final.png``.
+    mesh : Mesh
+        Triangles and strands to draw.
+    times : ndarray, shape (F,)
+        Frame times [s].
+    effects : iterable of Effect, optional
+        Obstacles and pins to draw (see :func:`draw`).
+    title : str
+        ``final.png``'s title.
+
+    Returns
+    -------
+    dict of str to bytes
+        File name to file content, for :func:`write_run_pictures`.
+    """
+    gif, count = _preview_gif(positions, mesh, times, effects, 60, 6.4, 80)
+    log.debug("drew preview.gif (%d frames)", count)
+    png = _final_png(positions[-1], mesh, title, effects, float(times[-1]), 6.0, 100)
+    return {"preview.gif": gif, "final.png": png}
+
+
+def write_run_pictures(folder, pictures: dict) -> list[Path]:
+    """Write pictures drawn by :func:`draw_run_pictures` into ``folder``, each atomically.
+
+    Parameters
+    ----------
+    folder : str or Path
+        The run folder.
+    pictures : dict of str to bytes
+        File name to content.
+
+    Returns
+    -------
+    list of Path
+        The files written.
+    """
+    paths = [Path(folder) / name for name in pictures]
+    for path, data in zip(paths, pictures.values()):
+        _write(path, data)
+    log.info("wrote %s", ", ".join(str(p) for p in paths))
+    return paths
+
+
+__all__ = ["draw", "write_preview", "write_final_image", "draw_run_pictures",
+           "write_run_pictures", "preview_frame_indices",
            "MAX_TRIANGLES", "EDGE_LIMIT", "PREVIEW_TRIANGLE_BUDGET"]

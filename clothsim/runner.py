@@ -15,7 +15,8 @@ file                 content
                      ``strands`` (e, 2), ``vertex_mass`` (n,); float64 / int64;
                      assembled from a store streamed to disk, never held in memory
 ``preview.gif``      small animation (at most ~60 frames), ``final.png`` last frame,
-                     both drawing the obstacles and pins
+                     both drawing the obstacles and pins; drawn while the last frame
+                     is written, written once the run is complete
 ``obstacles.vtu``    the scene's obstacles as triangles (only when it has some)
 ``run.json``         resolved scene and its hash, effects built, solver, backend and
                      solver state, package versions, per-frame records, and status
@@ -47,7 +48,7 @@ from .interrupts import SignalInterrupt, handle_signals, signals_deferred
 from .io.frames import OBSTACLES_NAME, PVD_NAME
 from .io.runfiles import package_versions, write_json, write_trajectory
 from .io.runfolder import RESULT_FILES, STALE_FILES, RunFolder, completed_frames
-from .plotting import write_final_image, write_preview
+from .plotting import draw_run_pictures, write_run_pictures
 from .scene import Scene, load_scene
 from .scene.inputs import input_hashes
 from .scene.schema import MAX_FRAMES
@@ -237,6 +238,10 @@ def _run_in(folder: RunFolder, scene, model, sim, frames: int, progress, resume:
             info["factorization"] = getattr(sim.solver, "factorization", None)
             info["solver_state"] = get_state()
             folder.write_frame(k, x, v, record, wait=False)
+    # the pictures are drawn while the last frame is written, and written once the run is
+    # complete; an error drawing them is raised then (the run is complete all the same)
+    pictures = _draw_previews(folder, scene, sim, fps, frames, x if frames >= first else None
+                              ) if preview else None
     folder.wait()
     if progress is not None and frames >= first:
         progress(frames, frames)
@@ -245,8 +250,10 @@ def _run_in(folder: RunFolder, scene, model, sim, frames: int, progress, resume:
     files = folder.frame_files()
     files += [folder.path / PVD_NAME, folder.path / "trajectory.npz", folder.path / "run.json"]
     files += [obstacles] if obstacles is not None else []
-    if preview:
-        files += _previews(folder, scene, sim, fps)
+    if isinstance(pictures, Exception):
+        raise pictures
+    if pictures is not None:
+        files += write_run_pictures(folder.path, pictures)
     return RunResult(folder.path, "completed", folder.done, folder.records, files)
 
 
@@ -281,16 +288,20 @@ def _frame_record(k: int, fps: float, steps: list, tolerance) -> dict:
             "residual_history": [float(r) for r in steps[-1].residual_history]}
 
 
-def _previews(folder: RunFolder, scene, sim, fps: float) -> list:
-    out, done = folder.path, folder.done
-    positions = folder.trajectory("positions", done + 1)  # memory-mapped: drawn frames load
-    times = np.arange(done + 1) / fps
-    mesh = sim.model.mesh
-    return [write_preview(out / "preview.gif", positions, mesh, times=times,
-                          effects=sim.effects),
-            write_final_image(out / "final.png", np.array(positions[-1]), mesh,
-                              title=f"{scene.name}, t = {times[-1]:.2f} s",
-                              effects=sim.effects, t=float(times[-1]))]
+def _draw_previews(folder: RunFolder, scene, sim, fps: float, frames: int, last):
+    """preview.gif and final.png of frames 0..frames, drawn in memory: frame ``frames`` is
+    ``last`` (None: in the store), the others are in the store (memory-mapped: only the
+    frames drawn load). Returns :func:`clothsim.plotting.draw_run_pictures`' dict, or the
+    error that drawing raised."""
+    stored = frames + 1 if last is None else frames
+    positions = list(folder.trajectory("positions", stored))
+    positions += [] if last is None else [last]
+    times = np.arange(frames + 1) / fps
+    try:
+        return draw_run_pictures(positions, sim.model.mesh, times=times, effects=sim.effects,
+                                 title=f"{scene.name}, t = {times[-1]:.2f} s")
+    except Exception as exc:  # noqa: BLE001 - raised once the run is marked complete
+        return exc
 
 
 __all__ = ["run_scene", "RunResult", "completed_frames", "package_versions", "scene_hash",
