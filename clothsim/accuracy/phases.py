@@ -152,4 +152,6 @@ class Phases:
             spent = self.seconds.setdefault(name, {"wall": 0.0, "cpu": 0.0})
             spent["wall"] += time.perf_counter() - t0
             spent["cpu"] += time.process_time() - c0
-            log.info("phase %s: %.1f s wall, %.1f s CPU", name, spent["wall"], spent["cpu"])
+        # only a phase that ended: an interrupted or failed one's seconds are kept, but its
+        # command's one-line error stays the only line (tests/test_reliability_stops.py)
+        log.info("phase %s: %.1f s wall, %.1f s CPU", name, spent["wall"], spent["cpu"])

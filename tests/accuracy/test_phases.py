@@ -53,3 +53,23 @@ def test_off_a_terminal_a_phase_logs_its_progress(monkeypatch, caplog):
     assert any(line.startswith("references: 3/3 step(s) done") for line in lines)
     assert lines[-1].startswith("phase references:")
     assert sys.stderr.getvalue() == ""      # no bar drawn
+
+
+def test_an_interrupted_phase_keeps_its_seconds_and_logs_no_end_line(caplog):
+    """A signal inside a phase: its seconds are recorded, but the command's one-line error
+    stays the only line (no "phase ...: s wall" line for a phase that did not end)."""
+    import logging
+
+    import pytest
+
+    phases = Phases(enabled=False)
+    with caplog.at_level(logging.INFO, logger="clothsim.accuracy.phases"):
+        with pytest.raises(KeyboardInterrupt):
+            with phases.phase("recording", total=2, unit="step"):
+                raise KeyboardInterrupt
+        with phases.phase("references", total=1, unit="step"):
+            pass
+    assert "recording" in phases.seconds and "references" in phases.seconds
+    lines = [r.getMessage() for r in caplog.records]
+    assert not any(line.startswith("phase recording") for line in lines)
+    assert any(line.startswith("phase references") for line in lines)
