@@ -69,6 +69,7 @@ def test_benchmark_builds_agrees_and_reports(program, capsys, monkeypatch):
     for r in rows.values():
         assert r["agree"] and r["distance"] <= r["tolerance"]
         assert r["moved"] > 0.05                  # the cloth fell: agreement is not trivial
+        assert r["steps"] >= side.WARM_STEPS      # the warm-up, and past a pending switch
     check = rows[side.CHECK_SIZE]
     assert check["tolerance"] < check["one_fewer"] / 4   # one iteration less would show
     timed = rows[9]
