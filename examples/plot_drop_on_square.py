@@ -41,7 +41,7 @@ assert abs(box.margin - 1.1 * (1 / 24) / np.sqrt(2)) < 1e-12
 centre = np.argmin(np.linalg.norm(model.mesh.vertices[:, [0, 2]], axis=1))
 x = frames[45]
 assert abs(x[centre, 1] - (box.max[1] + box.margin)) < 0.01
-assert x[:, 1].min() < 0.3
+assert x[:, 1].min() < box.max[1] - 0.15               # its corners hang well below it
 
 fig, axes = plt.subplots(1, 3, figsize=(11, 3.8))
 for ax, (k, xk) in zip(axes, frames.items()):
