@@ -82,10 +82,11 @@ class HeldSystem:
         The solver's free and exactly pinned vertices.
     held : ndarray of int
         The held vertices, increasing.
+    A_FF : csr_matrix, shape (f, f)
+        M_s + h² L_s over the free vertices [kg] (the fused held loops' gradient).
     tangent_factor : Factor
-        The factor of Tᵀ A T (:mod:`.tangent_system`), m × m.
-    factor : FreeInverse
-        (P A P + α D)⁻¹ on the free degrees of freedom, interleaved (``factor.solve``).
+        The factor of Tᵀ A T (:mod:`.tangent_system`), m × m; :meth:`solve` applies
+        (P A P + α D)⁻¹ with it.
     """
 
     def __init__(self, solver, problem, previous: HeldSystem | None = None):
@@ -94,6 +95,7 @@ class HeldSystem:
         self.As = As = sp.csr_matrix(sysf.A)
         self.free = sysf.free
         self.fixed = sysf.fixed
+        self.A_FF = As if not len(self.fixed) else As[self.free][:, self.free]
         self.basis = problem.contact_basis()
         self.held, self.blocks = projector_blocks(problem.contact_vertices, self.basis)
         self.alpha = float(As.diagonal().mean())
@@ -105,7 +107,6 @@ class HeldSystem:
                              check_conditioning=False,   # M + h² L's factor was checked
                              cholmod_mode="supernodal",   # measured: docs/data/held-factor.md
                              reuse=None if previous is None else previous.tangent_factor)
-        self.factor = FreeInverse(self)
         log.info("factored the held-contact system: %d held vertices (%d on oblique planes), "
                  "%d unknowns", len(self.held), len(self.oblique), K.shape[0])
 
@@ -202,37 +203,6 @@ class HeldSystem:
         """
         g[self.held] = np.einsum("vij,vj->vi", self.blocks, g[self.held])
         return g
-
-
-class FreeInverse:
-    """(P A P + α D)⁻¹ over the free degrees of freedom, interleaved (x, y, z of each free
-    vertex): :meth:`HeldSystem.solve` on a flat vector.
-
-    Parameters
-    ----------
-    held : HeldSystem
-    """
-
-    def __init__(self, held: HeldSystem):
-        self.held = held
-        self.shape = (3 * len(held.free),) * 2
-        self.backend = held.tangent_factor.backend
-
-    def solve(self, b: np.ndarray) -> np.ndarray:
-        """x = (P A P + α D)⁻¹ b.
-
-        Parameters
-        ----------
-        b : ndarray, shape (3f,)
-
-        Returns
-        -------
-        ndarray, shape (3f,)
-        """
-        held = self.held
-        r = np.zeros((len(held.As.indptr) - 1, 3))
-        r[held.free] = np.reshape(b, (-1, 3))
-        return held.solve(r)[held.free].reshape(-1)
 
 
 def constrained_matrix(problem, H, free: np.ndarray):

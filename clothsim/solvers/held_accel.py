@@ -73,8 +73,7 @@ class HeldStep(FusedStep):
         self._rhs_n = np.zeros_like(problem.y)
         self._held_pos = np.searchsorted(self.free, held.held)   # held vertices among F
         self._blocks = held.blocks                               # their 3 x 3 blocks of P
-        A = sysf.A.tocsr()
-        self._A_FF = A if not len(sysf.fixed) else A[self.free][:, self.free]
+        self._A_FF = held.A_FF
         g = self.gradient(self.a0, np.empty_like(self.a0)).reshape(-1)
         self.norm0 = math.sqrt(float(np.dot(g, g)))
 
@@ -125,8 +124,9 @@ class HeldStep(FusedStep):
         ndarray, shape (3, f)
             The solution [m], a new array, projected onto the tangent space.
         """
-        u = self.held.factor.solve(np.ascontiguousarray(bT.T).reshape(-1))
-        return self.tangential(np.ascontiguousarray(u.reshape(-1, 3).T))
+        r = np.zeros_like(self.problem.y)
+        r[self.free] = bT.T
+        return self.tangential(np.ascontiguousarray(self.held.solve(r)[self.free].T))
 
     def gradient(self, aT: np.ndarray, out: np.ndarray) -> np.ndarray:
         """P ∇g(x) over the free vertices, from the current δ (``aT`` is not read).
