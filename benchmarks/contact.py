@@ -53,9 +53,12 @@ SCENES = ("drop-on-square", "drape-sphere")
 MODES = ("hold", "post-solve")
 SIZES = (25, 65, 129, 257)
 DEFAULT_SIZES = (25, 65)
-#: The damping each mode's runs use: the scene's own in "hold"; none in "post-solve", which
-#: reproduces the seed (its scenes declared no damping).
-SEED_DAMPING = {"hold": None, "post-solve": False}
+#: The seed's solve: 10 local/global iterations (the paper's), 90 frames, no damping.
+SEED = {"damping": False, "solver": {"method": "local-global", "iterations": 10}, "frames": 90}
+#: How each mode's runs are set up: "hold" runs the scene as shipped; "post-solve"
+#: reproduces the seed (:data:`SEED`: its scenes declared no damping and ran 3 s of the
+#: paper's 10 local/global iterations).
+AS_RUN = {"hold": {}, "post-solve": SEED}
 #: "At rest": every vertex slower than this [m/s] over the last second of the scene.
 REST_SPEED = 0.02
 JSON = ROOT / "docs" / "data" / "contact.json"
@@ -72,11 +75,11 @@ def _depth(effect, x: np.ndarray) -> float:
 
 
 def _scene(scene: str, resolution: int, contact: str, damping=None,
-           iterations: int | None = None, thickness=None) -> Scene:
+           solver: dict | None = None, thickness=None) -> Scene:
     """The built-in ``scene`` at ``resolution``² in ``contact`` mode; ``damping``: None keeps
     the scene's own damping, False removes it, a dict replaces it (``[[effects]]`` keys);
-    ``iterations``: the solver's, when given; ``thickness``: the box's and the sphere's,
-    when given."""
+    ``solver``: ``[solver]`` keys replacing the scene's (a new ``method`` starts from that
+    method's defaults); ``thickness``: the box's and the sphere's, when given."""
     doc = tomllib.loads(builtin_scene_text(scene))
     doc["cloth"]["resolution"] = [resolution, resolution]
     doc["contact"] = {"mode": contact}
@@ -84,8 +87,8 @@ def _scene(scene: str, resolution: int, contact: str, damping=None,
         for e in doc["effects"]:
             if e["kind"] in ("box", "sphere"):
                 e["thickness"] = thickness
-    if iterations is not None:
-        doc["solver"]["iterations"] = iterations
+    if solver:
+        doc["solver"] = {**({} if "method" in solver else doc["solver"]), **solver}
     if damping is not None:
         doc["effects"] = [e for e in doc["effects"] if e["kind"] != "damping"]
         if damping:
@@ -129,7 +132,7 @@ def through_cloth(obstacles, x: np.ndarray, triangles: np.ndarray) -> float:
 
 
 def trace_contact(scene: str, resolution: int, contact: str = "hold", *,
-                  frames: int | None = None, damping=None, iterations: int | None = None,
+                  frames: int | None = None, damping=None, solver: dict | None = None,
                   thickness=None):
     """Run an obstacle scene frame by frame and say what its contacts do (a diagnostic).
 
@@ -143,8 +146,9 @@ def trace_contact(scene: str, resolution: int, contact: str = "hold", *,
         Default: the scene's.
     damping : None, False or dict, optional
         The scene's damping (None), none (False), or this ``[[effects]]`` table.
-    iterations : int, optional
-        Solver iterations per step (default: the scene's).
+    solver : dict, optional
+        ``[solver]`` keys replacing the scene's (e.g. ``{"method": "local-global",
+        "iterations": 10}``).
     thickness : float or "auto", optional
         The box's and the sphere's ``thickness`` [m] (default: the scene's, ``"auto"``).
 
@@ -160,7 +164,7 @@ def trace_contact(scene: str, resolution: int, contact: str = "hold", *,
         ``stick_speed`` (max |v| of all, held and sticking vertices [m/s]),
         ``factorizations`` (so far).
     """
-    sc = _scene(scene, resolution, contact, damping, iterations, thickness)
+    sc = _scene(scene, resolution, contact, damping, solver, thickness)
     sim = sc.build_simulation()
     frames = sc.frames if frames is None else frames
     obstacles = [e for e in sim.effects if hasattr(e, "inside")]
@@ -187,14 +191,15 @@ def trace_contact(scene: str, resolution: int, contact: str = "hold", *,
 
 
 def measure_contact(scene: str, resolution: int, contact: str, *, frames: int | None = None,
-                    last: int | None = None, damping=None, thickness=None) -> dict:
+                    last: int | None = None, damping=None, solver: dict | None = None,
+                    thickness=None) -> dict:
     """Run a built-in obstacle scene at ``resolution``² in a contact mode; measure it.
 
     Parameters
     ----------
-    scene, resolution, contact, frames, damping, thickness
+    scene, resolution, contact, frames, damping, solver, thickness
         As :func:`trace_contact` (``contact`` is ``[contact] mode``; frames default to
-        the scene's 90).
+        the scene's).
     last : int, optional
         Frames of the final window (default: one second).
 
@@ -210,13 +215,13 @@ def measure_contact(scene: str, resolution: int, contact: str, *, frames: int | 
         ``below_equator`` (vertices on the sphere below its centre at the end; 0 without a
         sphere), ``seconds_per_frame`` [s], ``factorizations`` and the run's settings.
     """
-    sc = _scene(scene, resolution, contact, damping, thickness=thickness)
+    sc = _scene(scene, resolution, contact, damping, solver, thickness)
     frames = sc.frames if frames is None else frames
     last = round(sc.fps) if last is None else last
     stretch = p99 = speed = inside = contact_speed = seconds = through = 0.0
     changes = 0
     for r in trace_contact(scene, resolution, contact, frames=frames, damping=damping,
-                           thickness=thickness):
+                           solver=solver, thickness=thickness):
         x, obstacles = r["x"], r["obstacles"]
         seconds += r["seconds"]
         changes += r["set_changed"]
@@ -277,52 +282,6 @@ def _trace_line(r: dict) -> str:
             f"set {'changed' if r['set_changed'] else 'same   '} max |v| {r['speed']:.3f}, "
             f"held {r['held_speed']:.3f}, sticking {r['stick_speed']:.3f} m/s, "
             f"factorizations {r['factorizations']}")
-
-
-#: The options ``--rest`` compares: (label, damping as :func:`trace_contact` takes it,
-#: iterations or None for the scene's).
-REST_OPTIONS = (("none", False, None), ("rigid 0.1 (declared)", None, None),
-                ("rigid 0.2", {"model": "rigid", "coefficient": 0.2}, None),
-                ("rigid 0.4", {"model": "rigid", "coefficient": 0.4}, None),
-                ("velocity 0.05", {"model": "velocity", "coefficient": 0.05}, None),
-                ("inertial 0.9", {"model": "inertial", "coefficient": 0.9}, None),
-                ("rigid 0.1 (declared), 100 iterations", None, 100))
-REST_PAGE = ROOT / "docs" / "data" / "contact-rest.md"
-
-
-def rest_by_second(scene: str, resolution: int, seconds: int = 5, damping=None,
-                   iterations: int | None = None) -> tuple[list[float], list[int]]:
-    """The largest speed [m/s] of any vertex in each second of a longer run ("hold" mode),
-    and the frames of each second whose contact set changed."""
-    speed, changes = [], []
-    for r in trace_contact(scene, resolution, "hold", frames=30 * seconds, damping=damping,
-                           iterations=iterations):
-        k = r["frame"] // 30
-        if len(speed) <= k:
-            speed.append(0.0)
-            changes.append(0)
-        speed[k] = max(speed[k], r["speed"])
-        changes[k] += int(r["set_changed"])
-    return speed, changes
-
-
-def rest_page(resolution: int = 25, seconds: int = 5) -> str:
-    """The ``--rest`` comparison: damping options (and a converged solve) against time."""
-    out = [f"Printed by `.venv/bin/python -m benchmarks.contact --rest` at {resolution}², "
-           f"commit {commit()}: the largest speed of any vertex [m/s] in each second of a "
-           f"{seconds} s run in \"hold\" mode (the scenes end after 3 s), and in brackets "
-           f"the frames of that second whose contact set changed. At rest: below "
-           f"{REST_SPEED} m/s.", ""]
-    for scene in SCENES:
-        out += [f"| {scene} | " + " | ".join(f"{k + 1}. s" for k in range(seconds)) + " |",
-                "|---" * (seconds + 1) + "|"]
-        for label, damping, iterations in REST_OPTIONS:
-            speed, changes = rest_by_second(scene, resolution, seconds, damping, iterations)
-            out.append(f"| {label} | " + " | ".join(
-                f"{v:.3f} ({c})" for v, c in zip(speed, changes)) + " |")
-            print(out[-1], flush=True)
-        out.append("")
-    return "\n".join(out)
 
 
 def _load() -> list[dict]:
@@ -392,15 +351,15 @@ def main(argv=None) -> None:
                         help="print what the contacts do in every frame (held set, vertices "
                              "entering and leaving it, sticking, speeds), writing nothing")
     parser.add_argument("--rest", action="store_true",
-                        help="compare damping options over 5 s at the first size (default "
-                             "25) and write docs/data/contact-rest.md")
+                        help="compare solver and damping settings by when the scenes come "
+                             "to rest (default sizes 25 49; benchmarks/contact_rest.py) and "
+                             "write docs/data/contact-rest.md")
     args = parser.parse_args([] if argv is None else argv)
     warnings.simplefilter("ignore")
     if args.rest:
-        n = args.sizes[0] if argv and "--sizes" in argv else 25
-        text = rest_page(n)
-        with atomic_path(REST_PAGE) as tmp:
-            tmp.write_text(text, encoding="utf-8")
+        from .contact_rest import write_rest_page
+
+        write_rest_page(args.sizes if argv and "--sizes" in argv else None)
         return
     if args.trace:
         for n in args.sizes:
@@ -422,7 +381,7 @@ def main(argv=None) -> None:
     for n in args.sizes:
         for scene in args.scenes:
             for mode in args.modes:
-                r = measure_contact(scene, n, mode, damping=SEED_DAMPING[mode])
+                r = measure_contact(scene, n, mode, **AS_RUN[mode])
                 r["commit"] = where
                 r["load"] = round(os.getloadavg()[0], 2)
                 print(f"{scene} {n}^2 {mode}: max stretch {r['max_stretch']:.3f}, 99th pct "

@@ -363,10 +363,11 @@ def measure_sphere_tunnelling(friction: float = 0.0, *, steps: int = 8,
 
 # ==== contact: strain in contact (case 8) ===================================================
 def measure_contact_strain(resolution: int = 25) -> list[dict]:
-    """Both built-in obstacle scenes at ``resolution``² in both contact modes (the default
-    90 frames): largest spring stretch over the last second, max depth inside, max |v|
+    """Both built-in obstacle scenes at ``resolution``² in both contact modes ("hold" as
+    shipped, "post-solve" as the seed ran it, :data:`benchmarks.contact.AS_RUN`): largest
+    spring stretch over the last second, max depth inside, max |v|
     (:func:`benchmarks.contact.measure_contact`)."""
-    from .contact import MODES, SCENES, SEED_DAMPING, measure_contact
+    from .contact import AS_RUN, MODES, SCENES, measure_contact
 
-    return [measure_contact(scene, resolution, mode, damping=SEED_DAMPING[mode])
+    return [measure_contact(scene, resolution, mode, **AS_RUN[mode])
             for scene in SCENES for mode in MODES]
