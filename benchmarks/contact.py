@@ -10,9 +10,11 @@ Run from the repository root::
     .venv/bin/python -m benchmarks.contact --trace --sizes 25 --scenes drape-sphere --modes hold
 
 Each run is the built-in scene (``drop-on-square``: a 1 m cloth dropped onto a 0.5 m box;
-``drape-sphere``: onto a 0.3 m sphere) at n × n vertices, its default 90 frames of
-h = 1/30 s and 10 local/global iterations, in ``[contact] mode = "hold"`` (the default)
-or ``"post-solve"`` (the seed's projection after the solve). Measured per run
+``drape-sphere``: onto a 0.3 m sphere) at n × n vertices, h = 1/30 s, in
+``[contact] mode = "hold"`` (the default) as shipped (120 frames of 30 Anderson-accelerated
+local/global iterations, its declared damping) or ``"post-solve"`` (the seed's projection
+after the solve) as the seed ran it (:data:`SEED`: 90 frames of 10 local/global
+iterations, no damping). Measured per run
 (:func:`measure_contact`): the largest spring stretch |p|/r and the largest 99th
 percentile of the stretch over the springs, both over the frames of the last second; the
 deepest any vertex ended a step inside an obstacle (whole run); the largest |v| over the
@@ -21,9 +23,9 @@ first is below :data:`REST_SPEED` ("at rest"); the deepest any obstacle lies in 
 the cloth's triangles over the last second (an edge of the box or the sphere's cap between
 vertices, :func:`through_cloth`); vertices ending on the sphere below its equator; the
 frames whose contact set changed (each refactors the held-contact system); wall seconds
-per frame. "hold" runs the scene as shipped, with its declared damping and contact
-thickness; "post-solve" runs it without damping, as the seed did (:data:`SEED_DAMPING`).
-``--trace`` prints, frame by frame, what the contacts do (:func:`trace_contact`).
+per frame. ``--trace`` prints, frame by frame, what the contacts do
+(:func:`trace_contact`); ``--rest`` compares the solver and damping settings the scenes
+were chosen from (:mod:`benchmarks.contact_rest`).
 
 Runs are stored one per row in ``docs/data/contact.json`` (a run replaces the row of the
 same scene, size and mode), and ``docs/data/contact.md`` is rewritten from all rows, so
@@ -253,7 +255,7 @@ def measure_projected_iterations(scene: str, resolution: int, iterations: int = 
     """The option held contacts were chosen over, measured: the obstacles' projection
     (``"post-solve"``) applied after *every* global step of local/global, the factor of
     M + h² L unchanged (projective dynamics' way with collision constraints). Returns the
-    largest spring stretch over the last second of the scene's 90 frames."""
+    largest spring stretch over the last second of the seed's 90 frames."""
     doc = tomllib.loads(builtin_scene_text(scene))
     doc["cloth"]["resolution"] = [resolution, resolution]
     doc["contact"] = {"mode": "post-solve"}
@@ -302,8 +304,9 @@ def page(runs: list[dict]) -> str:
     out = ["Printed by `.venv/bin/python -m benchmarks contact` (sizes run separately with "
            "`--sizes`; each row names the commit it was measured at).", "",
            f"At rest means every vertex slower than {REST_SPEED} m/s over the last second. "
-           "\"hold\" runs the scene as it is (with its declared damping); \"post-solve\" runs the "
-           "seed's scene, without it. Contact set changes: frames whose held planes differ from "
+           "\"hold\" runs the scene as it is (its 120 frames, declared solver and damping); "
+           "\"post-solve\" runs the seed's scene as the seed did (90 frames of 10 local/global "
+           "iterations, no damping). Contact set changes: frames whose held planes differ from "
            "the previous frame's (each one refactors the held-contact system).", "",
            "| scene | n² | mode | max stretch | 99th pct stretch | max depth inside [m] | "
            "obstacle through cloth [m] | "
