@@ -259,6 +259,7 @@ def measure_projected_iterations(scene: str, resolution: int, iterations: int = 
     doc = tomllib.loads(builtin_scene_text(scene))
     doc["cloth"]["resolution"] = [resolution, resolution]
     doc["contact"] = {"mode": "post-solve"}
+    doc["solver"] = dict(SEED["solver"])
     sim = Scene.from_dict(doc, source=f"{scene}.toml").build_simulation()
     obstacles = [e for e in sim.effects if hasattr(e, "inside")]
     solver, rest, worst = sim.solver, sim.model.springs.spring_rest_length, 0.0
