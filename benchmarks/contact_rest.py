@@ -1,6 +1,7 @@
 """When the contact scenes come to rest: the solver and damping settings they were chosen from.
 
-Run from the repository root (a few minutes; Newton only at 25²)::
+Run from the repository root (about half an hour on a busy 2-core machine; Newton only
+at 25²)::
 
     .venv/bin/python -m benchmarks.contact --rest                # 25² and 49²
     .venv/bin/python -m benchmarks.contact --rest --sizes 25     # one size
