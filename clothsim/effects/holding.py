@@ -37,6 +37,7 @@ from __future__ import annotations
 import numpy as np
 
 from ..contacts import ContactSet
+from ..errors import InputError
 
 #: How far (|n_kept − n_now|) a held contact's normal may turn before it is renewed.
 NORMAL_TOLERANCE = 1e-2
@@ -92,10 +93,15 @@ class Holding:
         before the vertex has a velocity of its own.
     planes : ContactSet
         The planes handed to the step: one per held vertex, two more per sticking one.
+        Their offsets are n · x at ``x`` (the positions ``hold_step`` placed), or
+        ``offsets`` when given (a state restored by :meth:`from_arrays`).
     """
 
+    #: The arrays :meth:`arrays` returns and :meth:`from_arrays` takes.
+    ARRAYS = ("vertices", "normals", "stick", "normal_force", "pull", "offsets")
+
     def __init__(self, x=None, vertices=None, normals=None, stick=None, normal_force=None,
-                 pull=None):
+                 pull=None, *, offsets=None):
         self.vertices = np.zeros(0, np.int64) if vertices is None else vertices
         self.normals = np.zeros((0, 3)) if normals is None else normals
         c = len(self.vertices)
@@ -110,7 +116,66 @@ class Holding:
         vs = v[self.stick]
         rows_v = np.concatenate([v, vs, vs])
         rows_n = np.concatenate([n, t1, t2])
-        self.planes = ContactSet(rows_v, rows_n, _rowdot(x[rows_v], rows_n))
+        self.planes = ContactSet(rows_v, rows_n,
+                                 _rowdot(x[rows_v], rows_n) if offsets is None else offsets)
+
+    def arrays(self) -> dict[str, np.ndarray]:
+        """Everything the next step reads, as copies: what ``--resume`` saves per frame.
+
+        Returns
+        -------
+        dict of str to ndarray
+            :data:`ARRAYS`: the attributes of the class docstring and ``offsets``, the
+            planes' offsets o = n · x [m], shape (c + 2 s,) (s sticking vertices). The
+            planes' vertices and normals follow from the others (:func:`tangent_frame` is
+            deterministic); their forces are set by the next solve.
+        """
+        return {"vertices": self.vertices.copy(), "normals": self.normals.copy(),
+                "stick": self.stick.copy(), "normal_force": self.normal_force.copy(),
+                "pull": self.pull.copy(), "offsets": self.planes.offsets.copy()}
+
+    @classmethod
+    def from_arrays(cls, arrays, vertex_count: int, name: str = "holding") -> Holding:
+        """The holding :meth:`arrays` returned, checked (it is read from a file).
+
+        Parameters
+        ----------
+        arrays : mapping of str to ndarray
+            :data:`ARRAYS`.
+        vertex_count : int
+            n: held vertices must be in 0..n−1.
+        name : str
+            Names the source in an error (e.g. the file and the obstacle).
+
+        Returns
+        -------
+        Holding
+
+        Raises
+        ------
+        InputError
+            A missing array, or one of the wrong shape, type or range (naming it).
+        """
+        missing = [k for k in cls.ARRAYS if k not in arrays]
+        if missing:
+            raise InputError(f"{name}: no array {missing[0]!r}", field=name)
+        a = {k: np.asarray(arrays[k]) for k in cls.ARRAYS}
+        c = len(a["vertices"])
+        s = int(a["stick"].sum()) if a["stick"].dtype == bool else -1
+        shapes = {"vertices": ((c,), "i"), "normals": ((c, 3), "f"), "stick": ((c,), "b"),
+                  "normal_force": ((c,), "f"), "pull": ((c, 3), "f"),
+                  "offsets": ((c + 2 * s,), "f")}
+        for k, (shape, kind) in shapes.items():
+            if a[k].shape != shape or a[k].dtype.kind != kind:
+                raise InputError(f"{name}: {k!r} has shape {a[k].shape} and type {a[k].dtype}, "
+                                 f"expected {shape} of kind {kind!r}", field=name)
+        v = a["vertices"]
+        if c and (v.min() < 0 or v.max() >= vertex_count):
+            raise InputError(f"{name}: a held vertex is out of range 0..{vertex_count - 1}",
+                             field=name)
+        return cls(None, v.astype(np.int64), a["normals"].astype(np.float64), a["stick"],
+                   a["normal_force"].astype(np.float64), a["pull"].astype(np.float64),
+                   offsets=a["offsets"].astype(np.float64))
 
     def reaction(self) -> np.ndarray:
         """The force each held vertex's planes exerted in the last solve.
