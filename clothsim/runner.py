@@ -18,6 +18,9 @@ file                 content
                      both drawing the obstacles and pins; drawn while the last frame
                      is written, written once the run is complete
 ``obstacles.vtu``    the scene's obstacles as triangles (only when it has some)
+``state/``           ``frame_%06d.npz``: what the effects carry into the next step
+                     (held contacts), written before the frame's ``.vtu`` and
+                     restored by ``resume`` (:mod:`clothsim.io.effectstate`)
 ``run.json``         resolved scene and its hash, effects built, solver, backend and
                      solver state, package versions, per-frame records, and status
                      (``running``, ``completed``, ``interrupted``, ``failed``) with
@@ -25,8 +28,8 @@ file                 content
 ===================  ==============================================================
 
 Frame k holds the state at t_k = k / fps. The runner sets each frame's start time to
-exactly (k − 1) / fps, so a run resumed from frame k (``resume=True``) repeats, bit for
-bit, what an uninterrupted run computes.
+exactly (k − 1) / fps and restores the effects' state saved with frame k, so a run resumed
+from frame k (``resume=True``) repeats, bit for bit, what an uninterrupted run computes.
 """
 
 from __future__ import annotations
@@ -43,8 +46,10 @@ from pathlib import Path
 import numpy as np
 
 from .display import pinned_mask, write_obstacles
+from .effects.base import effect_states
 from .errors import InputError, NonFiniteStateError
 from .interrupts import SignalInterrupt, handle_signals, signals_deferred
+from .io.effectstate import restore_state
 from .io.frames import OBSTACLES_NAME, PVD_NAME
 from .io.runfiles import package_versions, write_json, write_trajectory
 from .io.runfolder import RESULT_FILES, STALE_FILES, RunFolder, completed_frames
@@ -129,7 +134,8 @@ def run_scene(scene, out_dir, *, frames: int | None = None,
         frame is written on a background thread during the next frame's steps).
     resume : bool
         Continue from the last complete frame in ``out_dir`` (positions and velocities read
-        back from its .vtu file, time = index / fps, the solver's saved state restored).
+        back from its .vtu file, time = index / fps, the solver's saved state and the
+        effects' state of that frame restored: :mod:`clothsim.io.effectstate`).
         Refuses a folder holding another scene's run; starts afresh when there is nothing.
         With fewer ``frames`` than on disk, the index and trajectory are cut to ``frames``
         (frame files are kept).
@@ -207,10 +213,11 @@ def _run_in(folder: RunFolder, scene, model, sim, frames: int, progress, resume:
         saved = previous.get("solver_state")
         if saved:
             getattr(sim.solver, "set_state", lambda state: None)(saved)
+        info["effect_state_restored"] = restore_state(folder, start, sim.effects)
         log.info("resuming %s from frame %d", scene.name, start)
     else:
         x, v = sim.state.positions, sim.state.velocities
-        folder.write_frame(0, x, v)
+        folder.write_frame(0, x, v, state=effect_states(sim.effects))
     obstacles = write_obstacles(folder.path / OBSTACLES_NAME, sim.effects, model.mesh.vertices)
     if obstacles is not None:
         folder.add_static(OBSTACLES_NAME)  # trajectory.pvd shows the whole scene
@@ -237,7 +244,7 @@ def _run_in(folder: RunFolder, scene, model, sim, frames: int, progress, resume:
             info["backend"] = info["solver"]["backend"] = getattr(sim.solver, "backend", None)
             info["factorization"] = getattr(sim.solver, "factorization", None)
             info["solver_state"] = get_state()
-            folder.write_frame(k, x, v, record, wait=False)
+            folder.write_frame(k, x, v, record, wait=False, state=effect_states(sim.effects))
     # the pictures are drawn while the last frame is written, and written once the run is
     # complete; an error drawing them is raised then (the run is complete all the same)
     pictures = _draw_previews(folder, scene, sim, fps, frames, x if frames >= first else None

@@ -23,6 +23,7 @@ import numpy as np
 from ..errors import InputError
 from .background import BackgroundJob
 from .diskspace import check_run_plan, file_bytes, run_plan
+from .effectstate import state_files, write_state
 from .folders import RUN_RECORD
 from .frames import OBSTACLES_NAME, PVD_NAME, FrameWriter, read_frame
 from .outfolder import OutputFolder
@@ -125,6 +126,7 @@ class RunFolder(OutputFolder):
                              "run.json; refusing to delete files clothsim did not write "
                              "(choose another --out or remove them)")
         stale = frames + [out / name for name in STALE_FILES if (out / name).exists()]
+        stale += state_files(out)   # the effects' state per frame (io.effectstate)
         for p in stale:
             p.unlink()
         if stale:
@@ -227,7 +229,7 @@ class RunFolder(OutputFolder):
         self.writer.add_static(name)
 
     def write_frame(self, k: int, positions, velocities, record: dict | None = None, *,
-                    wait: bool = True) -> None:
+                    wait: bool = True, state: dict | None = None) -> None:
         """Frame k: its ``.vtu`` file, the store, its record (none for frame 0) and run.json
         with ``last_frame`` = k (trajectory.npz every few seconds, :meth:`save_npz`).
 
@@ -243,18 +245,24 @@ class RunFolder(OutputFolder):
             False: return at once and write the frame on a background thread (see the
             module docstring); the previous frame handed over is waited for first, and its
             error, if any, raised here.
+        state : dict of str to ndarray, optional
+            What the effects carry into the next step (not to be changed by the caller):
+            ``state/frame_%06d.npz``, written first (:mod:`clothsim.io.effectstate`).
         """
         self.wait()
         x = np.array(positions, dtype=np.float64)
         v = np.array(velocities, dtype=np.float64)
         info = copy.deepcopy(self.info)      # run.json as of now, whatever changes next
         if wait:
-            self._write_frame(k, x, v, record, info)
+            self._write_frame(k, x, v, record, info, state)
         else:
-            self._job.start(self._write_frame, k, x, v, record, info,
+            self._job.start(self._write_frame, k, x, v, record, info, state,
                             name=f"clothsim frame {k}")
 
-    def _write_frame(self, k: int, x, v, record: dict | None, info: dict) -> None:
+    def _write_frame(self, k: int, x, v, record: dict | None, info: dict,
+                     state: dict | None = None) -> None:
+        # first: a frame on disk has its state (compressed as the frames are)
+        write_state(self.path, k, state or {}, compress=self.writer.compression == "zlib")
         self.writer.write(k, k / self._fps, x, v)
         self.store.append(x, v)
         if record is not None:
