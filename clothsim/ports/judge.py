@@ -254,6 +254,12 @@ def judge(sim, model, problem, k, x_cs, x_port, err, tol, optimality, precision,
             note = (f"neither answer is a minimizer of g; the port's is clothsim's from "
                     f"{hint[0]} after {hint[1]} iterations ({hint[2]:.1e} m): set "
                     f"{_settings_text(hint[0], hint[1])}")
+        elif search:   # the settings were searched: no start or count of clothsim's gives it
+            note = (f"neither answer is a minimizer of g, and clothsim's local/global "
+                    f"iterations from y and from x_n (1 to "
+                    f"{min(MAX_SEARCH, max(2 * sim.solver.iterations, 100))}) never come within "
+                    f"the tolerance of the port's answer: the port iterates otherwise or "
+                    f"solves another model; converge both (a tolerance) to decide")
         else:
             note = (f"neither answer is a minimizer of g, and the answer of a fixed iteration "
                     f"count depends on its start point: match the port's settings "
