@@ -293,3 +293,17 @@ def test_documented_commands_are_found_and_a_wrong_flag_fails():
     with pytest.raises(_UsageError, match="frmaes"):
         build_parser().parse_args(argv)
     assert clothsim_commands("```python\nx = 1\n```\n.venv/bin/clothsim run --x\n") == []
+
+
+def test_a_documented_check_of_a_shortened_export_says_how_many_steps():
+    """``export SCENE --frames N --out DIR`` then ``check SCENE DIR`` fails (the output is
+    shorter than the scene) unless the check says ``--steps``: the pair in a page must."""
+    bad = []
+    for page, argv in COMMANDS:
+        if argv[:1] == ["export"] and "--frames" in argv and "--out" in argv:
+            out = argv[argv.index("--out") + 1]
+            for other, check in COMMANDS:
+                if (other == page and check[:1] == ["check"] and out in check
+                        and "--steps" not in check):
+                    bad.append(f"{page.name}: clothsim {' '.join(check)}")
+    assert not bad, "\n".join(bad)
