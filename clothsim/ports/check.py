@@ -19,6 +19,9 @@ from ..simulation import State
 from ..solvers import make_solver
 from .causes import FITTED, StepData, name_cause
 from .compare import EPS32, RTOL64, cloth_size, condition_number
+from .contact_planes import PortPlanes
+from .held_steps import HeldSteps
+from .held_verdicts import off_plane_note, planes_verdict, variant_verdict
 from .judge import CONVERGING, gradient_scale, judge, pin_role, pinned_moved, refine
 from .precision import Printed
 from .rounding import (
@@ -111,7 +114,8 @@ def system_condition_number(sim) -> float:
 
 def check_steps(simulation, positions, velocities=None, *, precision: str = "float64",
                 tolerance: float | None = None, optimality: float = 1e-6,
-                steps: int | None = None, expected_steps: int | None = None) -> CheckReport:
+                steps: int | None = None, expected_steps: int | None = None,
+                contacts=None) -> CheckReport:
     """Check every step k → k + 1 of a port's trajectory against clothsim's step.
 
     Parameters
@@ -158,6 +162,14 @@ def check_steps(simulation, positions, velocities=None, *, precision: str = "flo
     projected = [e.kind for e in sim.effects if overrides(e, "correct_positions")]
     iterations = sim.solver.iterations
     iterated = sim.solver.name != "newton"   # a converged method: the converged floor only
+    held = HeldSteps(sim)
+    if contacts is not None and not isinstance(contacts, PortPlanes):
+        contacts = PortPlanes(contacts, sim.model.vertex_count)
+    if contacts is not None:
+        notes.append(f"the port's held planes: {contacts.path}" if held else
+                     f"{contacts.path}: ignored, the scene holds no contacts (no obstacle in "
+                     f"[contact] mode = \"hold\")")
+        contacts = contacts if held else None
     out, searches, unexplained, others = [], 0, [], []
 
     def replay(model, problem):   # clothsim's step of another model, the same settings
@@ -168,10 +180,14 @@ def check_steps(simulation, positions, velocities=None, *, precision: str = "flo
     for k in range(count):
         state = State(xs[k].copy(), vs[k].copy(), t, k)
         t = t + h
+        if held:
+            held.anchor(xs[k])   # the planes clothsim decided, sticking ones at the port's x_k
+            held.starts(state)
         problem = sim.problem(state)
         model = sim.step_model(state)
         sim.state = state
         sim.step()
+        held.stepped()
         x_cs, v_cs = sim.state.positions, sim.state.velocities
         x_port = xs[k + 1]
         err = np.linalg.norm(x_cs - x_port, axis=1)
@@ -187,11 +203,17 @@ def check_steps(simulation, positions, velocities=None, *, precision: str = "flo
             tol = max(tol_k, bound32())
         moved = pinned_moved(problem, x_port, tol if precision == "float64"
                              else max(tol_k, 4 * EPS32 * float(np.abs(x_port).max())))
+        planes = None if contacts is None else planes_verdict(
+            k, held, contacts, xs[k], problem.fixed_vertices, err, tol)
+        variant = (None if moved is not None or planes is not None or err[worst] <= tol
+                   or not held else variant_verdict(k, held, state, x_port, err, tol))
         if moved is not None:
             v, dist = moved
             step = StepCheck(k, "pinned vertex moved", float(err[worst]), v, role=pin_role(
                 problem, v), tolerance=tol, note=f"the port moved it {dist:.3e} m from its "
                 f"target: its pins are missing or act elsewhere")
+        elif planes is not None or variant is not None:
+            step = planes or variant
         elif err[worst] <= tol:
             step = StepCheck(k, "agrees", float(err[worst]), worst, tolerance=tol)
             if velocities is not None:
@@ -213,6 +235,9 @@ def check_steps(simulation, positions, velocities=None, *, precision: str = "flo
                     float(err[worst]), tol, replay, step.status == "not converged"))
             if precision == "float64" and printed is not None and not step.passed:
                 printed.hint32(step, float(err[worst]), lambda b=bound32, t=tol_k: max(t, b()))
+            off = off_plane_note(held, x_port, tol) if held else ""
+            if off:
+                step.note += f"; {off}"
             if projected:
                 step.note += (f"; positions are corrected after the solve by "
                               f"{', '.join(projected)}, so optimality for g alone is only "
