@@ -20,8 +20,9 @@ from ..solvers import make_solver
 from .causes import FITTED, StepData, name_cause
 from .compare import EPS32, RTOL64, cloth_size, condition_number
 from .contact_planes import PortPlanes
+from .held_margins import adopt, position_rounding
 from .held_steps import HeldSteps
-from .held_verdicts import off_plane_note, planes_verdict, variant_verdict
+from .held_verdicts import marginal_changes, off_plane_note, planes_verdict, variant_verdict
 from .judge import CONVERGING, gradient_scale, judge, pin_role, pinned_moved, refine
 from .precision import Printed
 from .rounding import (
@@ -183,16 +184,9 @@ def check_steps(simulation, positions, velocities=None, *, precision: str = "flo
         if held:
             held.anchor(xs[k])   # the planes clothsim decided, sticking ones at the port's x_k
             held.starts(state)
-        problem = sim.problem(state)
         model = sim.step_model(state)
-        sim.state = state
-        sim.step()
-        held.stepped()
-        x_cs, v_cs = sim.state.positions, sim.state.velocities
         x_port = xs[k + 1]
-        err = np.linalg.norm(x_cs - x_port, axis=1)
-        err = np.where(np.isfinite(err), err, np.inf)
-        worst = int(np.argmax(err))
+        problem, x_cs, v_cs, err, worst = _step(sim, held, state, x_port)
 
         def bound32(model=model, problem=problem, x_cs=x_cs):
             return float32_tolerance(model, problem, iterations, tol64, x=x_cs,
@@ -201,6 +195,17 @@ def check_steps(simulation, positions, velocities=None, *, precision: str = "flo
         tol = tol_k = tol64 if printed is None else float(printed.tolerances[k])
         if precision == "float32" and tolerance is None and err[worst] > tol_k:
             tol = max(tol_k, bound32())
+        adopted = ""
+        if held and (contacts is not None or err[worst] > tol):
+            rounding = position_rounding(xs[k], printed.digits if printed else 17,
+                                         precision == "float32" or bool(printed and
+                                                                        printed.float32),
+                                         tol64)
+            changes, adopted = marginal_changes(k, held, model, problem, tol, contacts,
+                                                x_port, x_cs, rounding)
+            if changes:   # too close to call from the port's state: the port's decision
+                adopt(held, changes, None if contacts is None else contacts.step(k))
+                problem, x_cs, v_cs, err, worst = _step(sim, held, state, x_port)
         moved = pinned_moved(problem, x_port, tol if precision == "float64"
                              else max(tol_k, 4 * EPS32 * float(np.abs(x_port).max())))
         planes = None if contacts is None else planes_verdict(
@@ -244,6 +249,8 @@ def check_steps(simulation, positions, velocities=None, *, precision: str = "flo
                               f"indicative")
         if not step.role:
             step.role = pin_role(problem, step.vertex)
+        if adopted:
+            step.note = f"{step.note}; {adopted}" if step.note else adopted
         out.append(step)
     name_cause({s.k: s for s in out}, unexplained, others)   # a model the port solves?
     return CheckReport(out, float(tol64), precision, notes, expected_steps=expected_steps,
@@ -286,6 +293,18 @@ def float32_report(scenes=("hanging", "jacobson-net", "jacobson-flag", "drop-on-
         stag = float32_newton_stagnation(sim.step_model(), problem, x_min)
         print(f"{name:16} {sim.model.vertex_count:5d} {K:4d} {dev:10.2e} {tol:10.2e} "
               f"{kappa:11.2e} {floor:9.2e} {stag:10.2e}")
+
+
+def _step(sim, held, state, x_port):
+    """clothsim's step from the port's state: its problem, x, v, per-vertex error, worst."""
+    problem = sim.problem(state)
+    sim.state = state
+    sim.step()
+    held.stepped()
+    x_cs, v_cs = sim.state.positions, sim.state.velocities
+    err = np.linalg.norm(x_cs - x_port, axis=1)
+    err = np.where(np.isfinite(err), err, np.inf)
+    return problem, x_cs, v_cs, err, int(np.argmax(err))
 
 
 def _frames(sim, positions, velocities, steps):

@@ -42,8 +42,8 @@ VARIANTS = {
     "frictionless": ("holds the vertices on their contact planes without friction (no "
                      "sticking planes, no kinetic friction on held vertices)"),
     "flipped": ("reads the contact force along the inward normal, -n . grad g (the contact "
-                "normal's sign flipped), so that the step before released the vertices the "
-                "obstacle pushes and kept those the cloth pulls away"),
+                "normal's sign flipped): it releases the vertices the obstacle pushes and "
+                "keeps those the cloth pulls away"),
 }
 
 
@@ -149,6 +149,29 @@ class HeldSteps:
         self._state = State(state.positions.copy(), state.velocities.copy(), state.time,
                             state.step)
 
+    def x(self) -> np.ndarray:
+        """The port's x_k the step was anchored at [m]."""
+        return self._x
+
+    def previous_planes(self):
+        """The contact state of the step before (as :meth:`planes`; its planes' forces are
+        the ones that decided this step), or [] at the first step."""
+        if self._previous is None:
+            return []
+        return [(e, h) for e, (h, _, _) in zip(self.obstacles, self._previous[1], strict=True)]
+
+    def replace(self, planes) -> None:
+        """Hold another contact state in the step (:func:`clothsim.ports.held_margins.adopt`).
+
+        Parameters
+        ----------
+        planes : list of (Obstacle, Holding)
+        """
+        for e, h in planes:
+            e._holding = h
+        self._before = [(h, cv, cn) for (_, h), (_, cv, cn) in zip(planes, self._before,
+                                                                  strict=True)]
+
     def stepped(self) -> None:
         """Remember the state the step left (the next step's decision)."""
         self._after = [(e._holding, e.contact_vertices, e.contact_normals)
@@ -193,6 +216,8 @@ class HeldSteps:
                 e.contact_vertices, e.contact_normals = cv, cn
                 if variant == "post-solve":
                     e.contact = "post-solve"
+                if variant == "flipped":
+                    e.correct_positions = _flipped(e)
             self.replayed = [(e, e._holding) for e in self.obstacles]
             sim.state = State(state.positions.copy(), state.velocities.copy(), state.time,
                               state.step)

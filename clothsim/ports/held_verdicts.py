@@ -17,13 +17,14 @@ from __future__ import annotations
 
 import numpy as np
 
+from .held_margins import MARGINAL_KINDS, Margins, inferred
 from .held_steps import VARIANTS, face_name
 from .plane_diff import clothsim_rows, plane_differences
 from .verdicts import StepCheck
 
 #: A replayed contact treatment explains the port's step when it lands within the
 #: tolerance of the port's answer, or this many times nearer than clothsim's held step.
-NEARER = 100.0
+NEARER = 10.0
 
 
 def planes_verdict(k, held, port_planes, x_port_k, fixed, err, tol) -> StepCheck | None:
@@ -55,10 +56,58 @@ def planes_verdict(k, held, port_planes, x_port_k, fixed, err, tol) -> StepCheck
                               normal_tolerance=port_planes.normal_tolerance, skip=fixed)
     if not diffs:
         return None
-    vertex, text = diffs[0]
+    vertex, _, text = diffs[0]
     more = f"; {len(diffs)} vertices' planes differ in this step" if len(diffs) > 1 else ""
     return StepCheck(k, "contacts differ", float(err.max()), vertex, tolerance=tol,
                      note=f"{text}{more} (the port's planes: {port_planes.path.name})")
+
+
+def marginal_changes(k, held, model, problem, tol, port_planes, x_port, x_cs, rounding):
+    """The contact decisions of step k too close to call that the port took otherwise.
+
+    Parameters
+    ----------
+    k : int
+    held : HeldSteps
+        Anchored at the step, stepped.
+    model : Model
+    problem : StepProblem
+    tol : float
+        The step's tolerance [m].
+    port_planes : PortPlanes or None
+        The port's planes (the port's decisions); None: read off its answer.
+    x_port, x_cs : ndarray, shape (n, 3)
+        The port's and clothsim's x_{k+1} [m].
+    rounding : ndarray, shape (n,)
+        The rounding of the port's state per vertex [m]
+        (:func:`~clothsim.ports.held_margins.position_rounding`).
+
+    Returns
+    -------
+    (list of (int, str), str)
+        The changes for :func:`clothsim.ports.held_margins.adopt` and a note naming them
+        ("" when there are none).
+    """
+    margins = Margins(held, model, problem, rounding)
+    if port_planes is not None:
+        v, n, o = port_planes.step(k)
+        diffs = plane_differences(clothsim_rows(held.planes()), v, n, o, held.x(),
+                                  held.obstacles,
+                                  offset_tolerance=max(tol, port_planes.offset_rounding),
+                                  normal_tolerance=port_planes.normal_tolerance,
+                                  skip=problem.fixed_vertices)
+        changes = [(u, kind) for u, kind, _ in diffs
+                   if kind in MARGINAL_KINDS and margins.marginal(u, kind)]
+    else:
+        changes = inferred(held, margins, x_port, x_cs)
+    if not changes:
+        return [], ""
+    v, kind = changes[0]
+    words = {"clothsim": "released", "port": "held", "stick": "sliding",
+             "slide": "sticking"}[kind]
+    return changes, (f"{len(changes)} contact decision{'s' * (len(changes) != 1)} too close "
+                     f"to call from the port's state (within {margins.force[v]:.2g} N of its "
+                     f"threshold at vertex {v}) taken as the port's: vertex {v} {words}")
 
 
 def variant_verdict(k, held, state, x_port, err, tol) -> StepCheck | None:

@@ -28,16 +28,32 @@ def _point(normals: np.ndarray, offsets: np.ndarray) -> np.ndarray:
     return np.linalg.lstsq(normals, offsets, rcond=None)[0]
 
 
-def _port_face(obstacles, normal, x) -> str:
-    """The face of an obstacle the port's plane lies on (its normal parallel there)."""
-    best, where = np.inf, None
+def port_face(obstacles, normal, x):
+    """The obstacle a port's plane at ``x`` belongs to, and its outward normal there.
+
+    Parameters
+    ----------
+    obstacles : list of Obstacle
+        At least one.
+    normal : ndarray, shape (3,)
+        The port's normal (either sign).
+    x : ndarray, shape (3,)
+        The vertex's position [m].
+
+    Returns
+    -------
+    (Obstacle, ndarray (3,))
+        The nearest obstacle whose surface normal there is parallel to ``normal`` (the
+        nearest one when none is).
+    """
+    x = np.asarray(x, np.float64)
+    found = []
     for e in obstacles:
-        _, n = e.closest(np.asarray(x, np.float64)[None])
-        if abs(float(n[0] @ normal)) > 0.99:
-            distance = float(np.linalg.norm(e.closest(x[None])[0][0] - x))
-            if distance < best:
-                best, where = distance, face_name(e, n[0])
-    return where or "a plane"
+        q, n = e.closest(x[None])
+        found.append((abs(float(n[0] @ normal)) <= 0.99, float(np.linalg.norm(q[0] - x)),
+                      id(e), e, n[0]))
+    found.sort(key=lambda f: f[:3])
+    return found[0][3], found[0][4]
 
 
 def clothsim_rows(planes) -> dict:
@@ -89,8 +105,10 @@ def plane_differences(ours: dict, vertices, normals, offsets, x_port, obstacles,
 
     Returns
     -------
-    list of (int, str)
-        (vertex, sentence), by vertex.
+    list of (int, str, str)
+        (vertex, kind, sentence), by vertex; kind is "clothsim" (held by clothsim only),
+        "port" (held by the port only), "stick" (clothsim sticks, the port slides),
+        "slide" (the other way), or "plane" (held on another plane, or its sign flipped).
     """
     theirs: dict = {}
     for v, n, o in zip(vertices, normals, offsets, strict=True):
@@ -101,73 +119,63 @@ def plane_differences(ours: dict, vertices, normals, offsets, x_port, obstacles,
         mine, port = ours.get(v, []), theirs.get(v, [])
         if not port:
             e, n = mine[0][0], mine[0][1]
-            out.append((v, f"vertex {v} held on {face_name(e, n)} by clothsim, free in the "
-                           f"port"))
+            out.append((v, "clothsim", f"vertex {v} held on {face_name(e, n)} by clothsim, "
+                                       f"free in the port"))
             continue
         if not mine:
             n, o = port[0]
-            out.append((v, f"vertex {v} held on {_port_face(obstacles, n, x_port[v])} by the "
-                           f"port (n = {_fmt(n)}, offset {o:.6g} m), free in clothsim"))
+            face = face_name(*port_face(obstacles, n, x_port[v])) if obstacles else "a plane"
+            out.append((v, "port", f"vertex {v} held on {face} by the port (n = {_fmt(n)}, "
+                                   f"offset {o:.6g} m), free in clothsim"))
             continue
-        text = _vertex_difference(v, mine, port, offset_tolerance, normal_tolerance)
+        kind, text = _vertex_difference(v, mine, port, offset_tolerance, normal_tolerance)
         if text:
-            out.append((v, text))
+            out.append((v, kind, text))
     return out
 
 
-def _vertex_difference(v, mine, port, otol, ntol) -> str:
-    """How one vertex's planes differ ("" when they are the same)."""
-    e, n0 = mine[0][0], mine[0][1]
-    face = face_name(e, n0)
+def _vertex_difference(v, mine, port, otol, ntol) -> tuple[str, str]:
+    """How one vertex's planes differ: (kind, sentence), ("", "") when they are the same."""
+    face = face_name(mine[0][0], mine[0][1])
     N_c = np.array([r[1] for r in mine])
     N_p = np.array([n for n, _ in port])
-    sticks = any(r[3] for r in mine)
     rc, rp = _rank(N_c), _rank(N_p)
-    if sticks and rp < 3 <= rc:
-        return (f"vertex {v} sticks on {face} in clothsim (static friction: held in all three "
-                f"directions), slides in the port (held on {rp} plane{'s' * (rp != 1)})")
+    if any(r[3] for r in mine) and rp < 3 <= rc:
+        return "stick", (f"vertex {v} sticks on {face} in clothsim (static friction: held in "
+                         f"all three directions), slides in the port (held on {rp} "
+                         f"plane{'s' * (rp != 1)})")
     if rp == 3 and rc < 3:
-        return (f"vertex {v} slides on {face} in clothsim, sticks in the port (held in all "
-                f"three directions)")
-    if rc == 3 and rp == 3:
-        gap = float(np.linalg.norm(_point(N_c, np.array([r[2] for r in mine]))
-                                   - _point(N_p, np.array([o for _, o in port]))))
-        flip = _flipped(v, mine, port, face, ntol)
-        if flip:
-            return flip
-        if gap > otol:
-            return (f"vertex {v} sticks on {face} in both, the port {gap:.3e} m from where "
-                    f"clothsim holds it")
-        return ""
+        return "slide", (f"vertex {v} slides on {face} in clothsim, sticks in the port (held "
+                         f"in all three directions)")
     for e_i, n, o, _, normal_row in mine:
         if not normal_row:
             continue
         dots = N_p @ n
         j = int(np.argmax(np.abs(dots)))
         f = face_name(e_i, n)
+        if dots[j] < -(1 - ntol):
+            return "plane", (f"vertex {v}: the port's contact normal on {f} is "
+                             f"{_fmt(N_p[j])}, clothsim's outward normal {_fmt(n)}: its sign "
+                             f"is flipped")
+        if rc == 3 and rp == 3:
+            continue               # sticking in both: compare the points below
         if abs(dots[j]) < 1 - ntol:
-            return (f"vertex {v} held on {f} (n = {_fmt(n)}) by clothsim, on another plane "
-                    f"by the port (n = {_fmt(N_p[j])})")
-        if dots[j] < 0:
-            return (f"vertex {v}: the port's contact normal on {f} is {_fmt(N_p[j])}, "
-                    f"clothsim's outward normal {_fmt(n)}: its sign is flipped")
+            return "plane", (f"vertex {v} held on {f} (n = {_fmt(n)}) by clothsim, on "
+                             f"another plane by the port (n = {_fmt(N_p[j])})")
         if abs(port[j][1] - o) > otol:
-            return (f"vertex {v} held on {f} at n · x = {o:.9g} m by clothsim, "
-                    f"{port[j][1]:.9g} m by the port ({abs(port[j][1] - o):.3e} m apart)")
-    if rp != rc:
-        return (f"vertex {v} held on {face} in {rc} direction{'s' * (rc != 1)} by clothsim, "
-                f"{rp} by the port")
-    return ""
+            return "plane", (f"vertex {v} held on {f} at n · x = {o:.9g} m by clothsim, "
+                             f"{port[j][1]:.9g} m by the port ({abs(port[j][1] - o):.3e} m "
+                             f"apart)")
+    if rc == 3 and rp == 3:
+        gap = float(np.linalg.norm(_point(N_c, np.array([r[2] for r in mine]))
+                                   - _point(N_p, np.array([o for _, o in port]))))
+        if gap > otol:
+            return "plane", (f"vertex {v} sticks on {face} in both, the port {gap:.3e} m from "
+                             f"where clothsim holds it")
+    elif rp != rc:
+        return "plane", (f"vertex {v} held on {face} in {rc} direction{'s' * (rc != 1)} by "
+                         f"clothsim, in {rp} by the port")
+    return "", ""
 
 
-def _flipped(v, mine, port, face, ntol) -> str:
-    for _, n, _, _, normal_row in mine:
-        if normal_row:
-            for m, _ in port:
-                if float(m @ n) < -(1 - ntol):
-                    return (f"vertex {v}: the port's contact normal on {face} is {_fmt(m)}, "
-                            f"clothsim's outward normal {_fmt(n)}: its sign is flipped")
-    return ""
-
-
-__all__ = ["clothsim_rows", "plane_differences"]
+__all__ = ["clothsim_rows", "plane_differences", "port_face"]
