@@ -144,18 +144,36 @@ class HeldSteps:
         self._state = None
 
     def starts(self, state: State) -> None:
-        """The port's state of the step just anchored (the ``"flipped"`` replay's start of
-        the next step)."""
+        """Remember the port's state of the step just anchored (where the ``"flipped"``
+        replay of the next step takes this one again).
+
+        Parameters
+        ----------
+        state : State
+            The port's (x_k, v_k) and time.
+        """
         self._state = State(state.positions.copy(), state.velocities.copy(), state.time,
                             state.step)
 
     def x(self) -> np.ndarray:
-        """The port's x_k the step was anchored at [m]."""
+        """The port's positions the step was anchored at.
+
+        Returns
+        -------
+        ndarray, shape (n, 3)
+            x_k [m].
+        """
         return self._x
 
     def previous_planes(self):
-        """The contact state of the step before (as :meth:`planes`; its planes' forces are
-        the ones that decided this step), or [] at the first step."""
+        """The contact state of the step before.
+
+        Returns
+        -------
+        list of (Obstacle, Holding)
+            As :meth:`planes`; its planes' forces are the ones that decided this step.
+            Empty at the first step.
+        """
         if self._previous is None:
             return []
         return [(e, h) for e, (h, _, _) in zip(self.obstacles, self._previous[1], strict=True)]

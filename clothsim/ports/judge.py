@@ -297,7 +297,18 @@ def judge(sim, model, problem, k, x_cs, x_port, err, tol, optimality, precision,
 
 
 def hessian_diagonal(model, problem) -> np.ndarray:
-    """m_v + h² (Σ k of v's springs + its pins' k): ∇²g's diagonal per vertex [kg]."""
+    """m_v + h² (Σ k of v's springs + its pins' k): ∇²g's diagonal per vertex.
+
+    Parameters
+    ----------
+    model : Model
+    problem : StepProblem
+
+    Returns
+    -------
+    ndarray, shape (n,)
+        [kg]; the gradient difference over it is a displacement [m].
+    """
     n = model.vertex_count
     a, b = model.springs.spring_vertices.T
     k = model.springs.spring_stiffness

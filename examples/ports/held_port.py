@@ -1,8 +1,13 @@
-"""Hold-mode ports with one fault planted each, written as a port writes its output.
+"""A hold-mode "port" with one fault planted at a time, written as a port writes its output.
 
-Each is clothsim's simulation of drop-on-square with one change in its contact handling,
-run from the scene's start: its frames (positions, velocities) and the held planes it used
-in each step, in the layout of ``clothsim export`` (contacts.txt).
+It is clothsim's own simulation of a scene with one change in its contact handling, run
+from the scene's start: its frames (positions.txt, velocities.txt) and the held planes it
+used in each step, in the layout of ``clothsim export`` (contacts.txt). docs/ports.md
+("Checking a hold-mode port") checks each with ``clothsim check``;
+tests/ports/test_check_held.py asserts what the check names.
+
+    .venv/bin/python examples/ports/held_port.py drop-on-square --fault flipped \
+        --frames 15 --out out/held-flipped
 
 - ``"none"``: clothsim's held step itself;
 - ``"post-solve"``: the port resolves contact after the solve (the seed's projection)
@@ -16,13 +21,16 @@ in each step, in the layout of ``clothsim export`` (contacts.txt).
 
 from __future__ import annotations
 
+import argparse
+import sys
 import tomllib
+from pathlib import Path
 
 import numpy as np
 
 from clothsim.effects.holding import Holding
 from clothsim.ports.held_steps import holding_obstacles
-from clothsim.scene import Scene, builtin_scene_text
+from clothsim.scene import Scene, builtin_scene_text, load_scene
 
 FAULTS = ("none", "post-solve", "frictionless", "flipped")
 
@@ -82,9 +90,31 @@ def _flipped(obstacle):
 
 def write_port(folder, positions, velocities, rows=None, fmt: str = "%.17g") -> None:
     """The port's output folder: positions.txt, velocities.txt (and contacts.txt)."""
+    folder = Path(folder)
     folder.mkdir(parents=True, exist_ok=True)
     np.savetxt(folder / "positions.txt", positions.reshape(len(positions), -1), fmt=fmt)
     np.savetxt(folder / "velocities.txt", velocities.reshape(len(velocities), -1), fmt=fmt)
     if rows is not None:
         np.savetxt(folder / "contacts.txt", rows,
                    fmt=["%d", "%d", fmt, fmt, fmt, fmt], header="step vertex nx ny nz offset")
+
+
+def main(argv=None) -> int:
+    """Run the port on a scene and write its output folder."""
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("scene", help="scene file or built-in name (obstacles in hold mode)")
+    parser.add_argument("--fault", choices=FAULTS, default="none")
+    parser.add_argument("--frames", type=int, default=15)
+    parser.add_argument("--out", required=True, help="output folder")
+    parser.add_argument("--format", default="%.17g", help="printf format of the numbers")
+    parser.add_argument("--no-contacts", action="store_true",
+                        help="write no contacts.txt (a port that does not write its planes)")
+    args = parser.parse_args(argv)
+    x, v, rows = run_port(load_scene(args.scene), args.fault, args.frames)
+    write_port(Path(args.out), x, v, None if args.no_contacts else rows, fmt=args.format)
+    print(f"{args.fault}: {args.frames} steps written to {args.out}")
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())
