@@ -53,8 +53,7 @@ def run_port(scene: Scene, fault: str, frames: int):
         for e in obstacles:
             e.contact = "post-solve"          # the same obstacles (thickness), projected
     if fault == "flipped":
-        for e in obstacles:
-            e.correct_positions = _flipped(e)
+        sim._contact_forces = _flipped(sim)
     xs, vs, rows = [sim.state.positions.copy()], [sim.state.velocities.copy()], []
     for k in range(frames):
         for e in obstacles:
@@ -75,15 +74,15 @@ def run_port(scene: Scene, fault: str, frames: int):
     return np.stack(xs), np.stack(vs), np.concatenate([np.zeros((0, 6))] + rows)
 
 
-def _flipped(obstacle):
-    """correct_positions reading each plane's force along −n (the sign flipped)."""
-    correct = type(obstacle).correct_positions
+def _flipped(sim):
+    """The simulation's contact forces with the normal's sign flipped: F = −n · ∇g / h²."""
+    forces = sim._contact_forces
 
-    def flipped(t, state, x):
-        planes = obstacle._holding.planes
-        if planes.forces is not None:
-            planes.forces = -planes.forces
-        return correct(obstacle, t, state, x)
+    def flipped(problem, x, t):
+        forces(problem, x, t)
+        for c in sim._held_sets(t):
+            if c.forces is not None:
+                c.forces = -c.forces
 
     return flipped
 
