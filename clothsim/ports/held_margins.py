@@ -132,11 +132,47 @@ class Margins:
         if forces is None:         # stick / slide of a new contact: a geometric decision
             return False
         e, h, i = was
+        if not h.stick[i]:         # a sliding vertex sticks once it stopped: v_t . t <= 0
+            along = self._along(v, h.normals[i], h.pull[i])
+            return along is not None and abs(along) <= 2 * self.tol[v] / self.held.sim.h
         R = h.reaction()[i]
         fn = float(R @ h.normals[i])
         ft = float(np.linalg.norm(R - fn * h.normals[i]))
         cone = e.friction * fn + NOISE_MARGIN * h.planes.noise
         return abs(ft - cone) <= (1 + e.friction) * F
+
+
+    def _along(self, v: int, n: np.ndarray, pull: np.ndarray) -> float | None:
+        """v_t · t̂ of the port's step before at vertex v [m/s], t̂ the direction kinetic
+        friction opposed (its tangential velocity at the step's start, else the pull): what
+        decides that a sliding vertex stopped. None at the first step."""
+        state = self.held.previous_state()
+        if state is None:
+            return None
+        d = (self.held.x()[v] - state.positions[v]) / self.held.sim.h
+        t = state.velocities[v] - (state.velocities[v] @ n) * n
+        length = float(np.linalg.norm(t))
+        t = t / length if length > 0 else pull
+        return float((d - (d @ n) * n) @ t)
+
+    def friction_flip(self, v: int, x_port, x_cs) -> str:
+        """"stick" or "slide" when a marginal friction decision of held vertex v is the
+        other way in the port's answer (it moved in the plane where clothsim's stuck, or
+        the other way round), else ""."""
+        x = self.held.x()
+        moved_p = float(np.linalg.norm(x_port[v] - x[v]))
+        moved_c = float(np.linalg.norm(x_cs[v] - x[v]))
+        for _, h in self.held.planes():
+            i = np.flatnonzero(h.vertices == v)
+            if not len(i):
+                continue
+            stuck = bool(h.stick[i[0]])
+            kind = "stick" if stuck else "slide"
+            if stuck and moved_p > self.tol[v] >= moved_c and self.marginal(v, kind):
+                return kind
+            if not stuck and moved_p <= self.tol[v] < moved_c and self.marginal(v, kind):
+                return kind
+        return ""
 
 
 def inferred(held, margins, x_port, x_cs) -> list[tuple[int, str]]:
@@ -152,7 +188,9 @@ def inferred(held, margins, x_port, x_cs) -> list[tuple[int, str]]:
     Returns
     -------
     list of (int, str)
-        (vertex, kind) with kind "clothsim" (the port released it) or "port" (held it).
+        (vertex, kind) with kind "clothsim" (the port released it), "port" (held it),
+        "stick" (it slid where clothsim's stuck) or "slide" (it stuck where clothsim's
+        slid).
     """
     tol, out = margins.tol, []
     for _, h in held.planes():
@@ -162,6 +200,11 @@ def inferred(held, margins, x_port, x_cs) -> list[tuple[int, str]]:
         out += [(int(u), "clothsim") for u, gap in zip(v, out_port, strict=True)
                 if gap > tol[u] and margins.marginal(int(u), "clothsim")]
     now = {int(u) for _, h in held.planes() for u in h.vertices}
+    flipped = {u for u, _ in out}
+    for u in sorted(now - flipped):
+        kind = margins.friction_flip(u, x_port, x_cs)
+        if kind:
+            out.append((u, kind))
     for _, h in margins.previous:
         c = len(h.vertices)
         for u, n, o in zip(h.vertices, h.normals, h.planes.offsets[:c], strict=True):

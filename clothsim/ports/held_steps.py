@@ -178,6 +178,16 @@ class HeldSteps:
             return []
         return [(e, h) for e, (h, _, _) in zip(self.obstacles, self._previous[1], strict=True)]
 
+    def previous_state(self) -> State | None:
+        """The port's state at the start of the step before.
+
+        Returns
+        -------
+        State or None
+            (x_{k−1}, v_{k−1}); None at the first step.
+        """
+        return None if self._previous is None else self._previous[0]
+
     def replace(self, planes) -> None:
         """Hold another contact state in the step (:func:`clothsim.ports.held_margins.adopt`).
 

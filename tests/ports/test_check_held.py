@@ -180,3 +180,23 @@ def test_contacts_file_on_the_command_line(ports, tmp_path, capsys):
                  "--contacts", str(tmp_path / "bad.npz")]) == 2
     err = capsys.readouterr().err.strip().splitlines()
     assert len(err) == 1 and "bad.npz" in err[0]
+
+
+@pytest.mark.parametrize("with_planes", [False, True])
+def test_resting_contact_printed_with_g_passes_and_no_friction_still_fails(tmp_path,
+                                                                          with_planes):
+    """A coarse cloth coming to rest on the box (9², 60 frames: slow slides that stop, a
+    friction decision on a velocity of micrometres a step) printed with %g."""
+    scene = builtin("drop-on-square", 9)
+    X, V, rows = run_port(scene, "none", 60)
+    write_port(tmp_path, X, V, rows, fmt="%g")
+    planes = tmp_path / "contacts.txt" if with_planes else None
+    report = check_steps(scene, read_trajectory(tmp_path), read_velocities(tmp_path),
+                         contacts=planes)
+    assert report.passed, report.summary()
+    assert any("too close to call" in s.note for s in report.steps)
+    X, V, rows = run_port(scene, "frictionless", 60)
+    write_port(tmp_path, X, V, rows, fmt="%g")
+    report = check_steps(scene, read_trajectory(tmp_path), read_velocities(tmp_path),
+                         contacts=planes)
+    assert report.first_failure.status == "contacts differ", report.summary()
