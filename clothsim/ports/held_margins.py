@@ -156,9 +156,21 @@ class Margins:
         return float((d - (d @ n) * n) @ t)
 
     def friction_flip(self, v: int, x_port, x_cs) -> str:
-        """"stick" or "slide" when a marginal friction decision of held vertex v is the
-        other way in the port's answer (it moved in the plane where clothsim's stuck, or
-        the other way round), else ""."""
+        """Whether the port's answer took a marginal friction decision the other way.
+
+        Parameters
+        ----------
+        v : int
+            A held vertex.
+        x_port, x_cs : ndarray, shape (n, 3)
+            The port's and clothsim's x_{k+1} [m].
+
+        Returns
+        -------
+        str
+            "stick" (clothsim's sticks, the port's moved), "slide" (clothsim's slid, the
+            port's stayed), or "".
+        """
         x = self.held.x()
         moved_p = float(np.linalg.norm(x_port[v] - x[v]))
         moved_c = float(np.linalg.norm(x_cs[v] - x[v]))
