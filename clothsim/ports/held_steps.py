@@ -120,6 +120,9 @@ class HeldSteps:
         self.replayed: list = []
         self._before: list | None = None
         self._after: list | None = None
+        self._previous: tuple | None = None    # (State, holdings) of the step before
+        self._state: State | None = None
+        self._x: np.ndarray | None = None
 
     def __bool__(self) -> bool:
         return bool(self.obstacles)
@@ -217,7 +220,7 @@ class HeldSteps:
         return [(e, h) for e, (h, _, _) in zip(self.obstacles, self._before or (),
                                                strict=False)]
 
-    def replay(self, state: State, variant: str) -> np.ndarray:
+    def replay(self, state: State, variant: str) -> np.ndarray | None:
         """clothsim's step from ``state`` under another contact treatment (:data:`VARIANTS`).
 
         The simulation's state and the obstacles' decision are restored afterwards.
@@ -230,8 +233,9 @@ class HeldSteps:
 
         Returns
         -------
-        ndarray, shape (n, 3)
-            x_{k+1} of that step [m].
+        ndarray, shape (n, 3) or None
+            x_{k+1} of that step [m]; None for ``"flipped"`` at the first step (no step
+            before it to decide again).
         """
         sim, saved = self.sim, self.sim.state
         try:
