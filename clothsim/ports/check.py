@@ -22,7 +22,13 @@ from .compare import EPS32, RTOL64, cloth_size, condition_number
 from .contact_planes import PortPlanes
 from .held_margins import adopt, position_rounding
 from .held_steps import HeldSteps
-from .held_verdicts import marginal_changes, off_plane_note, planes_verdict, variant_verdict
+from .held_verdicts import (
+    marginal_changes,
+    off_plane_note,
+    on_port_planes,
+    planes_verdict,
+    variant_verdict,
+)
 from .judge import CONVERGING, gradient_scale, judge, pin_role, pinned_moved, refine
 from .precision import Printed
 from .rounding import (
@@ -208,8 +214,11 @@ def check_steps(simulation, positions, velocities=None, *, precision: str = "flo
                 problem, x_cs, v_cs, err, worst = _step(sim, held, state, x_port)
         moved = pinned_moved(problem, x_port, tol if precision == "float64"
                              else max(tol_k, 4 * EPS32 * float(np.abs(x_port).max())))
-        planes = None if contacts is None else planes_verdict(
+        planes, differing = (None, []) if contacts is None else planes_verdict(
             k, held, contacts, xs[k], problem.fixed_vertices, err, tol)
+        if planes is not None:   # and the port's solve, on its own planes?
+            adopt(held, differing, contacts.step(k))
+            planes.note += "; " + on_port_planes(_step(sim, held, state, x_port)[3], tol)
         variant = (None if moved is not None or planes is not None or err[worst] <= tol
                    or not held else variant_verdict(k, held, state, x_port, err, tol))
         if moved is not None:

@@ -231,7 +231,7 @@ def inferred(held, margins, x_port, x_cs) -> list[tuple[int, str]]:
 
 
 def adopt(held, changes, port_planes=None) -> None:
-    """Change the step's decision where the port decided a marginal case otherwise.
+    """Change the step's decision to the port's, vertex by vertex.
 
     Parameters
     ----------
@@ -240,7 +240,8 @@ def adopt(held, changes, port_planes=None) -> None:
     changes : list of (int, str)
         (vertex, kind): "clothsim" releases it, "port" holds it (on the port's plane when
         given, else on its plane of the step before), "stick" lets it slide, "slide" makes
-        it stick.
+        it stick, "plane" holds it on the port's plane instead of clothsim's (sticking when
+        the port holds it in three directions).
     port_planes : tuple of ndarray, optional
         The port's (vertices, normals, offsets) of the step.
     """
@@ -249,7 +250,8 @@ def adopt(held, changes, port_planes=None) -> None:
     new = []
     for e, h in held.planes():
         c = len(h.vertices)
-        keep = np.array([kinds.get(int(v)) != "clothsim" for v in h.vertices], bool)
+        keep = np.array([kinds.get(int(v)) not in ("clothsim", "plane") for v in h.vertices],
+                        bool)
         stick = h.stick.copy()
         for i, v in enumerate(h.vertices):
             kind = kinds.get(int(v))
@@ -258,12 +260,13 @@ def adopt(held, changes, port_planes=None) -> None:
                  h.pull[keep], h.planes.offsets[:c][keep]]
         new.append((e, parts))
     for v, kind in changes:
-        if kind != "port":
+        if kind not in ("port", "plane"):
             continue
         e, n, o = _port_plane(held, v, port_planes, x)
+        sticks = port_planes is not None and int(np.sum(port_planes[0] == v)) >= 3
         for f, parts in new:
             if f is e:
-                for j, item in enumerate((v, n, False, 0.0, np.zeros(3), o)):
+                for j, item in enumerate((v, n, sticks, 0.0, np.zeros(3), o)):
                     parts[j] = np.concatenate([parts[j], np.asarray(item)[None]])
     held.replace([(e, _holding(x, *parts)) for e, parts in new])
 

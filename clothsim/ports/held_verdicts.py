@@ -47,7 +47,9 @@ def planes_verdict(k, held, port_planes, x_port_k, fixed, err, tol) -> StepCheck
 
     Returns
     -------
-    StepCheck or None
+    (StepCheck or None, list of (int, str))
+        The verdict, and the changes that make clothsim's decision the port's
+        (:func:`~clothsim.ports.held_margins.adopt`).
     """
     v, n, o = port_planes.step(k)
     diffs = plane_differences(clothsim_rows(held.planes()), v, n, o, x_port_k,
@@ -55,11 +57,33 @@ def planes_verdict(k, held, port_planes, x_port_k, fixed, err, tol) -> StepCheck
                               offset_tolerance=max(tol, port_planes.offset_rounding),
                               normal_tolerance=port_planes.normal_tolerance, skip=fixed)
     if not diffs:
-        return None
+        return None, []
     vertex, _, text = diffs[0]
     more = f"; {len(diffs)} vertices' planes differ in this step" if len(diffs) > 1 else ""
-    return StepCheck(k, "contacts differ", float(err.max()), vertex, tolerance=tol,
-                     note=f"{text}{more} (the port's planes: {port_planes.path.name})")
+    return (StepCheck(k, "contacts differ", float(err.max()), vertex, tolerance=tol,
+                      note=f"{text}{more} (the port's planes: {port_planes.path.name})"),
+            [(u, kind) for u, kind, _ in diffs])
+
+
+def on_port_planes(err, tol) -> str:
+    """What clothsim's step says of the port's solve on the port's own planes.
+
+    Parameters
+    ----------
+    err : ndarray, shape (n,)
+        |x_clothsim − x_port| [m], clothsim's step held on the port's planes.
+    tol : float
+
+    Returns
+    -------
+    str
+    """
+    w = int(np.argmax(err))
+    if err[w] <= tol:
+        return (f"on the port's own planes clothsim's step is the port's answer (max error "
+                f"{err[w]:.3e} m): its solve is right, its contact decision differs")
+    return (f"on the port's own planes too, its answer is {err[w]:.3e} m from clothsim's "
+            f"step (vertex {w})")
 
 
 def marginal_changes(k, held, model, problem, tol, port_planes, x_port, x_cs, rounding):
@@ -208,4 +232,5 @@ def off_plane_note(held, x_port, tol) -> str:
     return text
 
 
-__all__ = ["NEARER", "off_plane_note", "planes_verdict", "variant_verdict"]
+__all__ = ["NEARER", "marginal_changes", "off_plane_note", "on_port_planes", "planes_verdict",
+           "variant_verdict"]

@@ -78,6 +78,10 @@ def test_planted_contact_faults_are_named(ports, box, tmp_path, fault, with_plan
     assert f"vertex {first.vertex}" in first.line()
     # the steps before the contact agree: the fault is in the contact handling only
     assert all(s.passed for s in report.steps[:first.k])
+    if with_planes:   # the step again on the port's own planes: is its solve right?
+        solve = ("on the port's own planes too" if fault == "frictionless"   # no kinetic
+                 else "its solve is right, its contact decision differs")    # friction
+        assert solve in first.note, first.line()
 
 
 def test_a_post_solve_port_without_planes_names_a_held_vertex(ports, box):
