@@ -245,7 +245,7 @@ def judge(sim, model, problem, k, x_cs, x_port, err, tol, optimality, precision,
     # the gradient difference as a displacement (over the Hessian's diagonal, where a
     # 1e10 N/m pin turns 1e-10 m into newtons); a vertex within the tolerance is no evidence
     excess = np.where(err > tol, np.linalg.norm(grad_p - grad_c, axis=1)
-                      / _diagonal(model, problem), 0.0)
+                      / hessian_diagonal(model, problem), 0.0)
     vertex = int(np.argmax(excess))
     total = float(np.linalg.norm(excess))
     local = total > 0 and excess[vertex] > LOCAL * total
@@ -302,8 +302,19 @@ def judge(sim, model, problem, k, x_cs, x_port, err, tol, optimality, precision,
     return verdict("not a minimizer", worst, note)
 
 
-def _diagonal(model, problem) -> np.ndarray:
-    """m_v + h² (Σ k of v's springs + its pins' k): ∇²g's diagonal per vertex [kg]."""
+def hessian_diagonal(model, problem) -> np.ndarray:
+    """m_v + h² (Σ k of v's springs + its pins' k): ∇²g's diagonal per vertex.
+
+    Parameters
+    ----------
+    model : Model
+    problem : StepProblem
+
+    Returns
+    -------
+    ndarray, shape (n,)
+        [kg]; the gradient difference over it is a displacement [m].
+    """
     n = model.vertex_count
     a, b = model.springs.spring_vertices.T
     k = model.springs.spring_stiffness
