@@ -87,7 +87,7 @@ class FusedStep(EnergyDifferences):
         dirs.vectors_into(yT, pyT)
         h2 = self.h2 = problem.h ** 2
         # free vertices as runs of consecutive indices: x_F = y_F + δ_F by slices
-        self.runs = runs = sysf.free_runs
+        self.runs = sysf.free_runs
         self.free = free
         self.cT = self._constant(problem, h2, cT)
         x_fixed_T = None
@@ -155,8 +155,7 @@ class FusedStep(EnergyDifferences):
         """(u − v) over the free vertices: coordinate-major (3, f) from (3, n) arrays, or
         with ``rows`` vertex-major (f, 3) from (n, 3) arrays; a new array."""
         if self.runs is None:
-            return u[self.free] - v[self.free] if rows else \
-                np.ascontiguousarray((u[:, self.free] - v[:, self.free]))
+            return u[self.free] - v[self.free] if rows else u[:, self.free] - v[:, self.free]
         out = np.empty((len(self.free), 3) if rows else (3, len(self.free)))
         for start, stop, offset in self.runs:
             if rows:
