@@ -180,7 +180,7 @@ def run(sizes=SIZES, *, repeats: int = REPEATS, source=None) -> dict:
                         case.measure(what)
             shares = {c.n: profile(c) for c in cases if c.timed}
             starts = {c.n: start_gradient(c) for c in cases if c.timed}
-            setups = {c.n: step_setup(c) for c in cases if c.timed}
+            setups = {c.n: step_setup(c) + gathers(c) for c in cases if c.timed}
         finally:
             for case in cases:
                 case.driver.close()
@@ -257,6 +257,22 @@ def step_setup(case: Case, repeats: int = 15) -> tuple[float, float]:
     return float(np.median(times["setup"])), float(np.median(times["solve"]))
 
 
+def gathers(case: Case, repeats: int = 15) -> tuple[float, float]:
+    """Thread CPU seconds of all springs' vectors p(y) as the step gathers them (strided
+    slices over the regular blocks, :mod:`clothsim.solvers.spring_blocks`) and by two takes
+    per coordinate, interleaved, medians."""
+    gather = case.solver._dirs._gather
+    yT = np.ascontiguousarray(case.problem.y.T)
+    out = np.empty((3, len(gather.a)))
+    times = {"slices": [], "takes": []}
+    for _ in range(repeats):
+        for what in times:
+            c0 = time.thread_time()
+            (gather if what == "slices" else gather._takes)(yT, out)
+            times[what].append(time.thread_time() - c0)
+    return float(np.median(times["slices"])), float(np.median(times["takes"]))
+
+
 def _ms(q) -> str:
     return f"{1e3 * q[0]:.2f} ({1e3 * q[1]:.2f}–{1e3 * q[2]:.2f})"
 
@@ -293,8 +309,11 @@ def table(result: dict) -> list[str]:
     setups = [result["setup"][n] for n in sizes]
     lines.append("| a step's setup (y's spring vectors, c_F, local step and rhs at x_0, "
                  "A_FF δ_0), ms (share of the step's solve) | "
-                 + " | ".join(f"{1e3 * t:.2f} ({100 * t / whole:.0f} %)" for t, whole in setups)
+                 + " | ".join(f"{1e3 * t[0]:.2f} ({100 * t[0] / t[1]:.0f} %)" for t in setups)
                  + " |")
+    lines.append("| all springs' vectors p(y): by strided slices (the step's) / by two takes "
+                 "a coordinate, ms | "
+                 + " | ".join(f"{1e3 * t[2]:.2f} / {1e3 * t[3]:.2f}" for t in setups) + " |")
     return lines
 
 
