@@ -25,6 +25,8 @@ import numpy as np
 from .spring_blocks import SpringGather
 
 _NONE = np.zeros(0, dtype=np.intp)
+_NO_VALUES = np.zeros((3, 0))
+_NO_VALUES.flags.writeable = False
 
 
 class SpringDirections:
@@ -118,7 +120,7 @@ class SpringDirections:
         """Remember the local step just done at xT (which must stay unchanged until the
         next local step) with d = dT; the carried values are copied."""
         self._d, self._xT = None, xT
-        self._carried = (coincident, dT[:, coincident].copy())
+        self._carried = (coincident, dT[:, coincident].copy() if len(coincident) else _NO_VALUES)
 
     # -- the local step three ways ----------------------------------------------------------
     def local_step(self, xT: np.ndarray) -> np.ndarray:
