@@ -117,9 +117,11 @@ class SpringGather:
         if self.blocks and len(rest):
             self._rest = (rest, self.a[rest], self.b[rest], np.empty(len(rest)),
                           np.empty(len(rest)))
-        self._tmp = np.empty(len(self.a))
+        self._tmp = None   # the takes' second operand, allocated only if they run
 
     def _takes(self, xT: np.ndarray, pT: np.ndarray) -> None:
+        if self._tmp is None:
+            self._tmp = np.empty(len(self.a))
         a, b, tmp = self.a, self.b, self._tmp
         for xc, pc in zip(xT, pT):  # mode="clip": no bounds check (indices valid by construction)
             xc.take(a, out=pc, mode="clip")
