@@ -193,7 +193,7 @@ def test_shell_lines_of_the_pages_work_in_a_fresh_shell():
     allowed = re.compile(r"^(make \w+|\.venv/bin/\S+|\. \.venv/bin/activate|"
                          r"CLOTHSIM_DATA=\S+ \.venv/bin/\S+)(\s|$)")
     bad = []
-    for page in OWN_PAGES + [ROOT / "README.md"] * 0:
+    for page in OWN_PAGES + [ROOT / "README.md"]:
         for block in _blocks(page, "sh"):
             activated = False
             for line in block.splitlines():
@@ -219,3 +219,93 @@ def test_every_page_in_the_toctrees_exists():
             assert (DOCS / f"{entry}.md").is_file() or (DOCS / f"{entry}.rst").is_file() or \
                 entry == "reference/scenes", entry
     assert (ROOT / "examples" / "GALLERY_HEADER.rst").is_file()
+
+
+# ------------------------------------------------------------- commands of every page
+# Every page a user pastes from, the shared ones included: a command with a flag its
+# parser does not know, or with too few arguments, fails here instead of in a fresh shell.
+ALL_PAGES = [ROOT / "README.md", *sorted(DOCS.glob("*.md")), *sorted((DOCS / "howto").glob("*.md")),
+             *sorted((ROOT / "examples").glob("**/README.md"))]
+SHELL_LANGS = {"", "sh", "bash", "console", "text"}
+
+
+def shell_blocks(text: str) -> list[str]:
+    """The bodies of the fenced blocks of a page in a shell language (or none), indented
+    ones (inside a list) too; a fence closes only with as many backticks as it opened."""
+    blocks, fence, lang, body = [], None, "", []
+    for line in text.splitlines():
+        m = re.match(r"^\s*(`{3,})\s*([^`\s]*)", line)
+        if fence is None and m:
+            fence, lang, body = m.group(1), m.group(2), []
+        elif fence is not None and m and m.group(1) == fence and not m.group(2):
+            if lang in SHELL_LANGS:
+                blocks.append("\n".join(body))
+            fence = None
+        elif fence is not None:
+            body.append(line)
+    return blocks
+
+
+def clothsim_commands(text: str) -> list[list[str]]:
+    """The argument lists of the ``.venv/bin/clothsim`` commands in the shell blocks of a
+    page (``$ `` prompts stripped; synopses with ``[OPTIONAL]`` parts left out)."""
+    import shlex
+
+    found = []
+    for body in shell_blocks(text):
+        for line in body.splitlines():
+            line = line.strip().removeprefix("$ ")
+            if not line.startswith(".venv/bin/clothsim"):
+                continue
+            words = shlex.split(line, comments=True)
+            if any(w.startswith("[") or w in ("...", "…") for w in words):
+                continue                                  # a synopsis, not a command
+            cut = [i for i, w in enumerate(words) if w in (">", "|", "&&", ";")]
+            found.append(words[1:cut[0] if cut else None])
+    return found
+
+
+COMMANDS = [(p, c) for p in ALL_PAGES for c in clothsim_commands(p.read_text(encoding="utf-8"))]
+
+
+@pytest.mark.parametrize("page, argv", COMMANDS,
+                         ids=[f"{p.relative_to(ROOT)}:{' '.join(c)[:60]}" for p, c in COMMANDS])
+def test_every_documented_clothsim_command_parses(page, argv):
+    from clothsim.cli import build_parser
+    from clothsim.cli.common import _UsageError
+
+    try:
+        build_parser().parse_args(argv)
+    except SystemExit as stop:                            # --help, --version
+        assert stop.code == 0, f"{page.name}: clothsim {' '.join(argv)}"
+    except _UsageError as error:
+        pytest.fail(f"{page.name}: clothsim {' '.join(argv)}: {error}")
+
+
+def test_documented_commands_are_found_and_a_wrong_flag_fails():
+    from clothsim.cli import build_parser
+    from clothsim.cli.common import _UsageError
+
+    assert len(COMMANDS) > 60 and {p.name for p, _ in COMMANDS} >= {
+        "README.md", "cli.md", "ports.md", "getting-started.md", "check-your-port.md"}
+    page = "1. Run\n\n   ```sh\n   .venv/bin/clothsim run hanging --frmaes 30  # typo\n   ```\n"
+    [argv] = clothsim_commands(page)
+    with pytest.raises(_UsageError, match="frmaes"):
+        build_parser().parse_args(argv)
+    assert clothsim_commands("```python\nx = 1\n```\n.venv/bin/clothsim run --x\n") == []
+
+
+def test_a_documented_check_of_a_shortened_export_says_how_many_steps():
+    """``export SCENE --frames N --out DIR`` then ``check SCENE DIR`` (or a port's run of
+    that export beside it, ``DIR/../run``) fails, the output being shorter than the scene,
+    unless the check says ``--steps``: the pair in a page must."""
+    bad = []
+    for page, argv in COMMANDS:
+        if argv[:1] == ["export"] and "--frames" in argv and "--out" in argv:
+            out = Path(argv[argv.index("--out") + 1])
+            for other, check in COMMANDS:
+                if (other == page and check[:1] == ["check"] and len(check) > 2
+                        and check[1] == argv[1] and "--steps" not in check
+                        and (Path(check[2]) == out or Path(check[2]).parent == out.parent)):
+                    bad.append(f"{page.name}: clothsim {' '.join(check)}")
+    assert not bad, "\n".join(bad)
