@@ -203,6 +203,8 @@ def _run_in(folder: RunFolder, scene, model, sim, frames: int, progress, resume:
         "started": datetime.now(UTC).isoformat(timespec="seconds"),
         "resumed_from": start if resuming else None,
     }
+    if resuming:   # before anything is written: an unreadable state file changes nothing
+        info["effect_state_restored"] = restore_state(folder, start, sim.effects)
     get_state = getattr(sim.solver, "get_state", lambda: {})
     read_back = folder.begin(info, model, fps, frames=frames,
                              pinned=lambda t: pinned_mask(sim.effects, n, t),
@@ -213,7 +215,6 @@ def _run_in(folder: RunFolder, scene, model, sim, frames: int, progress, resume:
         saved = previous.get("solver_state")
         if saved:
             getattr(sim.solver, "set_state", lambda state: None)(saved)
-        info["effect_state_restored"] = restore_state(folder, start, sim.effects)
         log.info("resuming %s from frame %d", scene.name, start)
     else:
         x, v = sim.state.positions, sim.state.velocities

@@ -136,8 +136,11 @@ def test_unreadable_state_file_refuses_naming_it(tmp_path):
     scene, out = small("drop-on-square"), tmp_path / "run"
     run_scene(scene, out, frames=3, preview=False)
     state_path(out, 3).write_bytes(b"not a zip")
+    before = {p.name: p.stat().st_mtime_ns for p in out.iterdir() if p.is_file()}
     with pytest.raises(InputError, match=r"state/frame_000003\.npz: cannot read"):
         run_scene(scene, out, frames=5, preview=False, resume=True)
+    after = {p.name: p.stat().st_mtime_ns for p in out.iterdir() if p.is_file()}
+    assert after == before                              # refused before anything is written
 
 
 def test_sigint_mid_run_then_resume_is_bit_for_bit(tmp_path):
