@@ -49,7 +49,7 @@ from .display import pinned_mask, write_obstacles
 from .effects.base import effect_states
 from .errors import InputError, NonFiniteStateError
 from .interrupts import SignalInterrupt, handle_signals, signals_deferred
-from .io.effectstate import restore_state
+from .io.effectstate import restore_state, state_path
 from .io.frames import OBSTACLES_NAME, PVD_NAME
 from .io.runfiles import package_versions, write_json, write_trajectory
 from .io.runfolder import RESULT_FILES, STALE_FILES, RunFolder, completed_frames
@@ -258,6 +258,7 @@ def _run_in(folder: RunFolder, scene, model, sim, frames: int, progress, resume:
     files = folder.frame_files()
     files += [folder.path / PVD_NAME, folder.path / "trajectory.npz", folder.path / "run.json"]
     files += [obstacles] if obstacles is not None else []
+    files += [p for j in range(folder.done + 1) if (p := state_path(folder.path, j)).exists()]
     if isinstance(pictures, Exception):
         raise pictures
     if pictures is not None:

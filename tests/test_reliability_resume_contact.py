@@ -70,7 +70,8 @@ def test_state_file_of_frame_k_is_the_state_in_memory_after_frame_k(tmp_path):
     """Step the scene as the runner does, and compare every frame's file with memory."""
     scene, frames = small("drop-on-square"), 24
     out = tmp_path / "run"
-    run_scene(scene, out, frames=frames, preview=False)
+    result = run_scene(scene, out, frames=frames, preview=False)
+    assert set(state_files(out)) <= set(result.files)
     sim = scene.build_simulation()
     sim.expect_steps(frames * scene.substeps)
     contact = 0
