@@ -206,6 +206,7 @@ def _run_in(folder: RunFolder, scene, model, sim, frames: int, progress, resume:
     if resuming:   # before anything is written: an unreadable state file changes nothing
         info["effect_state_restored"] = restore_state(folder, start, sim.effects)
     get_state = getattr(sim.solver, "get_state", lambda: {})
+    folder.state_bytes = sum(e.state_bytes(n) for e in sim.effects)   # planned per frame
     read_back = folder.begin(info, model, fps, frames=frames,
                              pinned=lambda t: pinned_mask(sim.effects, n, t),
                              compression=scene.data["output"]["frame_compression"],

@@ -20,7 +20,7 @@ import pytest
 from clothsim.effects.base import effect_states, restore_effect_states
 from clothsim.effects.holding import Holding
 from clothsim.errors import InputError
-from clothsim.io.effectstate import read_state, state_files, state_path
+from clothsim.io.effectstate import planned_state_bytes, read_state, state_files, state_path
 from clothsim.runner import run_scene
 from clothsim.scene import load_scene
 from clothsim.simulation import State
@@ -210,3 +210,22 @@ def test_frames_down_then_up_resumes_from_the_earlier_frames_state(tmp_path):
     a = np.load(out / "trajectory.npz")["positions"]
     b = np.load(tmp_path / "full" / "trajectory.npz")["positions"]
     assert np.array_equal(a, b), f"{np.abs(a - b).max():.3e} m apart after the resume"
+
+
+@pytest.mark.parametrize("compression", ["zlib", "none"])
+def test_the_disk_plan_counts_the_state_files(tmp_path, compression):
+    """Each state file fits what the run planned for it, and the plan grows by that."""
+    plans = {}
+    for mode in ("hold", "post-solve"):
+        out = tmp_path / mode
+        scene = small("drop-on-square", f'contact.mode="{mode}"',
+                      f'output.frame_compression="{compression}"')
+        run_scene(scene, out, frames=25, preview=False)
+        plans[mode] = json.loads((out / "run.json").read_text())["disk_estimate"]["frame"]
+    sim = small("drop-on-square").build_simulation()
+    n, obstacles = sim.model.vertex_count, [e for e in sim.effects if e.get_state()]
+    assert [e.kind for e in obstacles] == ["box", "plane"]
+    planned = planned_state_bytes(2 * Holding.max_bytes(n), compression)
+    assert plans["hold"] - plans["post-solve"] == planned
+    sizes = [p.stat().st_size for p in state_files(tmp_path / "hold")]
+    assert len(sizes) == 26 and max(sizes) <= planned

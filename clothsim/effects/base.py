@@ -247,6 +247,20 @@ class Effect:
         """
         return {}
 
+    def state_bytes(self, vertex_count: int) -> int:
+        """Bytes of :meth:`get_state`'s arrays at most, for a cloth of ``vertex_count``
+        vertices (the disk a run plans for; 0 by default).
+
+        Parameters
+        ----------
+        vertex_count : int
+
+        Returns
+        -------
+        int
+        """
+        return 0
+
     def set_state(self, state: dict, name: str | None = None) -> None:
         """Restore what :meth:`get_state` returned, after :meth:`bind` (the default has
         nothing to restore).

@@ -134,6 +134,22 @@ class Holding:
                 "stick": self.stick.copy(), "normal_force": self.normal_force.copy(),
                 "pull": self.pull.copy(), "offsets": self.planes.offsets.copy()}
 
+    @staticmethod
+    def max_bytes(vertex_count: int) -> int:
+        """Bytes of :meth:`arrays` at most: every vertex held and sticking (three planes).
+
+        Parameters
+        ----------
+        vertex_count : int
+            n.
+
+        Returns
+        -------
+        int
+            n × (8 + 24 + 1 + 8 + 24 + 3 × 8) bytes, and 1 kB of archive headers.
+        """
+        return 89 * int(vertex_count) + 1024
+
     @classmethod
     def from_arrays(cls, arrays, vertex_count: int, name: str = "holding") -> Holding:
         """The holding :meth:`arrays` returned, checked (it is read from a file).

@@ -329,6 +329,20 @@ class Obstacle(Effect):
         """
         return self._holding.arrays() if self.contact == "hold" else {}
 
+    def state_bytes(self, vertex_count: int) -> int:
+        """Bytes of :meth:`get_state` at most (:meth:`Holding.max_bytes
+        <clothsim.effects.holding.Holding.max_bytes>`; none in ``"post-solve"`` mode).
+
+        Parameters
+        ----------
+        vertex_count : int
+
+        Returns
+        -------
+        int
+        """
+        return Holding.max_bytes(vertex_count) if self.contact == "hold" else 0
+
     def set_state(self, state, name: str | None = None) -> None:
         """Restore what :meth:`get_state` returned (after :meth:`bind`).
 

@@ -32,6 +32,7 @@ import numpy as np
 from ..effects.base import effect_states, restore_effect_states
 from ..errors import InputError
 from .common import atomic_path
+from .frames import ZLIB_RATIO
 
 log = logging.getLogger(__name__)
 
@@ -53,6 +54,25 @@ def state_path(out, k: int) -> Path:
         ``out/state/frame_%06d.npz``.
     """
     return Path(out) / STATE_DIR / f"frame_{k:06d}.npz"
+
+
+def planned_state_bytes(bound: int, compression: str) -> int:
+    """The disk one frame's state file is planned for (:mod:`clothsim.io.diskspace`).
+
+    Parameters
+    ----------
+    bound : int
+        Its arrays' bytes at most (:meth:`clothsim.effects.base.Effect.state_bytes` summed).
+    compression : {"zlib", "none"}
+        The frames' compression, which the state file follows.
+
+    Returns
+    -------
+    int
+        ``bound``, or :data:`~clothsim.io.frames.ZLIB_RATIO` of it compressed (an upper
+        bound: the normals, offsets and vertex numbers compress well, the forces less).
+    """
+    return int(bound * (ZLIB_RATIO if compression == "zlib" else 1.0))
 
 
 def write_state(out, k: int, arrays: dict[str, np.ndarray], *,
@@ -170,5 +190,5 @@ def state_files(out) -> list[Path]:
     return sorted((Path(out) / STATE_DIR).glob("frame_*.npz"))
 
 
-__all__ = ["STATE_DIR", "read_state", "restore_state", "state_files", "state_path",
-           "write_state"]
+__all__ = ["STATE_DIR", "planned_state_bytes", "read_state", "restore_state", "state_files",
+           "state_path", "write_state"]

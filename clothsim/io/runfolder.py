@@ -23,7 +23,7 @@ import numpy as np
 from ..errors import InputError
 from .background import BackgroundJob
 from .diskspace import check_run_plan, file_bytes, run_plan
-from .effectstate import state_files, write_state
+from .effectstate import planned_state_bytes, state_files, write_state
 from .folders import RUN_RECORD
 from .frames import OBSTACLES_NAME, PVD_NAME, FrameWriter, read_frame
 from .outfolder import OutputFolder
@@ -59,6 +59,8 @@ class RunFolder(OutputFolder):
         One per frame 1..done.
     done : int
         The last complete frame (−1 before frame 0).
+    state_bytes : int
+        One frame's state file at most, stored (set before :meth:`begin`; 0: none).
     """
 
     def __init__(self, path, *, force: bool = False, guard=None):
@@ -67,6 +69,7 @@ class RunFolder(OutputFolder):
         self.info: dict = {}
         self.records: list[dict] = []
         self.done = -1
+        self.state_bytes = 0
         self.npz_frames: int | None = None
         self.store: TrajectoryStore | None = None
         self.writer: FrameWriter | None = None
@@ -201,8 +204,9 @@ class RunFolder(OutputFolder):
             ``frame``, ``frames``, ``trajectory``, ``end`` and ``peak`` [bytes].
         """
         model_bytes = sum(a.nbytes for a in model_arrays(self._model).values())
-        return run_plan(self.writer.estimated_bytes(), self._model.vertex_count, frames, start,
-                        model_bytes)
+        frame = self.writer.estimated_bytes() + (self.state_bytes and planned_state_bytes(
+            self.state_bytes, self.writer.compression))
+        return run_plan(frame, self._model.vertex_count, frames, start, model_bytes)
 
     def _plan(self, frames: int, start: int | None) -> None:
         """Warn about a large run, refuse one the disk cannot hold; run.json records the
