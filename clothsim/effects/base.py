@@ -21,6 +21,12 @@ one receiving what the previous one returned. Hooks read the time step from ``se
 the model from ``self.model``; they never change the model. Arrays are (n, 3), one row per
 vertex, in the model's vertex order, float64.
 
+What an effect carries from one step into the next (an obstacle's held contacts) it hands
+out through :meth:`Effect.get_state` and takes back through :meth:`Effect.set_state`:
+``clothsim run`` saves it with every frame (:func:`effect_states`) and ``--resume``
+restores it, so a resumed run is bit for bit the uninterrupted one. Every other hook must
+depend only on the time, the state and the model.
+
 An effect instance belongs to one simulation: binding it to a second one is an
 :class:`~clothsim.errors.InputError` (it keeps per-run data such as contacts). A
 simulation's effects are fixed when it is built (:class:`BoundEffects`).
