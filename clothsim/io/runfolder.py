@@ -229,7 +229,8 @@ class RunFolder(OutputFolder):
     def write_frame(self, k: int, positions, velocities, record: dict | None = None, *,
                     wait: bool = True) -> None:
         """Frame k: its ``.vtu`` file, the store, its record (none for frame 0) and run.json
-        with ``last_frame`` = k (trajectory.npz every few seconds, :meth:`save_npz`).
+        with ``last_frame`` = k (trajectory.npz with frame 0, then every few seconds:
+        :meth:`save_npz`).
 
         Parameters
         ----------
@@ -260,9 +261,8 @@ class RunFolder(OutputFolder):
         if record is not None:
             self.records.append(record)
         self.done = k
-        if k > 0:
-            self._save_npz()
-            self._mark("writing", info=info)
+        self._save_npz(force=k == 0)   # a first trajectory.npz at the start
+        self._mark("writing", info=info)
 
     def wait(self) -> None:
         """Wait for the frame being written in the background, if any.

@@ -88,7 +88,7 @@ def test_run_json_records_the_information_of_the_hand_over(tmp_path):
     folder.write_frame(1, x, 0 * x, {"frame": 1}, wait=False)
     folder.info["state"] = 1             # the next frame's, while frame 1 is in flight
     run = json.loads((tmp_path / "r" / "run.json").read_text())
-    assert run["last_frame"] is None     # frame 1 is not claimed before it is on disk
+    assert run["last_frame"] == 0        # frame 1 is not claimed before it is on disk
     gate.set()
     folder.wait()
     run = json.loads((tmp_path / "r" / "run.json").read_text())
