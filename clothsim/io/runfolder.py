@@ -328,7 +328,8 @@ class RunFolder(OutputFolder):
         super().mark(status, data, error=error)
 
     def end(self, status: str, error: str | None) -> None:
-        """trajectory.npz one last time (when any frame is done), then run.json.
+        """trajectory.npz one last time (when any frame is done and the last rebuild did
+        not hold them all), then run.json.
 
         Parameters
         ----------
@@ -349,7 +350,7 @@ class RunFolder(OutputFolder):
                 raise error_in_flight
             log.info("the frame being written when %s stopped failed too: %s", self.path,
                      error_in_flight)
-        if self.done >= 0:
+        if self.done >= 0 and self.npz_frames != self.done + 1:   # unless it holds them all
             self._save_npz(force=True)
         self._mark(status, error=error)
 
