@@ -16,7 +16,8 @@ file                 content
                      assembled from a store streamed to disk, never held in memory
 ``preview.gif``      small animation (at most ~60 frames), ``final.png`` last frame,
                      both drawing the obstacles and pins; drawn while the last frame
-                     is written, written once the run is complete
+                     is written (a large cloth's by a second process,
+                     :mod:`clothsim.pictures`), written once the run is complete
 ``obstacles.vtu``    the scene's obstacles as triangles (only when it has some)
 ``run.json``         resolved scene and its hash, effects built, solver, backend and
                      solver state, package versions, per-frame records, and status
