@@ -3,16 +3,18 @@
 :func:`clothsim.plotting.draw_run_pictures` holds the GIL for most of its second or so;
 drawn on a thread beside the run it waits for the frame writer (and the writer for it), so
 after the last step a large run paid the pictures and the last frame's write one after the
-other. :class:`PictureProcess` starts a Python process when the run starts (it imports
-clothsim, matplotlib and Pillow while the run factors and steps) and hands it the frames
-once the last one is computed: it draws while the main process writes the last frame,
+other. :class:`PictureProcess` starts a Python process once the run's first frame is
+computed (it imports clothsim, matplotlib and Pillow beside the next frames' solves, which
+hold the GIL on one core) and hands it the frames once the last one is computed: it draws
+while the main process writes the last frame,
 ``trajectory.npz`` and ``run.json``. The pictures are the very bytes the runner would have
 drawn itself (the same function on the same positions: the earlier frames memory-mapped from
 the run's trajectory store, the last one sent along), and they are written by the runner,
 once the run is complete, as before.
 
 It is used for cloths of more than :data:`PROCESS_FROM` vertices on a machine with two
-cores or more (smaller runs end before the process would have imported matplotlib). The
+cores or more, when more than one frame is computed (smaller and shorter runs end before
+the process would have imported matplotlib). The
 process runs in a session of its own, so Ctrl-C at the terminal reaches the run alone (which
 then ends it); it also ends by itself when its input closes, which the end of the run, or
 of the run's process, does. If it cannot start or dies, the runner draws the pictures itself.
@@ -114,18 +116,32 @@ class PictureProcess:
     Parameters
     ----------
     vertex_count : int
-        The cloth's vertices: the process starts only above :data:`PROCESS_FROM`, on two
-        cores or more (otherwise :meth:`request` returns False and the caller draws).
+        The cloth's vertices: :meth:`start` starts the process only above
+        :data:`PROCESS_FROM`, on two cores or more (otherwise :meth:`request` returns False
+        and the caller draws).
 
     Attributes
     ----------
     running : bool
-        Whether a process was started and may take :meth:`draw`'s request.
+        Whether a process was started and may take :meth:`request`'s frames.
     """
 
     def __init__(self, vertex_count: int):
         self._proc = None
-        if vertex_count <= PROCESS_FROM or _cores() < 2 or not sys.executable:
+        self.wanted = vertex_count > PROCESS_FROM and _cores() >= 2 and bool(sys.executable)
+
+    def start(self) -> None:
+        """Start the process, if the cloth is large enough and there is a second core.
+
+        The runner starts it once the first frame is computed: its imports (about a second
+        of the other core) then run beside CHOLMOD's single-threaded solves, not beside the
+        factorization's second thread.
+
+        Returns
+        -------
+        None
+        """
+        if not self.wanted or self._proc is not None:
             return
         package = str(Path(__file__).resolve().parents[1])   # the clothsim imported here
         env = dict(os.environ, PYTHONPATH=os.pathsep.join(

@@ -166,12 +166,12 @@ def run_scene(scene, out_dir, *, frames: int | None = None,
                          f"{frames!r}"[:200])
     frames = scene.frames if frames is None else int(frames)
     model = scene.build_model()
-    # a large cloth's pictures are drawn by a second process, which imports meanwhile
-    with PictureProcess(model.vertex_count if preview else 0) as pictures:
-        sim = scene.build_simulation(model)
-        with RunFolder(out_dir, force=force, guard=signals_deferred) as folder:
-            return _run_in(folder, scene, model, sim, frames, progress, resume,
-                           pictures if preview else None)
+    sim = scene.build_simulation(model)
+    # a large cloth's pictures are drawn by a second process (clothsim.pictures)
+    with PictureProcess(model.vertex_count if preview else 0) as pictures, \
+            RunFolder(out_dir, force=force, guard=signals_deferred) as folder:
+        return _run_in(folder, scene, model, sim, frames, progress, resume,
+                       pictures if preview else None)
 
 
 def _run_in(folder: RunFolder, scene, model, sim, frames: int, progress, resume: bool,
@@ -237,6 +237,8 @@ def _run_in(folder: RunFolder, scene, model, sim, frames: int, progress, resume:
         sim.state = State(x.copy(), v.copy(), (k - 1) / fps, (k - 1) * substeps)
         steps = _advance(sim, substeps, k)   # meanwhile frame k - 1 is written (background)
         x, v = sim.state.positions, sim.state.velocities
+        if pictures is not None and k == first and k < frames:
+            pictures.start()   # it imports beside the next frames' solves (clothsim.pictures)
         record = _frame_record(k, fps, steps, sim.solver.tolerance)
         folder.wait()
         if progress is not None and k > first:

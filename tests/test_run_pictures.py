@@ -79,15 +79,15 @@ def picture_process(monkeypatch):
     import clothsim.pictures as pictures
 
     started = []
-    real_init = pictures.PictureProcess.__init__
+    real_start = pictures.PictureProcess.start
 
-    def init(self, vertex_count):
-        real_init(self, vertex_count)
+    def start(self):
+        real_start(self)
         started.append((self, self._proc))
 
     monkeypatch.setattr(pictures, "PROCESS_FROM", 0)
     monkeypatch.setattr(pictures, "_cores", lambda: 2)
-    monkeypatch.setattr(pictures.PictureProcess, "__init__", init)
+    monkeypatch.setattr(pictures.PictureProcess, "start", start)
     return started
 
 
@@ -118,6 +118,7 @@ def test_pictures_drawn_by_the_second_process_are_those_of_its_trajectory(
 
 def test_a_failed_picture_process_leaves_the_pictures_to_the_run(tmp_path, monkeypatch,
                                                                 picture_process):
+    """A process that dies at once: the run draws the pictures itself, the same bytes."""
     import sys
 
     monkeypatch.setattr(sys, "executable", "/bin/false")   # the process dies at once
@@ -137,17 +138,23 @@ def test_the_picture_process_hands_its_error_over(tmp_path, monkeypatch):
     sim = hanging(9).build_simulation()
     x = sim.model.mesh.vertices
     with PictureProcess(10 ** 9) as worker:
+        assert not worker.running      # started by the runner once the first frame is done
+        worker.start()
         assert worker.running
         # one frame but no time for it: draw_run_pictures raises IndexError over there
         assert worker.request(tmp_path / "none", 0, x, sim.model.mesh, times=np.zeros(0),
                               effects=sim.effects, title="t")
         assert isinstance(worker.answer(), IndexError) and not worker.running
-    assert not PictureProcess(10).running            # a small cloth: no process
-    monkeypatch.setattr("clothsim.pictures._cores", lambda: 1)
-    assert not PictureProcess(10 ** 9).running       # one core: no process
+    for vertices, cores in ((10, 2), (10 ** 9, 1)):  # a small cloth, or one core: none
+        monkeypatch.setattr("clothsim.pictures._cores", lambda c=cores: c)
+        worker = PictureProcess(vertices)
+        worker.start()
+        assert not worker.running and not worker.request(tmp_path / "none", 0, x, None,
+                                                         times=[0.0], effects=(), title="")
 
 
 def test_an_interrupted_run_ends_its_picture_process(tmp_path, picture_process):
+    """Started after frame 1, ended (its input closed) when frame 2 is interrupted."""
     def progress(k, total):
         if k == 2:
             raise KeyboardInterrupt
@@ -157,3 +164,10 @@ def test_an_interrupted_run_ends_its_picture_process(tmp_path, picture_process):
     [(worker, proc)] = picture_process
     assert not worker.running and proc.returncode == 0   # its input closed: it ended
     assert not (tmp_path / "run" / "preview.gif").exists()
+
+
+def test_a_run_of_one_frame_draws_its_pictures_itself(tmp_path, picture_process):
+    """The process starts once the first frame is computed and more follow: a run with
+    one frame to compute would wait for its imports, so it draws the pictures itself."""
+    result = run_scene(hanging(9), tmp_path / "run", frames=1)
+    assert picture_process == [] and result.files[-1].name == "final.png"
