@@ -101,6 +101,19 @@ def shown_effects(effects, times) -> list[ShownEffect]:
             and not (e.kind == "pin" and getattr(e, "model", None) is None)]
 
 
+#: The process's program: the very clothsim package this one imported (whatever the other
+#: process's sys.path would find first), then :func:`serve`.
+_BOOT = (
+    "import importlib.util, os, sys\n"
+    "pkg = sys.argv[1]\n"
+    "spec = importlib.util.spec_from_file_location("
+    "'clothsim', os.path.join(pkg, '__init__.py'), submodule_search_locations=[pkg])\n"
+    "module = sys.modules['clothsim'] = importlib.util.module_from_spec(spec)\n"
+    "spec.loader.exec_module(module)\n"
+    "from clothsim.pictures import serve\n"
+    "serve()\n")
+
+
 def _cores() -> int:
     """CPUs this process may run on."""
     try:
@@ -143,14 +156,10 @@ class PictureProcess:
         """
         if not self.wanted or self._proc is not None:
             return
-        package = str(Path(__file__).resolve().parents[1])   # the clothsim imported here
-        env = dict(os.environ, PYTHONPATH=os.pathsep.join(
-            [package] + [p for p in [os.environ.get("PYTHONPATH")] if p]))
         try:
             self._proc = subprocess.Popen(
-                [sys.executable, "-c", "from clothsim.pictures import serve; serve()"],
-                stdin=subprocess.PIPE, stdout=subprocess.PIPE, env=env,
-                start_new_session=True)
+                [sys.executable, "-c", _BOOT, str(Path(__file__).resolve().parent)],
+                stdin=subprocess.PIPE, stdout=subprocess.PIPE, start_new_session=True)
         except OSError as exc:
             log.info("pictures drawn in this process (no second one: %s)", exc)
 
