@@ -33,15 +33,19 @@ def pictures_of_trajectory(scene, out, tmp):
     return {name: (tmp / name).read_bytes() for name in ("preview.gif", "final.png")}
 
 
+def assert_pictures_of_trajectory(scene, out, tmp):
+    """The run's pictures in ``out`` are byte for byte those of its trajectory."""
+    for name, data in pictures_of_trajectory(scene, out, tmp).items():
+        assert (out / name).read_bytes() == data, name
+
+
 @pytest.mark.parametrize("n", [9, 73])  # 73²: decimated (10 368 triangles)
 def test_run_pictures_are_those_of_its_trajectory(tmp_path, n):
     scene = hanging(n)
     out = tmp_path / "run"
     result = run_scene(scene, out, frames=3)
     assert [p.name for p in result.files[-2:]] == ["preview.gif", "final.png"]
-    want = pictures_of_trajectory(scene, out, tmp_path / "after")
-    for name, data in want.items():
-        assert (out / name).read_bytes() == data, name
+    assert_pictures_of_trajectory(scene, out, tmp_path / "after")
 
 
 def test_a_picture_error_is_raised_once_the_run_is_complete(tmp_path, monkeypatch):
@@ -111,9 +115,7 @@ def test_pictures_drawn_by_the_second_process_are_those_of_its_trajectory(
     run_scene(scene, out, frames=3)
     [(worker, proc)] = picture_process
     assert proc is not None and proc.returncode == 0 and not worker.running
-    want = pictures_of_trajectory(scene, out, tmp_path / "after")
-    for name, data in want.items():
-        assert (out / name).read_bytes() == data, name
+    assert_pictures_of_trajectory(scene, out, tmp_path / "after")
 
 
 def test_a_failed_picture_process_leaves_the_pictures_to_the_run(tmp_path, monkeypatch,
@@ -126,9 +128,7 @@ def test_a_failed_picture_process_leaves_the_pictures_to_the_run(tmp_path, monke
     out = tmp_path / "run"
     result = run_scene(scene, out, frames=2)
     assert [p.name for p in result.files[-2:]] == ["preview.gif", "final.png"]
-    want = pictures_of_trajectory(scene, out, tmp_path / "after")
-    for name, data in want.items():
-        assert (out / name).read_bytes() == data, name
+    assert_pictures_of_trajectory(scene, out, tmp_path / "after")
 
 
 def test_the_picture_process_hands_its_error_over(tmp_path, monkeypatch):
