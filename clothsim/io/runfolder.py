@@ -235,7 +235,8 @@ class RunFolder(OutputFolder):
     def write_frame(self, k: int, positions, velocities, record: dict | None = None, *,
                     wait: bool = True, state: dict | None = None) -> None:
         """Frame k: its ``.vtu`` file, the store, its record (none for frame 0) and run.json
-        with ``last_frame`` = k (trajectory.npz every few seconds, :meth:`save_npz`).
+        with ``last_frame`` = k (trajectory.npz with frame 0, then every few seconds:
+        :meth:`save_npz`).
 
         Parameters
         ----------
@@ -272,9 +273,8 @@ class RunFolder(OutputFolder):
         if record is not None:
             self.records.append(record)
         self.done = k
-        if k > 0:
-            self._save_npz()
-            self._mark("writing", info=info)
+        self._save_npz(force=k == 0)   # a first trajectory.npz at the start
+        self._mark("writing", info=info)
 
     def wait(self) -> None:
         """Wait for the frame being written in the background, if any.
@@ -340,7 +340,8 @@ class RunFolder(OutputFolder):
         super().mark(status, data, error=error)
 
     def end(self, status: str, error: str | None) -> None:
-        """trajectory.npz one last time (when any frame is done), then run.json.
+        """trajectory.npz one last time (when any frame is done and the last rebuild did
+        not hold them all), then run.json.
 
         Parameters
         ----------
@@ -361,7 +362,7 @@ class RunFolder(OutputFolder):
                 raise error_in_flight
             log.info("the frame being written when %s stopped failed too: %s", self.path,
                      error_in_flight)
-        if self.done >= 0:
+        if self.done >= 0 and self.npz_frames != self.done + 1:   # unless it holds them all
             self._save_npz(force=True)
         self._mark(status, error=error)
 
