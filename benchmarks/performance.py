@@ -43,6 +43,7 @@ import numpy as np
 from threadpoolctl import threadpool_limits
 
 import clothsim as cs
+from clothsim.errors import InputError
 from clothsim.factorization import spmv_add
 from clothsim.gallery import GRAVITY, grid_cloth, top_corners
 from clothsim.io.common import atomic_path
@@ -238,7 +239,7 @@ def run(sizes=SIZES, *, repeats: int = 15, setup_repeats: int = 3) -> dict:
     setup = np.array([r["setup_s"][0] for r in rows])
     exponent = float(np.polyfit(np.log(verts), np.log(setup), 1)[0]) if len(rows) > 1 else 0.0
     return {"rows": rows, "setup_exponent": exponent, "frame_s": spread(frame),
-            "commit": measured, "load": (load, os.getloadavg()[0]), "cores": os.cpu_count(),
+            "commit": measured, "load": (load, os.getloadavg()[0]), "cores": os.cpu_count() or 0,
             "repeats": repeats}
 
 
@@ -321,7 +322,10 @@ def main(argv: list[str] | None = None) -> None:
     if "--from-csv" in argv:                        # rewrite the table only, measure nothing
         rest = argv[argv.index("--from-csv") + 1:]
         source = rest[0] if rest and not rest[0].startswith("-") else CSV_PATH
-        print(f"written to {write_page(source)} from {source}")
+        try:
+            print(f"written to {write_page(source)} from {source}")
+        except InputError as error:
+            raise SystemExit(f"benchmarks.performance: {error}") from None
         return None
     sizes = SIZES[:-1] if "--quick" in argv else SIZES
     import sksparse.cholmod  # noqa: F401  (load CHOLMOD's OpenMP and BLAS: limited too)

@@ -198,3 +198,10 @@ def test_the_committed_table_is_the_committed_csvs():
 
     expected = "\n".join(performance_page.page(performance_page.read_csv())) + "\n"
     assert performance_page.PAGE.read_text(encoding="utf-8") == expected
+
+
+def test_from_csv_names_a_missing_file_in_one_line(tmp_path):
+    from benchmarks import performance
+
+    with pytest.raises(SystemExit, match=r"benchmarks.performance: .*nothing.csv: cannot read"):
+        performance.main(["--from-csv", str(tmp_path / "nothing.csv")])
