@@ -4,10 +4,11 @@ The seed resolves collisions after the solve, each vertex on its own
 (``"post-solve"``, :mod:`clothsim.effects.obstacles`). Over a box edge this tears the
 cloth: a vertex that enters through a side face is put on it while its neighbour stays on
 the top, the next solve knows nothing of the contact and pulls the pair into the box, and
-the projection separates them again (springs at 2.7× their rest length at 25², 16× at
-257²). In ``"hold"`` mode an obstacle instead tells the next step which vertices it
-pushes, and the step's solve keeps them on their contact planes while the rest of the
-cloth moves with them (:mod:`clothsim.contacts`, :mod:`clothsim.solvers.held`).
+the projection separates them again (springs at several times their rest length, more on
+finer cloths: the contact table of docs/effects.md, ``benchmarks contact``). In
+``"hold"`` mode an obstacle instead tells the next step which vertices it pushes, and the
+step's solve keeps them on their contact planes while the rest of the cloth moves with
+them (:mod:`clothsim.contacts`, :mod:`clothsim.solvers.held`).
 
 One step of an obstacle in ``"hold"`` mode:
 

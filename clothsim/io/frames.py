@@ -31,12 +31,12 @@ PVD_NAME = "trajectory.pvd"
 OBSTACLES_NAME = "obstacles.vtu"
 FRAME_COMPRESSIONS = ("auto", "zlib", "none")
 #: Vertices up to which "auto" compresses frames. meshio's zlib (level 6, one core) costs
-#: about 4 µs of CPU per vertex and frame and shrinks the file to about a third, while the
-#: raw write costs about a tenth of that (benchmarks/scale_ladder.py, its "frame write"
-#: table): compression never saves time, only disk. Up to 100 000 vertices (257² and
-#: smaller) it costs well under half a second a frame and small frames are worth keeping
-#: small; above, it costs a second or more a frame, as much as a step, for files that are
-#: large either way.
+#: microseconds of CPU per vertex and frame and shrinks the file to about a third, while
+#: the raw write costs several times less (docs/data/scale-ladder.md, the "frame write"
+#: table of benchmarks/scale_ladder.py): compression never saves time, only disk. Up to
+#: 100 000 vertices (257² and smaller) it costs well under half a second a frame and small
+#: frames are worth keeping small; above, it costs a second or more a frame, as much as a
+#: step, for files that are large either way.
 ZLIB_UP_TO = 100_000
 #: Size of a zlib frame over a raw one, at most: 0.48 measured at 129² and 257² with
 #: random velocities (nothing to compress there); a smooth cloth's frames shrink more

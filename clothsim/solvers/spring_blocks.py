@@ -20,8 +20,9 @@ from __future__ import annotations
 
 import numpy as np
 
-#: blocks of fewer springs are gathered by take: a block costs about 5 µs of calls and saves
-#: about 3.5 ns a spring (three coordinates), measured at 65² and 129²
+#: blocks of fewer springs are gathered by take: a block costs microseconds of calls and
+#: saves nanoseconds a spring (benchmarks.cpp_side_by_side times the slices against the
+#: takes on a whole step)
 MIN_BLOCK = 1024
 #: the slices are used only when the blocks hold all springs but at most this share
 MAX_REST = 1 / 8
