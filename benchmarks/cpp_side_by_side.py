@@ -180,19 +180,24 @@ def run(sizes=SIZES, *, repeats: int = REPEATS, source=None) -> dict:
                         case.measure(what)
             shares = {c.n: profile(c) for c in cases if c.timed}
             starts = {c.n: start_gradient(c) for c in cases if c.timed}
+            setups = {c.n: step_setup(c) + gathers(c) for c in cases if c.timed}
         finally:
             for case in cases:
                 case.driver.close()
     return {"rows": [c.row() for c in cases], "profile": shares, "start_gradient": starts,
+            "setup": setups,
             "repeats": repeats, "load": (load, os.getloadavg()[0]), "commit": measured,
             "compiler": compiler_version(), "eigen": eigen_version()}
 
 
 #: clothsim's solve by where its time goes: cProfile self time, functions grouped
 PARTS = (("CHOLMOD solve", ("solve_columns",)),
-         ("local step: spring vectors and projection", ("take", "directions.py", "einsum")),
+         ("local step: spring vectors and projection", ("take", "directions.py", "einsum",
+                                                        "spring_blocks.py")),
          ("right-hand side: h² J products", ("csr_matvec", "_right_hand_side")),
-         ("per step: start, gradient at x_0", ("gradient ", "fused.py __init__")),
+         ("per step: start, gradient at x_0", ("gradient ", "fused.py __init__", "_constant",
+                                               "_free_difference", "free_product",
+                                               "csc_matvecs")),
          ("other: update, norms, Python", ("",)))
 
 
@@ -214,11 +219,11 @@ def profile(case: Case, solves: int = 10) -> dict[str, float]:
 
 
 def start_gradient(case: Case, repeats: int = 15) -> tuple[float, float]:
-    """Thread CPU seconds of ∇g(x_0) as a step started at x_n gets it (the full gradient)
-    and of the one product A_FF δ_0 that gives it too (∇g(x_0)_F = A_FF δ_0 − rhs(x_0)),
-    interleaved, medians."""
+    """Thread CPU seconds of ∇g(x_0) from its definition (the full gradient) and of the
+    one product A_FF δ_0 that gives it too (∇g(x_0)_F = A_FF δ_0 − rhs(x_0)) as a step
+    started at x_n computes it (:meth:`~clothsim.solvers.system.SystemFactor.free_product`
+    on the vertex-major δ_0), interleaved, medians."""
     sysf = case.solver.system(case.problem)
-    A_FF = sysf.A_FF_factor.A.tocsr()
     x0 = case.problem.initial_guess()
     delta = np.ascontiguousarray(x0[sysf.free] - case.problem.y[sysf.free])
     d = case.solver._dirs.current().T
@@ -229,9 +234,43 @@ def start_gradient(case: Case, repeats: int = 15) -> tuple[float, float]:
             if what == "gradient":
                 case.solver.gradient(case.problem, x0, d)
             else:
-                A_FF @ delta
+                sysf.free_product(delta)
             times[what].append(time.thread_time() - c0)
     return float(np.median(times["gradient"])), float(np.median(times["product"]))
+
+
+def step_setup(case: Case, repeats: int = 15) -> tuple[float, float]:
+    """Thread CPU seconds of a step's setup (:class:`~clothsim.solvers.fused.FusedStep`:
+    y's spring vectors, c_F, the local step and right-hand side at x_0, A_FF δ_0) and of
+    the whole 10-iteration solve it starts, interleaved, medians."""
+    from clothsim.solvers.fused import FusedStep
+
+    times = {"setup": [], "solve": []}
+    for _ in range(repeats):
+        for what in times:
+            c0 = time.thread_time()
+            if what == "setup":
+                FusedStep(case.solver, case.problem)
+            else:
+                case.solver.solve(case.problem)
+            times[what].append(time.thread_time() - c0)
+    return float(np.median(times["setup"])), float(np.median(times["solve"]))
+
+
+def gathers(case: Case, repeats: int = 15) -> tuple[float, float]:
+    """Thread CPU seconds of all springs' vectors p(y) as the step gathers them (strided
+    slices over the regular blocks, :mod:`clothsim.solvers.spring_blocks`) and by two takes
+    per coordinate, interleaved, medians."""
+    gather = case.solver._dirs._gather
+    yT = np.ascontiguousarray(case.problem.y.T)
+    out = np.empty((3, len(gather.a)))
+    times = {"slices": [], "takes": []}
+    for _ in range(repeats):
+        for what in times:
+            c0 = time.thread_time()
+            (gather if what == "slices" else gather._takes)(yT, out)
+            times[what].append(time.thread_time() - c0)
+    return float(np.median(times["slices"])), float(np.median(times["takes"]))
 
 
 def _ms(q) -> str:
@@ -267,6 +306,14 @@ def table(result: dict) -> list[str]:
                               "∇g(x_0) as A_FF δ_0 − rhs(x_0) (FusedStep's), ms")):
         lines.append(f"| {what} | " + " | ".join(
             f"{1e3 * result['start_gradient'][n][i]:.2f}" for n in sizes) + " |")
+    setups = [result["setup"][n] for n in sizes]
+    lines.append("| a step's setup (y's spring vectors, c_F, local step and rhs at x_0, "
+                 "A_FF δ_0), ms (share of the step's solve) | "
+                 + " | ".join(f"{1e3 * t[0]:.2f} ({100 * t[0] / t[1]:.0f} %)" for t in setups)
+                 + " |")
+    lines.append("| all springs' vectors p(y): by strided slices (the step's) / by two takes "
+                 "a coordinate, ms | "
+                 + " | ".join(f"{1e3 * t[2]:.2f} / {1e3 * t[3]:.2f}" for t in setups) + " |")
     return lines
 
 

@@ -23,25 +23,36 @@ Every thread pool — BLAS, and the OpenMP runtime CHOLMOD loads — is limited 
 (threadpoolctl) for every measurement, so a CPU time is one thread's work (OpenMP workers
 left spinning by an earlier call otherwise add their CPU time to whatever is measured next;
 the solver itself limits BLAS, see docs/performance.md). Results go to
-docs/data/performance.csv and docs/img/performance.png; docs/performance.md explains them.
+docs/data/performance.csv (with the commit, the load average at the start and the end, and
+the 81 × 81 frame), the table docs/data/performance.md written from it
+(:mod:`benchmarks.performance_page`; docs/performance.md includes it and explains it) and
+docs/img/performance.png. ``python -m benchmarks.performance --from-csv [PATH]`` rewrites
+only the table from a CSV (default docs/data/performance.csv), measuring nothing.
 """
 
 from __future__ import annotations
 
 import csv
+import os
 import sys
 import time
 import warnings
+from pathlib import Path
 
 import numpy as np
 from threadpoolctl import threadpool_limits
 
 import clothsim as cs
+from clothsim.errors import InputError
 from clothsim.factorization import spmv_add
 from clothsim.gallery import GRAVITY, grid_cloth, top_corners
+from clothsim.io.common import atomic_path
 from clothsim.solvers import LocalGlobalSolver
 
-from . import DOCS_IMG, ROOT
+from . import DOCS_IMG
+from .performance_page import CSV_PATH, PAPER_FRAME_SECONDS_81, RUN_COLUMNS
+from .performance_page import write as write_page
+from .scale_ladder import commit
 
 SIZES = (33, 65, 129, 257)
 ITERATIONS = 10
@@ -49,8 +60,6 @@ ITERATIONS = 10
 #: while the automatic mode's switch to the faster solves is pending, at most MAX_STEPS)
 STEP_ON = 7
 MAX_STEPS = 300
-PAPER_FRAME_SECONDS_81 = 50e-3
-CSV_PATH = ROOT / "docs" / "data" / "performance.csv"
 
 
 def falling_sheet(n: int, *, iterations: int = ITERATIONS) -> cs.Simulation:
@@ -192,6 +201,7 @@ def spread(values) -> tuple[float, float, float]:
 
 def run(sizes=SIZES, *, repeats: int = 15, setup_repeats: int = 3) -> dict:
     """Measure everything, interleaved; returns the rows of the table and the frame."""
+    measured, load = commit(), os.getloadavg()[0]     # the code as it was when measured
     with warnings.catch_warnings():
         warnings.simplefilter("ignore")
         cases = [Case(n) for n in sizes]
@@ -228,18 +238,26 @@ def run(sizes=SIZES, *, repeats: int = 15, setup_repeats: int = 3) -> dict:
     verts = np.array([r["vertices"] for r in rows], float)
     setup = np.array([r["setup_s"][0] for r in rows])
     exponent = float(np.polyfit(np.log(verts), np.log(setup), 1)[0]) if len(rows) > 1 else 0.0
-    return {"rows": rows, "setup_exponent": exponent, "frame_s": spread(frame)}
+    return {"rows": rows, "setup_exponent": exponent, "frame_s": spread(frame),
+            "commit": measured, "load": (load, os.getloadavg()[0]), "cores": os.cpu_count() or 0,
+            "repeats": repeats}
 
 
-def write_csv(result: dict) -> None:
-    CSV_PATH.parent.mkdir(parents=True, exist_ok=True)
-    with open(CSV_PATH, "w", newline="") as fh:
+def write_csv(result: dict, path=CSV_PATH) -> None:
+    """The rows, and the run's commit, load, cores, repeats and 81 × 81 frame on each row
+    (atomically: a reader never sees half a CSV)."""
+    frame = [f"{1e3 * v:.3f}" for v in result["frame_s"]]
+    run_cells = [result["commit"], f"{result['load'][0]:.2f}", f"{result['load'][1]:.2f}",
+                 result["cores"], result["repeats"], *frame]
+    Path(path).parent.mkdir(parents=True, exist_ok=True)
+    with atomic_path(path) as tmp, open(tmp, "w", newline="") as fh:
         w = csv.writer(fh)
         w.writerow(["grid", "vertices", "springs", "factor_mode", "steps", "iteration_ms",
                     "iteration_q25_ms",
                     "iteration_q75_ms", "simplicial_ms", "supernodal_ms", "ratio",
                     "iteration_cpu_ms", "simplicial_cpu_ms", "supernodal_cpu_ms",
-                    "ratio_cpu", "numpy_parts_cpu_ms", "floor", "setup_s", "condition_s"])
+                    "ratio_cpu", "numpy_parts_cpu_ms", "floor", "setup_s", "condition_s",
+                    *RUN_COLUMNS])
         for r in result["rows"]:
             w.writerow([f"{r['n']}x{r['n']}", r["vertices"], r["springs"], r["mode"], r["steps"],
                         *(f"{1e3 * v:.4f}" for v in r["iteration_ms"]),
@@ -249,7 +267,7 @@ def write_csv(result: dict) -> None:
                         f"{1e3 * r['simplicial_cpu_ms'][0]:.4f}",
                         f"{1e3 * r['supernodal_cpu_ms'][0]:.4f}", f"{r['ratio_cpu']:.3f}",
                         f"{1e3 * r['parts_ms'][0]:.4f}", f"{r['floor']:.3f}",
-                        f"{r['setup_s'][0]:.4f}", f"{r['condition_s'][0]:.4f}"])
+                        f"{r['setup_s'][0]:.6f}", f"{r['condition_s'][0]:.6f}", *run_cells])
 
 
 def plot(result: dict) -> None:
@@ -301,6 +319,14 @@ def report(result: dict) -> None:
 
 def main(argv: list[str] | None = None) -> None:
     argv = sys.argv[1:] if argv is None else argv
+    if "--from-csv" in argv:                        # rewrite the table only, measure nothing
+        rest = argv[argv.index("--from-csv") + 1:]
+        source = rest[0] if rest and not rest[0].startswith("-") else CSV_PATH
+        try:
+            print(f"written to {write_page(source)} from {source}")
+        except InputError as error:
+            raise SystemExit(f"benchmarks.performance: {error}") from None
+        return None
     sizes = SIZES[:-1] if "--quick" in argv else SIZES
     import sksparse.cholmod  # noqa: F401  (load CHOLMOD's OpenMP and BLAS: limited too)
 
@@ -308,6 +334,7 @@ def main(argv: list[str] | None = None) -> None:
         result = run(sizes)
     report(result)
     write_csv(result)
+    write_page(CSV_PATH)
     plot(result)
     return result
 

@@ -3,21 +3,24 @@
 ``python -m benchmarks.scale_ladder [--sizes 129,257,513,1025] [--run-sizes 513]`` measures
 (``python -m benchmarks scale_ladder`` runs it with these defaults),
 each size in a fresh process (so the peak resident set is that size's alone), with BLAS
-and OpenMP on one thread:
+and OpenMP on one thread (as the solver runs them: CHOLMOD's factorization of 100 000 rows
+or more on two, :func:`clothsim.factorization.cholmod_threads`):
 
 - through the API (the ``hanging`` cloth at that resolution: two pinned corners, gravity):
   setup (model and simulation), the factorization (the mode clothsim chose, and why), the
   first step (factor + 10 iterations), the median of the next 3 steps, peak RSS, bytes per
   vertex;
 - through ``clothsim run`` (``--run-sizes``, 5 frames): wall and CPU time (user + system:
-  on a busy machine the wall time counts the other processes too), and the pictures'
-  share (``preview.gif`` + ``final.png``, from a second run with ``--no-preview``).
+  on a busy machine the wall time counts the other processes too; the picture process
+  of a large cloth, :mod:`clothsim.pictures`, is counted), and the pictures' share
+  (``preview.gif`` + ``final.png``, from a second run with ``--no-preview``).
 
 It prints a Markdown table with the commit and writes it to ``docs/data/scale-ladder.md``,
 which docs/performance.md includes.
 
 ``--mode-sizes 65,129,193,257,385,513`` measures instead CHOLMOD's two modes on the same
-matrices (M + h²L over the free vertices, each size in a fresh process, one thread): the
+matrices (M + h²L over the free vertices, each size in a fresh process, one thread, the
+large factorizations too: the cost model is of one thread's CPU seconds): the
 fastest of 3 factorizations and of 15 three-column solves (the modes interleaved), in CPU
 seconds (so that other processes on the machine count less), fits each as a power law
 t = c · n^p of the free vertices n, and writes the table, the fits and the mode that cost
@@ -89,7 +92,9 @@ import json, sys, time
 import numpy as np
 import clothsim as cs
 from clothsim import matrices
+from clothsim import factorization
 from clothsim.factorization import Factor, single_threaded
+factorization.CHOLMOD_THREADS = {"factor": 1, "solve": 1}   # the cost model: one thread
 n = int(sys.argv[1])
 sim = cs.load_scene("hanging", [f"cloth.resolution=[{n}, {n}]"]).build_simulation()
 problem = sim.problem()
@@ -223,7 +228,8 @@ def main(argv: list[str] | None = None) -> None:
         return
     lines = [f"Measured by `python -m benchmarks.scale_ladder --sizes {args.sizes} --run-sizes "
              f"{args.run_sizes}` at commit {commit()} "
-             f"(one BLAS/OpenMP thread; load average {Path('/proc/loadavg').read_text().split()[0]}"
+             f"(one BLAS/OpenMP thread, CHOLMOD's factorization from 100 000 rows on two; "
+             f"load average {Path('/proc/loadavg').read_text().split()[0]}"
              f" at the start).", "",
              "| grid | vertices | setup | factor | first step | next step | peak RSS | "
              "bytes per vertex | factorization |", "|---|---|---|---|---|---|---|---|---|"]

@@ -94,6 +94,8 @@ def contact_basis(vertices: np.ndarray, normals: np.ndarray) -> list[tuple[np.nd
             n[hit] -= np.einsum("ij,ij->i", n[hit], e)[:, None] * e
         length = np.linalg.norm(n, axis=1)
         keep = length > 1e-6
+        if not np.any(keep):     # every normal parallel to an earlier one: no new layer
+            continue
         order = np.argsort(verts[keep])
         layers.append((verts[keep][order], (n[keep] / length[keep, None])[order]))
     return layers

@@ -46,7 +46,7 @@ from .factorization import CHOLMOD_MODES
 #: tests/test_cholmod_mode.py checks they agree). scikit-sparse 0.4.16's symbolic analysis
 #: (``cholmod.analyze``) exposes only the fill-reducing permutation, not CHOLMOD's nonzero
 #: and flop counts of the factor, so the model predicts from n. The supernodal factor is
-#: ordered by AMD alone: on the cloth grids it factors about 1.5× faster than CHOLMOD's
+#: ordered by AMD alone: on the cloth grids it factored faster than CHOLMOD's
 #: default (which also tries METIS) at 513² and 1025², and its solves are as fast.
 MODE_COSTS = {"simplicial": ((1.296e-08, 1.676), (1.675e-08, 1.269)),
               "supernodal": ((8.604e-07, 1.194), (3.626e-08, 1.218))}

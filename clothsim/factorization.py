@@ -20,15 +20,17 @@ Which CHOLMOD mode is faster depends on the size and on how many solves the fact
 :mod:`clothsim.factor_mode` decides it for :class:`~clothsim.solvers.LocalGlobalSolver`
 (``[solver] cholmod_mode`` overrides it).
 
-Two helpers of the iterations that run around a factor: :func:`spmv_add` (a sparse product
-accumulated in place, no temporary) and :func:`single_threaded` (BLAS and OpenMP limited to
-one thread with threadpoolctl; see docs/performance.md).
+Helpers of the iterations that run around a factor: :func:`spmv_add` (a sparse product
+accumulated in place, no temporary), :func:`single_threaded` (BLAS and OpenMP limited to
+one thread with threadpoolctl; see docs/performance.md) and :func:`cholmod_threads` (a large
+factorization on two threads within that limit).
 """
 
 from __future__ import annotations
 
 import contextlib
 import logging
+import os
 import warnings
 from functools import cached_property
 
@@ -168,12 +170,14 @@ class Factor:
                     and np.array_equal(reuse.A.indptr, self.A.indptr)
                     and np.array_equal(reuse.A.indices, self.A.indices))
             try:
-                if same:   # the earlier symbolic analysis, a new numeric factorization
-                    self._factor, self.analyzed = reuse._factor.cholesky(self.A), False
-                elif cholmod_mode == "supernodal":   # AMD: measured 1.5x faster to factor
-                    self._factor = cholesky(self.A, mode=cholmod_mode, ordering_method="amd")
-                else:
-                    self._factor = cholesky(self.A, mode=cholmod_mode)
+                with cholmod_threads(self.shape[0]):
+                    if same:   # the earlier symbolic analysis, a new numeric factorization
+                        self._factor, self.analyzed = reuse._factor.cholesky(self.A), False
+                    elif cholmod_mode == "supernodal":   # AMD: faster to factor (factor_mode.py)
+                        self._factor = cholesky(self.A, mode=cholmod_mode,
+                                                ordering_method="amd")
+                    else:
+                        self._factor = cholesky(self.A, mode=cholmod_mode)
             except CholmodNotPositiveDefiniteError as exc:
                 raise FactorizationError(f"system matrix is not positive definite: {exc}") from exc
             # For small or very sparse matrices CHOLMOD picks a simplicial LDLᵀ, which does not
@@ -232,7 +236,8 @@ class Factor:
         """
         if self.shape[0] == 0:
             return np.zeros_like(b, dtype=np.float64)
-        return self._solve(np.ascontiguousarray(b, dtype=np.float64))
+        with cholmod_threads(self.shape[0] if self.backend == "cholmod" else 0, "solve"):
+            return self._solve(np.ascontiguousarray(b, dtype=np.float64))
 
     __call__ = solve
 
@@ -255,7 +260,8 @@ class Factor:
         if self.shape[0] == 0:
             return np.zeros_like(bT, dtype=np.float64)
         if self.backend == "cholmod":
-            return self._factor(bT.T).T
+            with cholmod_threads(self.shape[0], "solve"):
+                return self._factor(bT.T).T
         return np.ascontiguousarray(self._solve(np.ascontiguousarray(bT.T)).T)
 
     @cached_property
@@ -291,6 +297,66 @@ def spmv_add(A: sp.csr_matrix, v: np.ndarray, out: np.ndarray) -> None:
 
 _controller = None
 
+#: Threads of CHOLMOD's BLAS and OpenMP in the factorizations (``"factor"``) and solves
+#: (``"solve"``) of matrices of :data:`THREADED_FROM` rows or more, at most the cores this
+#: process may use. A large supernodal factorization is dense blocks, and CHOLMOD holds the
+#: GIL while it works: the run's other threads wait, and a second core would stay idle.
+#: The three-column solves are memory-bound and gained nothing from a second thread
+#: (docs/performance.md, "Large cloths"). The iteration's vector operations stay on one
+#: thread (:func:`single_threaded`).
+CHOLMOD_THREADS = {"factor": 2, "solve": 1}
+#: Rows from which CHOLMOD runs on :data:`CHOLMOD_THREADS` threads (a 317² cloth).
+THREADED_FROM = 100_000
+
+
+def _cores() -> int:
+    try:
+        return len(os.sched_getaffinity(0))
+    except AttributeError:  # pragma: no cover - not on Linux
+        return os.cpu_count() or 1
+
+
+def cholmod_threads(rows: int, work: str = "factor"):
+    """A context running CHOLMOD's BLAS and OpenMP on ``CHOLMOD_THREADS[work]`` threads (at
+    most the cores available) for a matrix of ``rows`` >= :data:`THREADED_FROM` rows; for a
+    smaller one, or one thread, it changes nothing (the caller's limit, e.g.
+    :func:`single_threaded`, holds).
+
+    The thread count is fixed by the machine, never by its load, so a run and its resumed
+    continuation factor alike, bit for bit; one and two threads agree to rounding.
+
+    Parameters
+    ----------
+    rows : int
+        Rows of the matrix factored or solved.
+    work : {"factor", "solve"}
+        What CHOLMOD is about to do.
+
+    Returns
+    -------
+    contextlib.AbstractContextManager
+    """
+    threads = min(CHOLMOD_THREADS[work], _cores()) if rows >= THREADED_FROM else 1
+    controller = _pools() if threads > 1 else False
+    if controller is False:
+        return contextlib.nullcontext()
+    return controller.limit(limits=threads, user_api=None)
+
+
+def _pools():
+    """The thread pools (threadpoolctl), looked up once CHOLMOD's libraries are loaded;
+    False without threadpoolctl."""
+    global _controller
+    if _controller is None:
+        try:
+            from threadpoolctl import ThreadpoolController
+        except ImportError:  # pragma: no cover
+            _controller = False
+        else:
+            cholmod_available()       # load CHOLMOD's libraries first: their pools count
+            _controller = ThreadpoolController()
+    return _controller
+
 
 def single_threaded():
     """A context limiting BLAS and OpenMP to one thread (threadpoolctl), or a no-op without it.
@@ -310,15 +376,7 @@ def single_threaded():
     contextlib.AbstractContextManager
         ``with single_threaded(): ...`` runs its body with one BLAS and one OpenMP thread.
     """
-    global _controller
-    if _controller is None:
-        try:
-            from threadpoolctl import ThreadpoolController
-        except ImportError:  # pragma: no cover
-            _controller = False
-        else:
-            cholmod_available()       # load CHOLMOD's libraries first: their pools count
-            _controller = ThreadpoolController()
-    if _controller is False:  # pragma: no cover
+    controller = _pools()
+    if controller is False:  # pragma: no cover
         return contextlib.nullcontext()
-    return _controller.limit(limits=1, user_api=None)
+    return controller.limit(limits=1, user_api=None)

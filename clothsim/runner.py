@@ -16,8 +16,12 @@ file                 content
                      assembled from a store streamed to disk, never held in memory
 ``preview.gif``      small animation (at most ~60 frames), ``final.png`` last frame,
                      both drawing the obstacles and pins; drawn while the last frame
-                     is written, written once the run is complete
+                     is written (a large cloth's by a second process,
+                     :mod:`clothsim.pictures`), written once the run is complete
 ``obstacles.vtu``    the scene's obstacles as triangles (only when it has some)
+``state/``           ``frame_%06d.npz``: what the effects carry into the next step
+                     (held contacts), written before the frame's ``.vtu`` and
+                     restored by ``resume`` (:mod:`clothsim.io.effectstate`)
 ``run.json``         resolved scene and its hash, effects built, solver, backend and
                      solver state, package versions, per-frame records, and status
                      (``running``, ``completed``, ``interrupted``, ``failed``) with
@@ -25,8 +29,8 @@ file                 content
 ===================  ==============================================================
 
 Frame k holds the state at t_k = k / fps. The runner sets each frame's start time to
-exactly (k − 1) / fps, so a run resumed from frame k (``resume=True``) repeats, bit for
-bit, what an uninterrupted run computes.
+exactly (k − 1) / fps and restores the effects' state saved with frame k, so a run resumed
+from frame k (``resume=True``) repeats, bit for bit, what an uninterrupted run computes.
 """
 
 from __future__ import annotations
@@ -43,11 +47,14 @@ from pathlib import Path
 import numpy as np
 
 from .display import pinned_mask, write_obstacles
+from .effects.base import effect_states
 from .errors import InputError, NonFiniteStateError
 from .interrupts import SignalInterrupt, handle_signals, signals_deferred
+from .io.effectstate import restore_state, state_path
 from .io.frames import OBSTACLES_NAME, PVD_NAME
 from .io.runfiles import package_versions, write_json, write_trajectory
 from .io.runfolder import RESULT_FILES, STALE_FILES, RunFolder, completed_frames
+from .pictures import PictureProcess
 from .plotting import draw_run_pictures, write_run_pictures
 from .scene import Scene, load_scene
 from .scene.inputs import input_hashes
@@ -129,7 +136,8 @@ def run_scene(scene, out_dir, *, frames: int | None = None,
         frame is written on a background thread during the next frame's steps).
     resume : bool
         Continue from the last complete frame in ``out_dir`` (positions and velocities read
-        back from its .vtu file, time = index / fps, the solver's saved state restored).
+        back from its .vtu file, time = index / fps, the solver's saved state and the
+        effects' state of that frame restored: :mod:`clothsim.io.effectstate`).
         Refuses a folder holding another scene's run; starts afresh when there is nothing.
         With fewer ``frames`` than on disk, the index and trajectory are cut to ``frames``
         (frame files are kept).
@@ -165,12 +173,15 @@ def run_scene(scene, out_dir, *, frames: int | None = None,
     frames = scene.frames if frames is None else int(frames)
     model = scene.build_model()
     sim = scene.build_simulation(model)
-    with RunFolder(out_dir, force=force, guard=signals_deferred) as folder:
-        return _run_in(folder, scene, model, sim, frames, progress, resume, preview)
+    # a large cloth's pictures are drawn by a second process (clothsim.pictures)
+    with PictureProcess(model.vertex_count if preview else 0) as pictures, \
+            RunFolder(out_dir, force=force, guard=signals_deferred) as folder:
+        return _run_in(folder, scene, model, sim, frames, progress, resume,
+                       pictures if preview else None)
 
 
 def _run_in(folder: RunFolder, scene, model, sim, frames: int, progress, resume: bool,
-            preview: bool) -> RunResult:
+            pictures: PictureProcess | None) -> RunResult:
     """The run, once ``folder`` is claimed and locked: frames computed here, written there."""
     fps, substeps, n = scene.fps, scene.substeps, model.vertex_count
     shash = scene_hash(scene, model)
@@ -197,7 +208,10 @@ def _run_in(folder: RunFolder, scene, model, sim, frames: int, progress, resume:
         "started": datetime.now(UTC).isoformat(timespec="seconds"),
         "resumed_from": start if resuming else None,
     }
+    if resuming:   # before anything is written: an unreadable state file changes nothing
+        info["effect_state_restored"] = restore_state(folder, start, sim.effects)
     get_state = getattr(sim.solver, "get_state", lambda: {})
+    folder.state_bytes = sum(e.state_bytes(n) for e in sim.effects)   # planned per frame
     read_back = folder.begin(info, model, fps, frames=frames,
                              pinned=lambda t: pinned_mask(sim.effects, n, t),
                              compression=scene.data["output"]["frame_compression"],
@@ -210,10 +224,10 @@ def _run_in(folder: RunFolder, scene, model, sim, frames: int, progress, resume:
         log.info("resuming %s from frame %d", scene.name, start)
     else:
         x, v = sim.state.positions, sim.state.velocities
-        folder.write_frame(0, x, v)
+    # before frame 0, which lists it in trajectory.pvd (the scene shown whole)
     obstacles = write_obstacles(folder.path / OBSTACLES_NAME, sim.effects, model.mesh.vertices)
     if obstacles is not None:
-        folder.add_static(OBSTACLES_NAME)  # trajectory.pvd shows the whole scene
+        folder.add_static(OBSTACLES_NAME)
     # the factorization mode weighs the run's solves: the first run's count, kept by a
     # resumed run so that it factors in the same mode (and repeats it bit for bit)
     sim.expect_steps(frames * substeps)
@@ -221,14 +235,19 @@ def _run_in(folder: RunFolder, scene, model, sim, frames: int, progress, resume:
         sim.solver.expected_solves = previous["expected_solves"]
     info["expected_solves"] = getattr(sim.solver, "expected_solves", None)
     info["solver_state"] = get_state()
-    folder.save_npz(force=True)
-    folder.mark("writing")
+    if resuming:
+        folder.save_npz(force=True)
+        folder.mark("writing")
+    else:   # frame 0, trajectory.npz and run.json: written while frame 1 is computed
+        folder.write_frame(0, x, v, wait=False, state=effect_states(sim.effects))
     first = start + 1 if resuming else 1
     for k in range(first, frames + 1):
         # canonical start time of the frame: identical in fresh and resumed runs
         sim.state = State(x.copy(), v.copy(), (k - 1) / fps, (k - 1) * substeps)
         steps = _advance(sim, substeps, k)   # meanwhile frame k - 1 is written (background)
         x, v = sim.state.positions, sim.state.velocities
+        if pictures is not None and k == first and k < frames:
+            pictures.start()   # it imports beside the next frames' solves (clothsim.pictures)
         record = _frame_record(k, fps, steps, sim.solver.tolerance)
         folder.wait()
         if progress is not None and k > first:
@@ -237,23 +256,32 @@ def _run_in(folder: RunFolder, scene, model, sim, frames: int, progress, resume:
             info["backend"] = info["solver"]["backend"] = getattr(sim.solver, "backend", None)
             info["factorization"] = getattr(sim.solver, "factorization", None)
             info["solver_state"] = get_state()
-            folder.write_frame(k, x, v, record, wait=False)
-    # the pictures are drawn while the last frame is written, and written once the run is
-    # complete; an error drawing them is raised then (the run is complete all the same)
-    pictures = _draw_previews(folder, scene, sim, fps, frames, x if frames >= first else None
-                              ) if preview else None
+            folder.write_frame(k, x, v, record, wait=False, state=effect_states(sim.effects))
+    # the pictures are drawn while the last frame is written (by the second process, or
+    # here), and written once the run is complete; an error drawing them is raised then
+    # (the run is complete all the same)
+    last = x if frames >= first else None
+    drawing = pictures is not None and _request_previews(pictures, folder, scene, sim, fps,
+                                                         frames, last)
+    drawn = _draw_previews(folder, scene, sim, fps, frames, last) if (
+        pictures is not None and not drawing) else None
     folder.wait()
     if progress is not None and frames >= first:
         progress(frames, frames)
     with signals_deferred():
         folder.end("complete", None)
+    if drawing:
+        drawn = pictures.answer()
+        if drawn is None:   # the process failed: drawn here, every frame now in the store
+            drawn = _draw_previews(folder, scene, sim, fps, frames, None)
     files = folder.frame_files()
     files += [folder.path / PVD_NAME, folder.path / "trajectory.npz", folder.path / "run.json"]
     files += [obstacles] if obstacles is not None else []
-    if isinstance(pictures, Exception):
-        raise pictures
-    if pictures is not None:
-        files += write_run_pictures(folder.path, pictures)
+    files += [p for j in range(folder.done + 1) if (p := state_path(folder.path, j)).exists()]
+    if isinstance(drawn, Exception):
+        raise drawn
+    if drawn is not None:
+        files += write_run_pictures(folder.path, drawn)
     return RunResult(folder.path, "completed", folder.done, folder.records, files)
 
 
@@ -299,9 +327,23 @@ def _draw_previews(folder: RunFolder, scene, sim, fps: float, frames: int, last)
     times = np.arange(frames + 1) / fps
     try:
         return draw_run_pictures(positions, sim.model.mesh, times=times, effects=sim.effects,
-                                 title=f"{scene.name}, t = {times[-1]:.2f} s")
+                                 title=_title(scene, times))
     except Exception as exc:  # noqa: BLE001 - raised once the run is marked complete
         return exc
+
+
+def _request_previews(pictures: PictureProcess, folder: RunFolder, scene, sim, fps: float,
+                      frames: int, last) -> bool:
+    """Hand :func:`_draw_previews`' frames to the picture process; False: draw them here."""
+    times = np.arange(frames + 1) / fps
+    return pictures.request(folder.store.paths["positions"], frames + 1 if last is None
+                            else frames, last, sim.model.mesh, times=times,
+                            effects=sim.effects, title=_title(scene, times))
+
+
+def _title(scene, times) -> str:
+    """final.png's title."""
+    return f"{scene.name}, t = {times[-1]:.2f} s"
 
 
 __all__ = ["run_scene", "RunResult", "completed_frames", "package_versions", "scene_hash",

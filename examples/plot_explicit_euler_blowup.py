@@ -7,8 +7,8 @@ M⁻¹ L (:func:`clothsim.solvers.stable_time_step`). Implicit Euler, as minimiz
 local/global, has no such limit. We run the same cloth with symplectic Euler just below
 and just above the limit, and with local/global at the paper's h = 1/30 s, far above it.
 (ω_max comes from L, whose springs are as stiff across as along; a real spring is softer
-across, so the true limit is a little above 2 / ω_max: at 1.1 h_max this cloth still
-survives half a second; at 1.3 h_max it does not.)
+across, so the true limit can lie a little above 2 / ω_max: the run above the limit
+therefore takes 1.3 h_max, and the lesson checks that it blows up within half a second.)
 """
 
 import warnings

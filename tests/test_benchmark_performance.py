@@ -116,3 +116,92 @@ def test_large_vs_table_takes_medians_and_ratios():
     assert lines[3] == "| 1025² first step | 40.0 s | 25.0 s | 0.62 | 20.0 s | 12.5 s | 0.62 |"
     assert lines[4] == ("| 513² clothsim run, 5 frames | 20.0 s | 15.0 s | 0.75 | 18.0 s | "
                         "17.0 s | 0.94 |")
+
+
+def _result(sizes=(129, 257), ratios=(2.5, 2.0)):
+    """A made-up measurement in the shape of performance.run's result."""
+    rows = []
+    for n, ratio in zip(sizes, ratios):
+        t = (1e-3 * n / 100, 0.9e-3 * n / 100, 1.3e-3 * n / 100)
+        rows.append({"n": n, "vertices": n * n, "springs": 5 * n * n, "mode": "simplicial",
+                     "steps": 10, "iteration_ms": t, "simplicial_ms": (t[0] / ratio,) * 3,
+                     "supernodal_ms": (2 * t[0],) * 3, "ratio": ratio,
+                     "iteration_cpu_ms": t, "simplicial_cpu_ms": (t[0] / ratio,) * 3,
+                     "supernodal_cpu_ms": (2 * t[0],) * 3, "ratio_cpu": ratio,
+                     "setup_s": (1e-6 * n * n,) * 3, "condition_s": (1e-7 * n * n,) * 3,
+                     "parts_ms": (t[0] / 2,) * 3, "floor": 1.5})
+    return {"rows": rows, "setup_exponent": 1.0, "frame_s": (0.012, 0.011, 0.013),
+            "commit": "abc1234", "load": (0.41, 0.52), "cores": 2, "repeats": 15}
+
+
+def test_the_table_is_written_from_the_csv(tmp_path):
+    """benchmarks.performance writes its CSV, then the page's table from that CSV alone:
+    every figure, the guards' verdicts, the commit, load and the 81 × 81 frame."""
+    from benchmarks import performance, performance_page
+
+    csv_path, page_path = tmp_path / "p.csv", tmp_path / "p.md"
+    performance.write_csv(_result(), csv_path)
+    performance_page.write(csv_path, page_path)
+    text = page_path.read_text()
+    assert "at commit abc1234, 15 interleaved repeats, 2 cores, load average 0.41" in text
+    assert "0.52 at the end" in text
+    rows = [line for line in text.splitlines() if line.startswith("| 129² |")]
+    assert rows == ["| 129² | 83,205 | simplicial (10) | 1.29 ms (1.16–1.68) [1.29] | 0.516 ms"
+                    " | 2.58 ms | **2.50** [2.50] | 1.50 | 16.6 ms | 1.66 ms |"]
+    assert "≤ 2.8 at 129²: holds (2.50); ≤ 1.9 at 257²: missed (2.00)" in text
+    assert "≤ 1.8 at 129²: missed (2.50)" in text
+    assert "(vertices)^1.00" in text                 # setup ∝ n² = vertices here
+    assert "CPU time: 12.0 ms (11.0–13.0 ms), against the paper's 50.0 ms" in text
+    assert "target ≤ 30.0 ms: met" in text
+
+def test_from_csv_measures_nothing(monkeypatch):
+    """``--from-csv [PATH]`` only rewrites the table, from PATH or the default CSV."""
+    from benchmarks import performance
+
+    sources = []
+    monkeypatch.setattr(performance, "write_page", lambda src: sources.append(src) or src)
+    monkeypatch.setattr(performance, "run", lambda *a, **k: pytest.fail("measured"))
+    performance.main(["--from-csv", "elsewhere.csv"])
+    performance.main(["--from-csv"])
+    assert sources == ["elsewhere.csv", performance.CSV_PATH]
+
+
+def test_the_table_from_an_older_csv_says_what_it_lacks(tmp_path):
+    """A CSV without the run's columns (the committed one before this change) still gives
+    the table; the commit, load and frame are named as not recorded, never invented. A size
+    left out (--quick) reads "not measured"; a broken CSV is one InputError naming the field."""
+    from benchmarks import performance, performance_page
+    from clothsim.errors import InputError
+
+    csv_path = tmp_path / "p.csv"
+    performance.write_csv(_result(sizes=(33, 129), ratios=(5.0, 1.7)), csv_path)
+    lines = csv_path.read_text().splitlines()
+    keep = len(performance_page.RUN_COLUMNS)
+    csv_path.write_text("\n".join(",".join(line.split(",")[:-keep]) for line in lines) + "\n")
+    text = "\n".join(performance_page.page(performance_page.read_csv(csv_path)))
+    assert "at a commit and load this CSV does not record" in text
+    assert "≤ 1.9 at 257²: not measured" in text and "≤ 1.8 at 129²: holds (1.70)" in text
+    assert "this CSV predates recording it" in text and "abc1234" not in text
+    csv_path.write_text(csv_path.read_text().replace(",1.700,", ",fast,", 1))
+    with pytest.raises(InputError, match=r"line 3: ratio is 'fast'") as err:
+        performance_page.read_csv(csv_path)
+    assert err.value.field == "ratio"
+    (tmp_path / "q.csv").write_text("grid,vertices\n9x9,81\n")
+    with pytest.raises(InputError, match="no column 'springs'"):
+        performance_page.read_csv(tmp_path / "q.csv")
+
+
+def test_the_committed_table_is_the_committed_csvs():
+    """docs/data/performance.md is what --from-csv writes from docs/data/performance.csv:
+    a hand edit of either, or a new CSV without its table, fails here."""
+    from benchmarks import performance_page
+
+    expected = "\n".join(performance_page.page(performance_page.read_csv())) + "\n"
+    assert performance_page.PAGE.read_text(encoding="utf-8") == expected
+
+
+def test_from_csv_names_a_missing_file_in_one_line(tmp_path):
+    from benchmarks import performance
+
+    with pytest.raises(SystemExit, match=r"benchmarks.performance: .*nothing.csv: cannot read"):
+        performance.main(["--from-csv", str(tmp_path / "nothing.csv")])

@@ -7,7 +7,8 @@ import pytest
 import scipy.sparse as sp
 from threadpoolctl import threadpool_info
 
-from clothsim.factorization import cholmod_available, single_threaded, spmv_add
+from clothsim import factorization, matrices
+from clothsim.factorization import Factor, cholmod_available, single_threaded, spmv_add
 from clothsim.gallery import GRAVITY, grid_cloth
 from clothsim.problem import StepProblem
 from clothsim.solvers import LocalGlobalSolver
@@ -93,3 +94,44 @@ def test_a_known_eigenvalue_floor_bounds_the_condition_and_skips_the_estimate(ba
             exact > CONDITION_WARNING_THRESHOLD)
     plain = Factor(A, backend=backend)            # without a floor: always estimated
     assert plain.condition_bound is None and "condition_estimate" in plain.__dict__
+
+
+needs_cholmod = pytest.mark.skipif(not cholmod_available(), reason="CHOLMOD not installed")
+
+
+@needs_cholmod
+@pytest.mark.parametrize("cores, threshold, factor, solve", [
+    (2, 0, {2}, {1}), (8, 0, {2}, {1}), (1, 0, {1}, {1}), (2, 10 ** 9, {1}, {1})])
+@pytest.mark.parametrize("threads", [{"factor": 2, "solve": 1}, {"factor": 2, "solve": 2}])
+def test_cholmod_runs_on_more_threads_for_large_matrices_only(monkeypatch, cores, threshold,
+                                                             factor, solve, threads):
+    """Inside the step's one-thread limit, CHOLMOD's factorization (and its solves when
+    asked) run on CHOLMOD_THREADS threads from THREADED_FROM rows (at most the cores there
+    are), and the limit is one thread again around them; the answers agree to rounding."""
+    import sksparse.cholmod
+
+    monkeypatch.setattr(factorization, "THREADED_FROM", threshold)
+    monkeypatch.setattr(factorization, "CHOLMOD_THREADS", threads)
+    monkeypatch.setattr(factorization, "_cores", lambda: cores)
+    if threads["solve"] == 2:
+        solve = factor
+    seen = []
+    real = sksparse.cholmod.cholesky
+
+    def watched(*args, **kw):
+        seen.append(set(pools().values()))
+        return real(*args, **kw)
+
+    monkeypatch.setattr(sksparse.cholmod, "cholesky", watched)
+    A = matrices.system_matrix(grid_cloth(40, k=100.0), 1 / 30).tocsc()   # a cloth's M + h² L
+    b = np.random.default_rng(1).normal(size=(3, A.shape[0]))
+    for mode in ("supernodal", "simplicial"):
+        with single_threaded():
+            f = Factor(A, backend="cholmod", cholmod_mode=mode, check_conditioning=False)
+            f._factor = lambda rhs, inner=f._factor: (seen.append(set(pools().values())),
+                                                      inner(rhs))[1]
+            x = f.solve_columns(b)
+            after = set(pools().values())
+        assert seen[-2:] == [factor, solve] and after == {1}
+        ref = np.linalg.solve(A.toarray(), b.T).T
+        np.testing.assert_allclose(x, ref, rtol=1e-10, atol=1e-12 * np.abs(ref).max())

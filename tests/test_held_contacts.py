@@ -330,3 +330,16 @@ def test_the_contact_scenes_declare_their_damping_and_the_seed_runs_without_it(n
         runs.append(sim.state.velocities)
     np.testing.assert_array_equal(runs[0], runs[1])
     assert np.abs(runs[2] - runs[1]).max() > 1e-6          # the declared damping acts
+
+
+def test_a_layer_of_normals_all_parallel_to_earlier_ones_is_dropped_not_indexed():
+    """A vertex held twice along the same normal (two parallel planes), then along another:
+    the second layer keeps nothing, and the third must still be orthogonalized (it raised
+    IndexError on an empty layer: drape-sphere under 1e60 m/s² gravity at frame 5)."""
+    from clothsim.contacts import contact_basis
+
+    ey, ex = np.array([0.0, 1.0, 0.0]), np.array([1.0, 0.0, 0.0])
+    layers = contact_basis(np.array([4, 4, 4, 7]), np.array([ey, ey, ex + ey, ex]))
+    assert [v.tolist() for v, _ in layers] == [[4, 7], [4]]
+    np.testing.assert_allclose(layers[0][1], [ey, ex])
+    np.testing.assert_allclose(layers[1][1], [ex])

@@ -31,7 +31,7 @@ STAGES = [
     {"io"},
     {"datasets"},
     {"scene"},
-    {"display", "camera", "painter", "plotting"},
+    {"display", "camera", "painter", "plotting", "pictures"},
     {"runner", "runfolder", "interrupts"},
     {"accuracy", "ports"},
     {"cli", "__main__", "__init__"},

@@ -108,3 +108,14 @@ def test_export_into_a_file_path_is_one_line(tiny, tmp_path, capsys):
     assert main(["export", tiny, "--out", str(f / "sub")]) in (1, 2)
     err = capsys.readouterr().err.strip().splitlines()
     assert len(err) == 1 and str(f) in err[0] and "Error" not in err[0]
+
+
+def test_a_folder_that_cannot_take_the_lock_says_nothing_was_written(tiny, tmp_path, capsys):
+    """An --out under a file (and, for a user who is not root, a read-only folder) fails
+    before anything is written: the line must not promise frames or a --resume."""
+    (tmp_path / "a-file").write_text("")
+    out = tmp_path / "a-file" / "out"
+    assert main(["run", tiny, "--out", str(out), "--no-preview"]) == 1
+    line = capsys.readouterr().err.strip()
+    assert len(line.splitlines()) == 1 and str(out) in line, line
+    assert line.endswith("nothing was written") and "--resume" not in line, line

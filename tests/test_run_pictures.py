@@ -33,15 +33,19 @@ def pictures_of_trajectory(scene, out, tmp):
     return {name: (tmp / name).read_bytes() for name in ("preview.gif", "final.png")}
 
 
+def assert_pictures_of_trajectory(scene, out, tmp):
+    """The run's pictures in ``out`` are byte for byte those of its trajectory."""
+    for name, data in pictures_of_trajectory(scene, out, tmp).items():
+        assert (out / name).read_bytes() == data, name
+
+
 @pytest.mark.parametrize("n", [9, 73])  # 73²: decimated (10 368 triangles)
 def test_run_pictures_are_those_of_its_trajectory(tmp_path, n):
     scene = hanging(n)
     out = tmp_path / "run"
     result = run_scene(scene, out, frames=3)
     assert [p.name for p in result.files[-2:]] == ["preview.gif", "final.png"]
-    want = pictures_of_trajectory(scene, out, tmp_path / "after")
-    for name, data in want.items():
-        assert (out / name).read_bytes() == data, name
+    assert_pictures_of_trajectory(scene, out, tmp_path / "after")
 
 
 def test_a_picture_error_is_raised_once_the_run_is_complete(tmp_path, monkeypatch):
@@ -70,3 +74,100 @@ def test_a_resumed_complete_run_draws_its_pictures_from_its_files(tmp_path):
     assert result.last_frame == 3
     for name in ("preview.gif", "final.png"):
         assert (resumed / name).read_bytes() == (fresh / name).read_bytes(), name
+
+
+@pytest.fixture
+def picture_process(monkeypatch):
+    """The picture process for any cloth (it starts above PROCESS_FROM vertices only); the
+    processes started are recorded."""
+    import clothsim.pictures as pictures
+
+    started = []
+    real_start = pictures.PictureProcess.start
+
+    def start(self):
+        real_start(self)
+        started.append((self, self._proc))
+
+    monkeypatch.setattr(pictures, "PROCESS_FROM", 0)
+    monkeypatch.setattr(pictures, "_cores", lambda: 2)
+    monkeypatch.setattr(pictures.PictureProcess, "start", start)
+    return started
+
+
+@pytest.mark.parametrize("name, sets", [
+    ("hanging", ["cloth.resolution=[9, 9]"]),
+    ("hanging", ["cloth.resolution=[73, 73]"]),               # decimated
+    ("hanging", ["cloth.resolution=[9, 9]", "effects[1].release=0.05"]),  # pins let go
+    ("drape-sphere", ["cloth.resolution=[9, 9]"]),            # sphere and floor
+    ("drop-on-square", ["cloth.resolution=[9, 9]"]),          # box and floor
+])
+def test_pictures_drawn_by_the_second_process_are_those_of_its_trajectory(
+        tmp_path, monkeypatch, picture_process, name, sets):
+    import clothsim.runner as runner
+
+    def not_here(*args, **kw):
+        raise AssertionError("drawn in the run's process")
+
+    monkeypatch.setattr(runner, "draw_run_pictures", not_here)
+    scene = load_scene(name, sets)
+    out = tmp_path / "run"
+    run_scene(scene, out, frames=3)
+    [(worker, proc)] = picture_process
+    assert proc is not None and proc.returncode == 0 and not worker.running
+    assert_pictures_of_trajectory(scene, out, tmp_path / "after")
+
+
+def test_a_failed_picture_process_leaves_the_pictures_to_the_run(tmp_path, monkeypatch,
+                                                                picture_process):
+    """A process that dies at once: the run draws the pictures itself, the same bytes."""
+    import sys
+
+    monkeypatch.setattr(sys, "executable", "/bin/false")   # the process dies at once
+    scene = hanging(9)
+    out = tmp_path / "run"
+    result = run_scene(scene, out, frames=2)
+    assert [p.name for p in result.files[-2:]] == ["preview.gif", "final.png"]
+    assert_pictures_of_trajectory(scene, out, tmp_path / "after")
+
+
+def test_the_picture_process_hands_its_error_over(tmp_path, monkeypatch):
+    from clothsim.pictures import PictureProcess
+
+    monkeypatch.setattr("clothsim.pictures._cores", lambda: 2)
+    sim = hanging(9).build_simulation()
+    x = sim.model.mesh.vertices
+    with PictureProcess(10 ** 9) as worker:
+        assert not worker.running      # started by the runner once the first frame is done
+        worker.start()
+        assert worker.running
+        # one frame but no time for it: draw_run_pictures raises IndexError over there
+        assert worker.request(tmp_path / "none", 0, x, sim.model.mesh, times=np.zeros(0),
+                              effects=sim.effects, title="t")
+        assert isinstance(worker.answer(), IndexError) and not worker.running
+    for vertices, cores in ((10, 2), (10 ** 9, 1)):  # a small cloth, or one core: none
+        monkeypatch.setattr("clothsim.pictures._cores", lambda c=cores: c)
+        worker = PictureProcess(vertices)
+        worker.start()
+        assert not worker.running and not worker.request(tmp_path / "none", 0, x, None,
+                                                         times=[0.0], effects=(), title="")
+
+
+def test_an_interrupted_run_ends_its_picture_process(tmp_path, picture_process):
+    """Started after frame 1, ended (its input closed) when frame 2 is interrupted."""
+    def progress(k, total):
+        if k == 2:
+            raise KeyboardInterrupt
+
+    with pytest.raises(KeyboardInterrupt):
+        run_scene(hanging(9), tmp_path / "run", frames=4, progress=progress)
+    [(worker, proc)] = picture_process
+    assert not worker.running and proc.returncode == 0   # its input closed: it ended
+    assert not (tmp_path / "run" / "preview.gif").exists()
+
+
+def test_a_run_of_one_frame_draws_its_pictures_itself(tmp_path, picture_process):
+    """The process starts once the first frame is computed and more follow: a run with
+    one frame to compute would wait for its imports, so it draws the pictures itself."""
+    result = run_scene(hanging(9), tmp_path / "run", frames=1)
+    assert picture_process == [] and result.files[-1].name == "final.png"

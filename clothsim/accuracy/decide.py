@@ -96,9 +96,9 @@ def scatter(r) -> float:
     """A row's own timing scatter: its median repeat over its fastest (1 with one sample).
 
     Two settings whose fastest repeats differ by less than either one's scatter are not told
-    apart (:func:`separated`): on this 2-core machine under a load of 10, the fastest of 3
-    samples of one setting (lbfgs 20 it on the 21 × 21 seed demo's held steps) was 18.7 ms in
-    one study and 24.2 ms in the next, while its median stood 1.3 times above its fastest.
+    apart (:func:`separated`): on a shared 2-core machine under a heavy load, the fastest of
+    3 samples of one setting moved by tens of percent from one study to the next, while its
+    median stood well above its fastest.
 
     Parameters
     ----------

@@ -269,8 +269,10 @@ def _cmd_run(args) -> int:
         return _fail(f"{exc}; run.json (status failed) is in {out}", 1)
     except OSError as exc:  # full disk, read-only folder, file too large, ...
         log.debug("I/O error", exc_info=True)
-        return _fail(f"{os_error_line(exc, out)}; frames written so far stay (run.json says "
-                     "failed when it could be written; --resume continues)", 1)
+        written = ("frames written so far stay (run.json says failed when it could be "
+                   "written; --resume continues)" if (out / "run.json").is_file()
+                   else "nothing was written")       # e.g. the lock file could not be made
+        return _fail(f"{os_error_line(exc, out)}; {written}", 1)
     finally:
         if bar is not None:
             bar.close()

@@ -62,7 +62,9 @@ def _add_port_commands(sub) -> None:
                       "columns (a J storing attachments as extra constraint columns)")
 
     chk = sub.add_parser("check", help="check a port step by step: clothsim's step from the "
-                         "port's (x_k, v_k) against the port's x_{k+1}")
+                         "port's (x_k, v_k) against the port's x_{k+1} (held contacts: with "
+                         "the planes clothsim decides from the port's state, and the port's "
+                         "own planes compared with them)")
     chk.add_argument("scene", metavar="SCENE", help="scene file or built-in name")
     chk.add_argument("port", metavar="PORT", help="folder with positions.txt and "
                      "velocities.txt, or a trajectory file in any format compare reads")
@@ -78,6 +80,13 @@ def _add_port_commands(sub) -> None:
     chk.add_argument("--optimality", type=float, default=1e-6,
                      help="largest relative gradient |grad g(x)| / |grad g(x0)| of a port's "
                      "answer counted as a minimizer (1e-6)")
+    chk.add_argument("--contacts", metavar="FILE", default=None,
+                     help="the port's held contact planes per step (contacts.txt or "
+                     "contacts.npz, as export writes them: step vertex nx ny nz offset), for "
+                     "a scene whose obstacles hold contacts ([contact] mode = \"hold\", the "
+                     "default): a step whose planes differ fails 'contacts differ', naming "
+                     "the vertex (default: PORT/contacts.npz or PORT/contacts.txt when PORT "
+                     "is a folder holding one; 'none' ignores it)")
     chk.add_argument("--verbose-steps", action="store_true", help="print every step")
 
     dif = sub.add_parser("diff-model", help="compare two models: springs, stiffness, rest "
@@ -200,6 +209,7 @@ def _cmd_compare(args) -> int:
 
 def _cmd_check(args) -> int:
     from ..ports.check import check_steps
+    from ..ports.contact_planes import port_contacts
     from ..ports.formats import read_trajectory, read_velocities
     from ..scene import load_scene
 
@@ -210,9 +220,12 @@ def _cmd_check(args) -> int:
     scene = load_scene(args.scene, args.set)
     x = read_trajectory(args.port)
     v = read_velocities(args.port)
+    contacts = port_contacts(args.port, args.contacts)
+    _refuse_special(contacts)
     report = check_steps(scene, x, v, precision=args.precision, tolerance=args.tolerance,
                          steps=args.steps, optimality=args.optimality,
-                         expected_steps=None if args.steps is not None else scene.frames)
+                         expected_steps=None if args.steps is not None else scene.frames,
+                         contacts=contacts)
     if args.verbose_steps:
         for step in report.steps:
             print(step.line())

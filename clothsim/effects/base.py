@@ -21,6 +21,12 @@ one receiving what the previous one returned. Hooks read the time step from ``se
 the model from ``self.model``; they never change the model. Arrays are (n, 3), one row per
 vertex, in the model's vertex order, float64.
 
+What an effect carries from one step into the next (an obstacle's held contacts) it hands
+out through :meth:`Effect.get_state` and takes back through :meth:`Effect.set_state`:
+``clothsim run`` saves it with every frame (:func:`effect_states`) and ``--resume``
+restores it, so a resumed run is bit for bit the uninterrupted one. Every other hook must
+depend only on the time, the state and the model.
+
 An effect instance belongs to one simulation: binding it to a second one is an
 :class:`~clothsim.errors.InputError` (it keeps per-run data such as contacts). A
 simulation's effects are fixed when it is built (:class:`BoundEffects`).
@@ -233,6 +239,45 @@ class Effect:
         """
         raise NotImplementedError
 
+    def get_state(self) -> dict[str, np.ndarray]:
+        """What this effect carries from one step into the next (for a bit-for-bit resume).
+
+        Most effects are functions of the time and the state (x, v) alone and carry nothing
+        (``{}``, the default); an obstacle in ``"hold"`` mode carries the contacts it hands
+        the next step. ``clothsim run`` saves it with every frame (:func:`effect_states`).
+
+        Returns
+        -------
+        dict of str to ndarray
+            Copies: the caller may keep them while the simulation steps on.
+        """
+        return {}
+
+    def state_bytes(self, vertex_count: int) -> int:
+        """Bytes of :meth:`get_state`'s arrays at most, for a cloth of ``vertex_count``
+        vertices (the disk a run plans for; 0 by default).
+
+        Parameters
+        ----------
+        vertex_count : int
+
+        Returns
+        -------
+        int
+        """
+        return 0
+
+    def set_state(self, state: dict, name: str | None = None) -> None:
+        """Restore what :meth:`get_state` returned, after :meth:`bind` (the default has
+        nothing to restore).
+
+        Parameters
+        ----------
+        state : mapping of str to ndarray
+        name : str, optional
+            Names the source in an error message.
+        """
+
     def describe(self) -> dict:
         """JSON-ready description of the effect as built (for run.json).
 
@@ -262,6 +307,55 @@ def overrides(effect: Effect, hook: str) -> bool:
     """
     return (getattr(type(effect), hook) is not getattr(Effect, hook)
             and hook not in getattr(effect, "unused_hooks", ()))
+
+
+def effect_states(effects) -> dict[str, np.ndarray]:
+    """Every effect's :meth:`Effect.get_state`, flat: key ``"<index>.<kind>.<name>"``.
+
+    Parameters
+    ----------
+    effects : sequence of Effect
+        A simulation's effects, in order.
+
+    Returns
+    -------
+    dict of str to ndarray
+        Empty when no effect carries anything between steps.
+    """
+    return {f"{i}.{e.kind}.{k}": a for i, e in enumerate(effects)
+            for k, a in e.get_state().items()}
+
+
+def restore_effect_states(effects, arrays, source: str = "state") -> None:
+    """Give each effect its part of :func:`effect_states`' output back.
+
+    Parameters
+    ----------
+    effects : sequence of Effect
+        The same effects, bound (the same scene).
+    arrays : mapping of str to ndarray
+    source : str
+        Names where ``arrays`` came from in an error (a file).
+
+    Raises
+    ------
+    InputError
+        An array for an effect that is not there (another scene), or one an effect rejects.
+    """
+    parts: dict[int, dict] = {}
+    for key, a in arrays.items():
+        index, kind, name = (key.split(".", 2) + ["", ""])[:3]
+        i = int(index) if index.isdigit() else -1
+        if not 0 <= i < len(effects) or effects[i].kind != kind:
+            raise InputError(f"{source}: holds {key!r}, but effects[{index}] of this scene is "
+                             f"not a {kind or '?'}", field=source)
+        parts.setdefault(i, {})[name] = a
+    lacking = [i for i, e in enumerate(effects) if i not in parts and e.get_state()]
+    if lacking:
+        raise InputError(f"{source}: holds nothing for effects[{lacking[0]}] "
+                         f"({effects[lacking[0]].kind}), which carries state", field=source)
+    for i, part in parts.items():
+        effects[i].set_state(part, f"{source} (effects[{i}], {effects[i].kind})")
 
 
 class BoundEffects(tuple):
@@ -294,5 +388,5 @@ class BoundEffects(tuple):
     __setitem__ = __delitem__ = __iadd__ = __imul__ = _refuse
 
 
-__all__ = ["HOOKS", "BoundEffects", "Effect", "PinSet", "overrides"]
-__all__ = ["HOOKS", "ContactSet", "Effect", "PinSet", "overrides"]
+__all__ = ["HOOKS", "BoundEffects", "ContactSet", "Effect", "PinSet", "effect_states",
+           "overrides", "restore_effect_states"]

@@ -4,10 +4,11 @@ The seed resolves collisions after the solve, each vertex on its own
 (``"post-solve"``, :mod:`clothsim.effects.obstacles`). Over a box edge this tears the
 cloth: a vertex that enters through a side face is put on it while its neighbour stays on
 the top, the next solve knows nothing of the contact and pulls the pair into the box, and
-the projection separates them again (springs at 2.7× their rest length at 25², 16× at
-257²). In ``"hold"`` mode an obstacle instead tells the next step which vertices it
-pushes, and the step's solve keeps them on their contact planes while the rest of the
-cloth moves with them (:mod:`clothsim.contacts`, :mod:`clothsim.solvers.held`).
+the projection separates them again (springs at several times their rest length, more on
+finer cloths: the contact table of docs/effects.md, ``benchmarks contact``). In
+``"hold"`` mode an obstacle instead tells the next step which vertices it pushes, and the
+step's solve keeps them on their contact planes while the rest of the cloth moves with
+them (:mod:`clothsim.contacts`, :mod:`clothsim.solvers.held`).
 
 One step of an obstacle in ``"hold"`` mode:
 
@@ -37,6 +38,7 @@ from __future__ import annotations
 import numpy as np
 
 from ..contacts import ContactSet
+from ..errors import InputError
 
 #: How far (|n_kept − n_now|) a held contact's normal may turn before it is renewed.
 NORMAL_TOLERANCE = 1e-2
@@ -92,10 +94,15 @@ class Holding:
         before the vertex has a velocity of its own.
     planes : ContactSet
         The planes handed to the step: one per held vertex, two more per sticking one.
+        Their offsets are n · x at ``x`` (the positions ``hold_step`` placed), or
+        ``offsets`` when given (a state restored by :meth:`from_arrays`).
     """
 
+    #: The arrays :meth:`arrays` returns and :meth:`from_arrays` takes.
+    ARRAYS = ("vertices", "normals", "stick", "normal_force", "pull", "offsets")
+
     def __init__(self, x=None, vertices=None, normals=None, stick=None, normal_force=None,
-                 pull=None):
+                 pull=None, *, offsets=None):
         self.vertices = np.zeros(0, np.int64) if vertices is None else vertices
         self.normals = np.zeros((0, 3)) if normals is None else normals
         c = len(self.vertices)
@@ -110,7 +117,82 @@ class Holding:
         vs = v[self.stick]
         rows_v = np.concatenate([v, vs, vs])
         rows_n = np.concatenate([n, t1, t2])
-        self.planes = ContactSet(rows_v, rows_n, _rowdot(x[rows_v], rows_n))
+        self.planes = ContactSet(rows_v, rows_n,
+                                 _rowdot(x[rows_v], rows_n) if offsets is None else offsets)
+
+    def arrays(self) -> dict[str, np.ndarray]:
+        """Everything the next step reads, as copies: what ``--resume`` saves per frame.
+
+        Returns
+        -------
+        dict of str to ndarray
+            :data:`ARRAYS`: the attributes of the class docstring and ``offsets``, the
+            planes' offsets o = n · x [m], shape (c + 2 s,) (s sticking vertices). The
+            planes' vertices and normals follow from the others (:func:`tangent_frame` is
+            deterministic); their forces are set by the next solve.
+        """
+        return {"vertices": self.vertices.copy(), "normals": self.normals.copy(),
+                "stick": self.stick.copy(), "normal_force": self.normal_force.copy(),
+                "pull": self.pull.copy(), "offsets": self.planes.offsets.copy()}
+
+    @staticmethod
+    def max_bytes(vertex_count: int) -> int:
+        """Bytes of :meth:`arrays` at most: every vertex held and sticking (three planes).
+
+        Parameters
+        ----------
+        vertex_count : int
+            n.
+
+        Returns
+        -------
+        int
+            n × (8 + 24 + 1 + 8 + 24 + 3 × 8) bytes, and 1 kB of archive headers.
+        """
+        return 89 * int(vertex_count) + 1024
+
+    @classmethod
+    def from_arrays(cls, arrays, vertex_count: int, name: str = "holding") -> Holding:
+        """The holding :meth:`arrays` returned, checked (it is read from a file).
+
+        Parameters
+        ----------
+        arrays : mapping of str to ndarray
+            :data:`ARRAYS`.
+        vertex_count : int
+            n: held vertices must be in 0..n−1.
+        name : str
+            Names the source in an error (e.g. the file and the obstacle).
+
+        Returns
+        -------
+        Holding
+
+        Raises
+        ------
+        InputError
+            A missing array, or one of the wrong shape, type or range (naming it).
+        """
+        missing = [k for k in cls.ARRAYS if k not in arrays]
+        if missing:
+            raise InputError(f"{name}: no array {missing[0]!r}", field=name)
+        a = {k: np.asarray(arrays[k]) for k in cls.ARRAYS}
+        c = len(a["vertices"])
+        s = int(a["stick"].sum()) if a["stick"].dtype == bool else -1
+        shapes = {"vertices": ((c,), "i"), "normals": ((c, 3), "f"), "stick": ((c,), "b"),
+                  "normal_force": ((c,), "f"), "pull": ((c, 3), "f"),
+                  "offsets": ((c + 2 * s,), "f")}
+        for k, (shape, kind) in shapes.items():
+            if a[k].shape != shape or a[k].dtype.kind != kind:
+                raise InputError(f"{name}: {k!r} has shape {a[k].shape} and type {a[k].dtype}, "
+                                 f"expected {shape} of kind {kind!r}", field=name)
+        v = a["vertices"]
+        if c and (v.min() < 0 or v.max() >= vertex_count):
+            raise InputError(f"{name}: a held vertex is out of range 0..{vertex_count - 1}",
+                             field=name)
+        return cls(None, v.astype(np.int64), a["normals"].astype(np.float64), a["stick"],
+                   a["normal_force"].astype(np.float64), a["pull"].astype(np.float64),
+                   offsets=a["offsets"].astype(np.float64))
 
     def reaction(self) -> np.ndarray:
         """The force each held vertex's planes exerted in the last solve.

@@ -318,6 +318,49 @@ class Obstacle(Effect):
                              field=f"{self.kind}.{key}")
         self._holding = Holding()
 
+    def get_state(self) -> dict[str, np.ndarray]:
+        """The contacts this obstacle hands the next step (``"hold"`` mode; none in
+        ``"post-solve"`` mode, which carries nothing from one step to the next).
+
+        Returns
+        -------
+        dict of str to ndarray
+            :meth:`Holding.arrays <clothsim.effects.holding.Holding.arrays>` (copies).
+        """
+        return self._holding.arrays() if self.contact == "hold" else {}
+
+    def state_bytes(self, vertex_count: int) -> int:
+        """Bytes of :meth:`get_state` at most (:meth:`Holding.max_bytes
+        <clothsim.effects.holding.Holding.max_bytes>`; none in ``"post-solve"`` mode).
+
+        Parameters
+        ----------
+        vertex_count : int
+
+        Returns
+        -------
+        int
+        """
+        return Holding.max_bytes(vertex_count) if self.contact == "hold" else 0
+
+    def set_state(self, state, name: str | None = None) -> None:
+        """Restore what :meth:`get_state` returned (after :meth:`bind`).
+
+        Parameters
+        ----------
+        state : mapping of str to ndarray
+        name : str, optional
+            Names the source in an error (default: the obstacle's kind).
+
+        Raises
+        ------
+        InputError
+            An array missing or of the wrong shape or range.
+        """
+        if self.contact == "hold":
+            self._holding = Holding.from_arrays(state, self.model.vertex_count,
+                                                name or self.kind)
+
     def describe(self):
         return {"kind": self.kind, **self._shape(), "friction": self.friction,
                 "thickness": self.thickness, "margin": self.margin, "contact": self.contact}

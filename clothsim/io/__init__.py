@@ -17,6 +17,8 @@ module                  what it reads or writes
 ``io.folders``          which folders clothsim may write, their kinds and statuses
 ``io.lock``             the folder lock ``.clothsim.lock`` (never followed, then removed)
 ``io.resume``           where ``--resume`` continues
+``io.effectstate``      what the effects carry into the next step, per frame
+                        (``state/frame_%06d.npz``: held contacts), for ``--resume``
 ``io.diskspace``        the disk a run needs, estimated before it writes
 ``io.runfiles``         ``run.json`` and ``trajectory.npz`` of a run, streamed to disk
 ``io.matrices``         Matrix Market matrices and text vectors for other implementations

@@ -31,12 +31,12 @@ PVD_NAME = "trajectory.pvd"
 OBSTACLES_NAME = "obstacles.vtu"
 FRAME_COMPRESSIONS = ("auto", "zlib", "none")
 #: Vertices up to which "auto" compresses frames. meshio's zlib (level 6, one core) costs
-#: about 4 µs of CPU per vertex and frame and shrinks the file to about a third, while the
-#: raw write costs about a tenth of that (benchmarks/scale_ladder.py, its "frame write"
-#: table): compression never saves time, only disk. Up to 100 000 vertices (257² and
-#: smaller) it costs well under half a second a frame and small frames are worth keeping
-#: small; above, it costs a second or more a frame, as much as a step, for files that are
-#: large either way.
+#: microseconds of CPU per vertex and frame and shrinks the file to about a third, while
+#: the raw write costs several times less (docs/data/scale-ladder.md, the "frame write"
+#: table of benchmarks/scale_ladder.py): compression never saves time, only disk. Up to
+#: 100 000 vertices (257² and smaller) it costs well under half a second a frame and small
+#: frames are worth keeping small; above, it costs a second or more a frame, as much as a
+#: step, for files that are large either way.
 ZLIB_UP_TO = 100_000
 #: Size of a zlib frame over a raw one, at most: 0.48 measured at 129² and 257² with
 #: random velocities (nothing to compress there); a smooth cloth's frames shrink more
@@ -152,8 +152,7 @@ class FrameWriter:
         self.pinned = pinned
         self._static: list[str] = []
         self._cells = cell_blocks(mesh, None if springs is None else springs.spring_vertices)
-        self._fields_of = None if springs is None else FrameFields(
-            mesh.vertices, self._cells, springs.spring_vertices, springs.spring_rest_length)
+        self._fields_of = None   # FrameFields, prepared by the first write (its thread)
 
     def filename(self, index: int) -> str:
         """File name of frame ``index``, e.g. ``frame_000012.vtu``.
@@ -184,7 +183,7 @@ class FrameWriter:
         -------
         int
         """
-        per_vertex = 48 + (4 if self._fields_of is not None else 0) + (
+        per_vertex = 48 + (4 if self.springs is not None else 0) + (
             1 if self.pinned is not None else 0)
         per_cells = sum(len(c) * (8 * c.shape[1] + 20) for _, c in self._cells)
         data = (per_vertex * self.mesh.vertex_count + per_cells) * 4 / 3
@@ -244,7 +243,11 @@ class FrameWriter:
         if self.pinned is not None:
             mask = self.pinned(time) if callable(self.pinned) else self.pinned
             point_data["pinned"] = np.asarray(mask, dtype=bool).astype(np.uint8)
-        if self._fields_of is not None:  # for colouring: float32 keeps the files small
+        if self.springs is not None:  # for colouring: float32 keeps the files small
+            if self._fields_of is None:
+                self._fields_of = FrameFields(self.mesh.vertices, self._cells,
+                                              self.springs.spring_vertices,
+                                              self.springs.spring_rest_length)
             point_data["stretch"] = self._fields_of.stretch(x).astype(np.float32)
             if self.mesh.triangle_count:
                 cell_data["area_ratio"] = [a.astype(np.float32)

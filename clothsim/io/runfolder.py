@@ -23,6 +23,7 @@ import numpy as np
 from ..errors import InputError
 from .background import BackgroundJob
 from .diskspace import check_run_plan, file_bytes, run_plan
+from .effectstate import planned_state_bytes, state_files, write_state
 from .folders import RUN_RECORD
 from .frames import OBSTACLES_NAME, PVD_NAME, FrameWriter, read_frame
 from .outfolder import OutputFolder
@@ -58,6 +59,8 @@ class RunFolder(OutputFolder):
         One per frame 1..done.
     done : int
         The last complete frame (−1 before frame 0).
+    state_bytes : int
+        One frame's state file at most, stored (set before :meth:`begin`; 0: none).
     """
 
     def __init__(self, path, *, force: bool = False, guard=None):
@@ -66,6 +69,7 @@ class RunFolder(OutputFolder):
         self.info: dict = {}
         self.records: list[dict] = []
         self.done = -1
+        self.state_bytes = 0
         self.npz_frames: int | None = None
         self.store: TrajectoryStore | None = None
         self.writer: FrameWriter | None = None
@@ -125,6 +129,7 @@ class RunFolder(OutputFolder):
                              "run.json; refusing to delete files clothsim did not write "
                              "(choose another --out or remove them)")
         stale = frames + [out / name for name in STALE_FILES if (out / name).exists()]
+        stale += state_files(out)   # the effects' state per frame (io.effectstate)
         for p in stale:
             p.unlink()
         if stale:
@@ -199,8 +204,9 @@ class RunFolder(OutputFolder):
             ``frame``, ``frames``, ``trajectory``, ``end`` and ``peak`` [bytes].
         """
         model_bytes = sum(a.nbytes for a in model_arrays(self._model).values())
-        return run_plan(self.writer.estimated_bytes(), self._model.vertex_count, frames, start,
-                        model_bytes)
+        frame = self.writer.estimated_bytes() + (self.state_bytes and planned_state_bytes(
+            self.state_bytes, self.writer.compression))
+        return run_plan(frame, self._model.vertex_count, frames, start, model_bytes)
 
     def _plan(self, frames: int, start: int | None) -> None:
         """Warn about a large run, refuse one the disk cannot hold; run.json records the
@@ -227,9 +233,10 @@ class RunFolder(OutputFolder):
         self.writer.add_static(name)
 
     def write_frame(self, k: int, positions, velocities, record: dict | None = None, *,
-                    wait: bool = True) -> None:
+                    wait: bool = True, state: dict | None = None) -> None:
         """Frame k: its ``.vtu`` file, the store, its record (none for frame 0) and run.json
-        with ``last_frame`` = k (trajectory.npz every few seconds, :meth:`save_npz`).
+        with ``last_frame`` = k (trajectory.npz with frame 0, then every few seconds:
+        :meth:`save_npz`).
 
         Parameters
         ----------
@@ -243,26 +250,31 @@ class RunFolder(OutputFolder):
             False: return at once and write the frame on a background thread (see the
             module docstring); the previous frame handed over is waited for first, and its
             error, if any, raised here.
+        state : dict of str to ndarray, optional
+            What the effects carry into the next step (not to be changed by the caller):
+            ``state/frame_%06d.npz``, written first (:mod:`clothsim.io.effectstate`).
         """
         self.wait()
         x = np.array(positions, dtype=np.float64)
         v = np.array(velocities, dtype=np.float64)
         info = copy.deepcopy(self.info)      # run.json as of now, whatever changes next
         if wait:
-            self._write_frame(k, x, v, record, info)
+            self._write_frame(k, x, v, record, info, state)
         else:
-            self._job.start(self._write_frame, k, x, v, record, info,
+            self._job.start(self._write_frame, k, x, v, record, info, state,
                             name=f"clothsim frame {k}")
 
-    def _write_frame(self, k: int, x, v, record: dict | None, info: dict) -> None:
+    def _write_frame(self, k: int, x, v, record: dict | None, info: dict,
+                     state: dict | None = None) -> None:
+        # first: a frame on disk has its state (compressed as the frames are)
+        write_state(self.path, k, state or {}, compress=self.writer.compression == "zlib")
         self.writer.write(k, k / self._fps, x, v)
         self.store.append(x, v)
         if record is not None:
             self.records.append(record)
         self.done = k
-        if k > 0:
-            self._save_npz()
-            self._mark("writing", info=info)
+        self._save_npz(force=k == 0)   # a first trajectory.npz at the start
+        self._mark("writing", info=info)
 
     def wait(self) -> None:
         """Wait for the frame being written in the background, if any.
@@ -328,7 +340,8 @@ class RunFolder(OutputFolder):
         super().mark(status, data, error=error)
 
     def end(self, status: str, error: str | None) -> None:
-        """trajectory.npz one last time (when any frame is done), then run.json.
+        """trajectory.npz one last time (when any frame is done and the last rebuild did
+        not hold them all), then run.json.
 
         Parameters
         ----------
@@ -349,7 +362,7 @@ class RunFolder(OutputFolder):
                 raise error_in_flight
             log.info("the frame being written when %s stopped failed too: %s", self.path,
                      error_in_flight)
-        if self.done >= 0:
+        if self.done >= 0 and self.npz_frames != self.done + 1:   # unless it holds them all
             self._save_npz(force=True)
         self._mark(status, error=error)
 

@@ -24,7 +24,8 @@ judge's explanation.
 
 Global fits first (one parameter: stiffness, rest lengths, 1/h², pins; two: stiffness and
 rest lengths; three: the force per vertex or per unit mass), then per spring family, then
-a force scaled per vertex on a minority of the vertices. When none explains the steps,
+a force scaled per vertex on a minority of the vertices, then the mass per vertex (another
+mass lumping: the inertia and gravity's m g with it). When none explains the steps,
 the verdict says so (with the closest fit, as a measurement) and names no cause.
 """
 
@@ -35,6 +36,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
+from ..model import MASS_LUMPINGS, Model
 from .cause_words import cause_text, describe, evidence_text, head, listing, span
 from .hypotheses import (
     REPLACING,
@@ -42,7 +44,7 @@ from .hypotheses import (
     applicable,
     columns,
     fit,
-    fit_vertex_force,
+    fit_vertex_scale,
     relative,
 )
 from .replays import approach, replay
@@ -182,7 +184,7 @@ def infer_cause(steps: list[StepData]) -> Cause | None:
                    for s in fitted):
                 return Cause(cause_text(fitted, hyp, theta, gradients, evidence), hyp, theta,
                              gradients, evidence)
-    return _vertex_force_cause(steps[0])
+    return _vertex_force_cause(steps[0]) or _vertex_mass_cause(steps[0])
 
 
 def _replayable(fitted, hyp, theta) -> bool:
@@ -270,7 +272,7 @@ def _vertex_force_cause(step: StepData) -> Cause | None:
     """A force missing (or scaled) on a minority of the vertices, fitted per vertex."""
     if step.problem.f_ext is None or not np.any(step.problem.f_ext):
         return None
-    c = fit_vertex_force(step)
+    c = fit_vertex_scale(step, "vertex force")
     changed = np.flatnonzero(np.abs(c) > 1e-3)
     if not 0 < len(changed) <= 0.5 * len(c):
         return None
@@ -284,6 +286,47 @@ def _vertex_force_cause(step: StepData) -> Cause | None:
             f"({listing(changed)}), the scene's force on the others"
             f"{evidence_text([step], gradients, evidence)}")
     return Cause(text, "vertex force", c, gradients, evidence)
+
+
+def _vertex_mass_cause(step: StepData) -> Cause | None:
+    """Other vertex masses (in M and in gravity's m g), fitted per vertex; named as the
+    other mass lumping when the fitted masses are spread as it spreads them."""
+    m = step.model.vertex_mass
+    if not np.any(m > 0):
+        return None
+    c = fit_vertex_scale(step, "vertex mass")
+    free = step.problem.free_mask(len(m)) & (m > 0)
+    if not np.any(np.abs(c[free]) > 1e-3):
+        return None
+    gradients, evidence = {}, {}
+    if not _explains(step, "vertex mass", c, gradients, evidence):
+        return None
+    fitted = (1 + c) * m
+    text = (f"{head(evidence)} other vertex masses: {_masses_text(step, fitted, free)}"
+            f"{evidence_text([step], gradients, evidence)}")
+    return Cause(text, "vertex mass", c, gradients, evidence)
+
+
+def _masses_text(step: StepData, fitted: np.ndarray, free: np.ndarray) -> str:
+    """The fitted masses in words: a mass lumping's when they are spread as it spreads
+    them (on the free vertices, the only ones the step shows), else their range."""
+    m = step.model.vertex_mass
+    for lumping in MASS_LUMPINGS:
+        try:
+            unit = Model.build(step.model.mesh, step.model.springs, total_mass=1.0,
+                               mass_lumping=lumping).vertex_mass
+        except ValueError:
+            continue
+        u = unit[free]
+        total = float(fitted[free] @ u / (u @ u))     # the port's total mass, least squares
+        lumped = total * unit
+        if np.allclose(fitted[free], lumped[free], rtol=1e-3, atol=0) and \
+                not np.allclose(m[free], lumped[free], rtol=1e-3, atol=0):
+            return (f"those of mass_lumping = \"{lumping}\" ({total:.4g} kg in all), not the "
+                    f"scene's masses ({m.sum():.4g} kg in all; clothsim diff-model compares them)")
+    changed = free & (np.abs(fitted - m) > 1e-3 * m)
+    return (f"the scene's × {span(fitted[changed] / m[changed])} on {int(changed.sum())} of "
+            f"{len(m)} vertices ({listing(np.flatnonzero(changed))})")
 
 
 #: The verdicts a fitted model may replace: a port that solves another problem gets them.
@@ -318,7 +361,7 @@ def name_cause(checks: dict, steps: list[StepData], others=()) -> Cause | None:
             near = closest(steps[0])
             checks[steps[0].k].note += ("; no single model parameter explains the port's "
                                         "answer (fitted: external force, stiffness, rest "
-                                        "lengths, pins, 1/h², per spring family"
+                                        "lengths, pins, 1/h², per spring family, per vertex"
                                         + (f"; {near}" if near else "") + ")")
         return None
     first = steps[0].k

@@ -19,6 +19,16 @@ from ..simulation import State
 from ..solvers import make_solver
 from .causes import FITTED, StepData, name_cause
 from .compare import EPS32, RTOL64, cloth_size, condition_number
+from .contact_planes import PortPlanes
+from .held_margins import adopt, position_rounding
+from .held_steps import HeldSteps
+from .held_verdicts import (
+    marginal_changes,
+    off_plane_note,
+    on_port_planes,
+    planes_verdict,
+    variant_verdict,
+)
 from .judge import CONVERGING, gradient_scale, judge, pin_role, pinned_moved, refine
 from .precision import Printed
 from .rounding import (
@@ -111,7 +121,8 @@ def system_condition_number(sim) -> float:
 
 def check_steps(simulation, positions, velocities=None, *, precision: str = "float64",
                 tolerance: float | None = None, optimality: float = 1e-6,
-                steps: int | None = None, expected_steps: int | None = None) -> CheckReport:
+                steps: int | None = None, expected_steps: int | None = None,
+                contacts=None) -> CheckReport:
     """Check every step k → k + 1 of a port's trajectory against clothsim's step.
 
     Parameters
@@ -158,6 +169,14 @@ def check_steps(simulation, positions, velocities=None, *, precision: str = "flo
     projected = [e.kind for e in sim.effects if overrides(e, "correct_positions")]
     iterations = sim.solver.iterations
     iterated = sim.solver.name != "newton"   # a converged method: the converged floor only
+    held = HeldSteps(sim)
+    if contacts is not None and not isinstance(contacts, PortPlanes):
+        contacts = PortPlanes(contacts, sim.model.vertex_count)
+    if contacts is not None:
+        notes.append(f"the port's held planes: {contacts.path}" if held else
+                     f"{contacts.path}: ignored, the scene holds no contacts (no obstacle in "
+                     f"[contact] mode = \"hold\")")
+        contacts = contacts if held else None
     out, searches, unexplained, others = [], 0, [], []
 
     def replay(model, problem):   # clothsim's step of another model, the same settings
@@ -168,15 +187,12 @@ def check_steps(simulation, positions, velocities=None, *, precision: str = "flo
     for k in range(count):
         state = State(xs[k].copy(), vs[k].copy(), t, k)
         t = t + h
-        problem = sim.problem(state)
+        if held:
+            held.anchor(xs[k])   # the planes clothsim decided, sticking ones at the port's x_k
+            held.starts(state)
         model = sim.step_model(state)
-        sim.state = state
-        sim.step()
-        x_cs, v_cs = sim.state.positions, sim.state.velocities
         x_port = xs[k + 1]
-        err = np.linalg.norm(x_cs - x_port, axis=1)
-        err = np.where(np.isfinite(err), err, np.inf)
-        worst = int(np.argmax(err))
+        problem, x_cs, v_cs, err, worst = _step(sim, held, state, x_port)
 
         def bound32(model=model, problem=problem, x_cs=x_cs):
             return float32_tolerance(model, problem, iterations, tol64, x=x_cs,
@@ -185,13 +201,33 @@ def check_steps(simulation, positions, velocities=None, *, precision: str = "flo
         tol = tol_k = tol64 if printed is None else float(printed.tolerances[k])
         if precision == "float32" and tolerance is None and err[worst] > tol_k:
             tol = max(tol_k, bound32())
+        adopted = ""
+        if held and (contacts is not None or err[worst] > tol):
+            rounding = position_rounding(xs[k], printed.digits if printed else 17,
+                                         precision == "float32" or bool(printed and
+                                                                        printed.float32),
+                                         tol64)
+            changes, adopted = marginal_changes(k, held, model, problem, tol, contacts,
+                                                x_port, x_cs, rounding)
+            if changes:   # too close to call from the port's state: the port's decision
+                adopt(held, changes, None if contacts is None else contacts.step(k))
+                problem, x_cs, v_cs, err, worst = _step(sim, held, state, x_port)
         moved = pinned_moved(problem, x_port, tol if precision == "float64"
                              else max(tol_k, 4 * EPS32 * float(np.abs(x_port).max())))
+        planes, differing = (None, []) if contacts is None else planes_verdict(
+            k, held, contacts, xs[k], problem.fixed_vertices, err, tol)
+        if planes is not None:   # and the port's solve, on its own planes?
+            adopt(held, differing, contacts.step(k))
+            planes.note += "; " + on_port_planes(_step(sim, held, state, x_port)[3], tol)
+        variant = (None if moved is not None or planes is not None or err[worst] <= tol
+                   or not held else variant_verdict(k, held, state, x_port, err, tol))
         if moved is not None:
             v, dist = moved
             step = StepCheck(k, "pinned vertex moved", float(err[worst]), v, role=pin_role(
                 problem, v), tolerance=tol, note=f"the port moved it {dist:.3e} m from its "
                 f"target: its pins are missing or act elsewhere")
+        elif planes is not None or variant is not None:
+            step = planes or variant
         elif err[worst] <= tol:
             step = StepCheck(k, "agrees", float(err[worst]), worst, tolerance=tol)
             if velocities is not None:
@@ -213,12 +249,17 @@ def check_steps(simulation, positions, velocities=None, *, precision: str = "flo
                     float(err[worst]), tol, replay, step.status == "not converged"))
             if precision == "float64" and printed is not None and not step.passed:
                 printed.hint32(step, float(err[worst]), lambda b=bound32, t=tol_k: max(t, b()))
+            off = off_plane_note(held, x_port, tol) if held else ""
+            if off:
+                step.note += f"; {off}"
             if projected:
                 step.note += (f"; positions are corrected after the solve by "
                               f"{', '.join(projected)}, so optimality for g alone is only "
                               f"indicative")
         if not step.role:
             step.role = pin_role(problem, step.vertex)
+        if adopted:
+            step.note = f"{step.note}; {adopted}" if step.note else adopted
         out.append(step)
     name_cause({s.k: s for s in out}, unexplained, others)   # a model the port solves?
     return CheckReport(out, float(tol64), precision, notes, expected_steps=expected_steps,
@@ -261,6 +302,18 @@ def float32_report(scenes=("hanging", "jacobson-net", "jacobson-flag", "drop-on-
         stag = float32_newton_stagnation(sim.step_model(), problem, x_min)
         print(f"{name:16} {sim.model.vertex_count:5d} {K:4d} {dev:10.2e} {tol:10.2e} "
               f"{kappa:11.2e} {floor:9.2e} {stag:10.2e}")
+
+
+def _step(sim, held, state, x_port):
+    """clothsim's step from the port's state: its problem, x, v, per-vertex error, worst."""
+    problem = sim.problem(state)
+    sim.state = state
+    sim.step()
+    held.stepped()
+    x_cs, v_cs = sim.state.positions, sim.state.velocities
+    err = np.linalg.norm(x_cs - x_port, axis=1)
+    err = np.where(np.isfinite(err), err, np.inf)
+    return problem, x_cs, v_cs, err, int(np.argmax(err))
 
 
 def _frames(sim, positions, velocities, steps):

@@ -14,8 +14,10 @@ with it, are in :mod:`clothsim.ports.replays`.
 The hypotheses (:func:`applicable`): ``stiffness``, ``rest lengths``, ``inertia``, ``pins``
 (one parameter each), ``force per vertex``, ``force per unit mass`` (three),
 ``stiffness and rest lengths`` (two), ``family F`` (the stiffness of one spring family),
-and ``vertex force`` (a scale of the force per vertex, fitted alone by
-:func:`fit_vertex_force`). The two force hypotheses replace the scene's force
+and the per-vertex scales fitted one vertex at a time by :func:`fit_vertex_scale`:
+``vertex force`` (a scale of the force per vertex) and ``vertex mass`` (a scale of the
+mass per vertex, in the inertia term and in the force, which gravity makes m g: another
+mass lumping). The two force hypotheses replace the scene's force
 (:data:`REPLACING`): their θ is the new force per vertex [N], or per unit mass [m/s²].
 """
 
@@ -147,12 +149,12 @@ def columns(step: StepData, hypothesis: str) -> list[np.ndarray]:
     ----------
     step : StepData
     hypothesis : str
-        A name of :func:`applicable`, or ``"vertex force"``.
+        A name of :func:`applicable`, ``"vertex force"`` or ``"vertex mass"``.
 
     Returns
     -------
     list of ndarray, each shape (n, 3)
-        One per parameter (``vertex force``: one, scaled per vertex by θ_v).
+        One per parameter (``vertex force``, ``vertex mass``: one, scaled per vertex by θ_v).
     """
     h2 = step.problem.h ** 2
     if hypothesis.startswith("family "):
@@ -182,6 +184,8 @@ def columns(step: StepData, hypothesis: str) -> list[np.ndarray]:
         return out
     if hypothesis == "vertex force":   # a force scale c_v per vertex: one column per vertex
         return [-h2 * t["force"]]
+    if hypothesis == "vertex mass":    # a mass scale c_v per vertex: M (x − y) − h² m g
+        return [t["inertia"] - h2 * t["force"]]
     raise ValueError(hypothesis)
 
 
@@ -251,19 +255,22 @@ def fit(steps, hypothesis):
     return theta
 
 
-def fit_vertex_force(step: StepData):
-    """Per-vertex scale c_v of the force: c_v minimizes |R_v − c_v h² f_v| on its own.
+def fit_vertex_scale(step: StepData, hypothesis: str = "vertex force"):
+    """Per-vertex scale c_v of a one-column hypothesis: c_v minimizes |R_v + c_v col_v| on
+    its own (three equations, one unknown per vertex).
 
     Parameters
     ----------
     step : StepData
+    hypothesis : {"vertex force", "vertex mass"}
 
     Returns
     -------
     ndarray, shape (n,)
-        c_v (0 where there is no force, and at exact pins): the force there is (1 + c_v) f_v.
+        c_v (0 where the column vanishes, and at exact pins): the force (``vertex force``)
+        or the mass (``vertex mass``) there is (1 + c_v) times the scene's.
     """
-    col = columns(step, "vertex force")[0]
+    col = columns(step, hypothesis)[0]
     R = residual(step)
     free = free_rows(step)
     den = np.einsum("ij,ij->i", col, col)

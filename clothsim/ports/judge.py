@@ -245,7 +245,7 @@ def judge(sim, model, problem, k, x_cs, x_port, err, tol, optimality, precision,
     # the gradient difference as a displacement (over the Hessian's diagonal, where a
     # 1e10 N/m pin turns 1e-10 m into newtons); a vertex within the tolerance is no evidence
     excess = np.where(err > tol, np.linalg.norm(grad_p - grad_c, axis=1)
-                      / _diagonal(model, problem), 0.0)
+                      / hessian_diagonal(model, problem), 0.0)
     vertex = int(np.argmax(excess))
     total = float(np.linalg.norm(excess))
     local = total > 0 and excess[vertex] > LOCAL * total
@@ -254,6 +254,12 @@ def judge(sim, model, problem, k, x_cs, x_port, err, tol, optimality, precision,
             note = (f"neither answer is a minimizer of g; the port's is clothsim's from "
                     f"{hint[0]} after {hint[1]} iterations ({hint[2]:.1e} m): set "
                     f"{_settings_text(hint[0], hint[1])}")
+        elif search:   # the settings were searched: no start or count of clothsim's gives it
+            note = (f"neither answer is a minimizer of g, and clothsim's local/global "
+                    f"iterations from y and from x_n (1 to "
+                    f"{min(MAX_SEARCH, max(2 * sim.solver.iterations, 100))}) never come within "
+                    f"the tolerance of the port's answer: the port iterates otherwise or "
+                    f"solves another model; converge both (a tolerance) to decide")
         else:
             note = (f"neither answer is a minimizer of g, and the answer of a fixed iteration "
                     f"count depends on its start point: match the port's settings "
@@ -296,8 +302,19 @@ def judge(sim, model, problem, k, x_cs, x_port, err, tol, optimality, precision,
     return verdict("not a minimizer", worst, note)
 
 
-def _diagonal(model, problem) -> np.ndarray:
-    """m_v + h² (Σ k of v's springs + its pins' k): ∇²g's diagonal per vertex [kg]."""
+def hessian_diagonal(model, problem) -> np.ndarray:
+    """m_v + h² (Σ k of v's springs + its pins' k): ∇²g's diagonal per vertex.
+
+    Parameters
+    ----------
+    model : Model
+    problem : StepProblem
+
+    Returns
+    -------
+    ndarray, shape (n,)
+        [kg]; the gradient difference over it is a displacement [m].
+    """
     n = model.vertex_count
     a, b = model.springs.spring_vertices.T
     k = model.springs.spring_stiffness

@@ -46,6 +46,11 @@ def variant(step: StepData, hypothesis: str, theta) -> tuple:
         k = np.where(mask, max(one, 0.0) * k, k)
     elif hypothesis == "inertia":
         mass = max(one, 0.0) * mass
+    elif hypothesis == "vertex mass":   # θ per vertex: its mass and its (gravity) force
+        scale = np.maximum(1.0 + np.asarray(theta), 0.0)
+        mass = scale * mass
+        f = np.zeros_like(step.x_port) if p.f_ext is None else p.f_ext
+        p = dataclasses.replace(p, f_ext=f * scale[:, None])
     elif hypothesis == "pins":
         p = dataclasses.replace(p, anchor_stiffness=max(one, 0.0) * p.anchor_stiffness)
     else:

@@ -32,13 +32,14 @@ from .. import matrices
 from ..errors import FactorizationError
 from ..factorization import Factor
 from ..objective import objective_gradient
+from ..solvers.held import constrained_matrix
 from ..solvers.newton import NewtonSolver
 from .compare import EPS32
 
 #: Allowed ratio of a port's float32 error to clothsim's own float32 deviation: another
 #: solver ordering (LDLᵀ instead of LU, other sums) rounds differently by a small factor.
-#: Measured: the paper authors' code built in float32 errs by up to 1.9 × the deviation,
-#: the project's C++/Eigen port (examples/ports/cpp, float) by up to 2.6 ×.
+#: Measured when it was set (commit 617962f): the paper authors' code built in float32
+#: and the project's C++/Eigen port (examples/ports/cpp, float) both err by less than this.
 MARGIN = 4.0
 #: Iterations run at most to measure a converged step's floor (a float32 fixed point
 #: stagnates long before).
@@ -178,7 +179,8 @@ def converged_float32_floor(model, problem, x: np.ndarray) -> float:
         The floor [m].
     """
     x32 = x.astype(np.float32).astype(np.float64)
-    dg = float32_gradient(model, problem, x32) - objective_gradient(model, problem, x32)
+    dg = (problem.tangential(float32_gradient(model, problem, x32))
+          - objective_gradient(model, problem, x32))   # on the held planes: in them
     dx = _hessian_solve(model, problem, x)(dg)
     ulp = float(np.spacing(np.float32(np.abs(x).max())))
     return float(np.linalg.norm(dx, axis=1).max()) + np.sqrt(3.0) / 2 * ulp
@@ -217,13 +219,18 @@ def float32_newton_stagnation(model, problem, x: np.ndarray, iterations: int = 2
 
 
 def _hessian_solve(model, problem, x: np.ndarray):
-    """v ↦ ∇²g(x)⁻¹ v over the free vertices (0 on the pinned), for (n, 3) arrays."""
+    """v ↦ ∇²g(x)⁻¹ v over the free vertices (0 on the pinned), for (n, 3) arrays; with
+    held contacts on the feasible directions only, (P ∇²g P + α D)⁻¹ P v."""
     free = np.flatnonzero(problem.free_mask(model.vertex_count))
     dofs = (3 * free[:, None] + np.arange(3)).ravel()
+    mask = np.zeros(3 * model.vertex_count, bool)
+    mask[dofs] = True
     solver = NewtonSolver(model)
     factor = None
     for definite in (False, True):  # the exact Hessian; its projection if it is indefinite
         H = solver.hessian(problem, x, definite=definite).tocsc()[dofs][:, dofs]
+        if problem.has_contacts:
+            H = constrained_matrix(problem, H, mask)
         try:
             factor = Factor(H, check_conditioning=False)
             break
@@ -233,7 +240,8 @@ def _hessian_solve(model, problem, x: np.ndarray):
     def solve(v: np.ndarray) -> np.ndarray:
         out = np.zeros(3 * model.vertex_count)
         if factor is not None:
-            out[dofs] = factor.solve(np.asarray(v, np.float64).reshape(-1)[dofs])
+            v = problem.tangential(np.asarray(v, np.float64).reshape(-1, 3))
+            out[dofs] = factor.solve(v.reshape(-1)[dofs])
         return out.reshape(-1, 3)
 
     return solve

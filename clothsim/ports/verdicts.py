@@ -35,6 +35,11 @@ Verdicts that fail:
     Checked as float64, but the difference is within what float32 arithmetic gives.
 ``velocities differ``
     Positions agree but v_{k+1} does not (a damping or velocity update that differs).
+``contacts differ``
+    Hold mode: the port's planes of the step are not the ones clothsim decides from the
+    port's state (held by one and free in the other, sticking and sliding, another plane,
+    the normal's sign), or its answer is clothsim's step under another contact treatment
+    (:mod:`clothsim.ports.held_verdicts`).
 """
 
 from __future__ import annotations

@@ -22,7 +22,11 @@ from __future__ import annotations
 
 import numpy as np
 
+from .spring_blocks import SpringGather
+
 _NONE = np.zeros(0, dtype=np.intp)
+_NO_VALUES = np.zeros((3, 0))
+_NO_VALUES.flags.writeable = False
 
 
 class SpringDirections:
@@ -40,8 +44,8 @@ class SpringDirections:
 
     def __init__(self, a: np.ndarray, b: np.ndarray, rest: np.ndarray,
                  rest_positions_T: np.ndarray):
-        self.a = np.ascontiguousarray(a, dtype=np.intp)
-        self.b = np.ascontiguousarray(b, dtype=np.intp)
+        self._gather = SpringGather(a, b)
+        self.a, self.b = self._gather.a, self._gather.b
         self.rest = np.ascontiguousarray(rest, dtype=np.float64)
         self._length = np.empty(len(self.a))
         # the last local step: a materialized d (3, s), or (when _d is None) the positions
@@ -55,18 +59,17 @@ class SpringDirections:
     def vectors_into(self, xT: np.ndarray, pT: np.ndarray) -> None:
         """The spring vectors p_i = x_{a_i} − x_{b_i}, written into ``pT``.
 
+        Regular runs of springs (a grid's families) are gathered by strided slices, the
+        rest by ``take`` (:mod:`clothsim.solvers.spring_blocks`): the same values.
+
         Parameters
         ----------
         xT : ndarray, shape (3, n)
-            Positions [m], coordinate-major, contiguous rows.
+            Positions [m], coordinate-major, contiguous rows (C-contiguous for the slices).
         pT : ndarray, shape (3, s)
             Output [m], coordinate-major, contiguous rows (overwritten).
         """
-        a, b, tmp = self.a, self.b, self._length
-        for xc, pc in zip(xT, pT):  # mode="clip": no bounds check (indices valid by construction)
-            xc.take(a, out=pc, mode="clip")
-            xc.take(b, out=tmp, mode="clip")
-            np.subtract(pc, tmp, out=pc)
+        self._gather(xT, pT)
 
     def _scale(self, pT: np.ndarray, length_given: np.ndarray | None = None,
                source: np.ndarray | None = None) -> np.ndarray:
@@ -117,7 +120,7 @@ class SpringDirections:
         """Remember the local step just done at xT (which must stay unchanged until the
         next local step) with d = dT; the carried values are copied."""
         self._d, self._xT = None, xT
-        self._carried = (coincident, dT[:, coincident].copy())
+        self._carried = (coincident, dT[:, coincident].copy() if len(coincident) else _NO_VALUES)
 
     # -- the local step three ways ----------------------------------------------------------
     def local_step(self, xT: np.ndarray) -> np.ndarray:

@@ -86,18 +86,16 @@ class FusedStep(EnergyDifferences):
         self.pyT, self.eT = pyT, eT = solver._pyT, solver._eT
         dirs.vectors_into(yT, pyT)
         h2 = self.h2 = problem.h ** 2
-        c = np.zeros_like(y) if problem.f_ext is None else h2 * problem.f_ext
-        problem.anchors.add_rhs(c, h2, origin=y)
-        cT[...] = c[free].T
-        self.cT = cT
-        x_fixed_T = None
-        if len(fixed):
-            x_pinned = x if x0 is None else problem.initial_guess()
-            x_fixed_T = np.ascontiguousarray(x_pinned[fixed].T)
-            cT -= (sysf.A_FP @ (x_pinned[fixed] - y[fixed])).T
         # free vertices as runs of consecutive indices: x_F = y_F + δ_F by slices
         self.runs = sysf.free_runs
         self.free = free
+        self.cT = self._constant(problem, h2, cT)
+        x_fixed_T = None
+        if len(fixed):   # − A_FP δ_P, on the rows coupled to a pin (the others subtract 0)
+            x_pinned = x if x0 is None else problem.initial_guess()
+            x_fixed_T = np.ascontiguousarray(x_pinned[fixed].T)
+            rows, A_rows = sysf.coupled
+            cT[:, rows] -= (A_rows @ (x_pinned[fixed] - y[fixed])).T
         self._yFT = np.ascontiguousarray(yT[:, free]) if self.runs is None else None
         self._xFT = np.empty_like(self._yFT) if self.runs is None else None
         if energy:   # spring vectors of x_0, kept before the local step turns them into e
@@ -116,14 +114,12 @@ class FusedStep(EnergyDifferences):
         else:
             dirs.vectors_into(xT, eT)
         self._right_hand_side(dirs.e_into(xT, eT, pyT), self._rhs)
-        self.delta = np.ascontiguousarray((x[free] - y[free]).T)
+        self.delta = self._free_difference(xT, yT)
         if from_y:        # δ_F = 0 at x_0, so ∇g(x_0)_F = (A δ)_F − (b − A y)_F = −rhs_F
             self.a0 = np.zeros_like(self._rhs)
             self.norm0 = _norm(self._rhs)
         elif x0 is None:  # pins at their targets: ∇g(x_0)_F = A_FF δ_F − rhs_F, one product
-            dT = np.zeros_like(xT)           # (A δ̃)_F with δ̃ zero on the pins is A_FF δ_F
-            dT[:, free] = self.delta
-            self.a0 = np.ascontiguousarray((sysf.A @ dT.T)[free].T)
+            self.a0 = sysf.free_product(self._free_difference(x, y, rows=True))
             self.norm0 = _norm(self.a0 - self._rhs)
         else:   # a caller's x_0 may have its pins off their targets: from the definition
             g0 = solver.gradient(problem, x, dirs.current().T)
@@ -140,6 +136,34 @@ class FusedStep(EnergyDifferences):
         self._x_fixed_T = x_fixed_T
         self._first = True
         self.grad = np.empty_like(self._rhs)
+
+    def _constant(self, problem, h2: float, cT: np.ndarray) -> np.ndarray:
+        """c_F = (h² f + h² K_anchor (q − y))_F into cT (the pins' part is added after)."""
+        f = problem.f_ext
+        if self.runs is None or len(problem.anchor_vertices):
+            c = np.zeros_like(problem.y) if f is None else h2 * f
+            problem.anchors.add_rhs(c, h2, origin=problem.y)
+            cT[...] = c[self.free].T
+        elif f is None:
+            cT.fill(0.0)
+        else:             # the same products, over the free runs only
+            for start, stop, offset in self.runs:
+                np.multiply(f[start:stop].T, h2, out=cT[:, offset:offset + stop - start])
+        return cT
+
+    def _free_difference(self, u: np.ndarray, v: np.ndarray, rows: bool = False) -> np.ndarray:
+        """(u − v) over the free vertices: coordinate-major (3, f) from (3, n) arrays, or
+        with ``rows`` vertex-major (f, 3) from (n, 3) arrays; a new array."""
+        if self.runs is None:
+            return u[self.free] - v[self.free] if rows else u[:, self.free] - v[:, self.free]
+        out = np.empty((len(self.free), 3) if rows else (3, len(self.free)))
+        for start, stop, offset in self.runs:
+            if rows:
+                np.subtract(u[start:stop], v[start:stop], out=out[offset:offset + stop - start])
+            else:
+                np.subtract(u[:, start:stop], v[:, start:stop],
+                            out=out[:, offset:offset + stop - start])
+        return out
 
     # -- the parts -------------------------------------------------------------------------
     @property

@@ -39,26 +39,13 @@ class EnergyDifferences:
                             problem.anchor_stiffness)
         self._dxT = np.zeros_like(self.yT)
         self._dpT = np.empty_like(self.eT)
-        # spring ends of all three coordinates at once, in (3, n) arrays read flat
-        n = self.yT.shape[1]
-        shift = (np.arange(3) * n)[:, None]
-        self._a3 = np.ascontiguousarray((self.dirs.a[None, :] + shift).reshape(-1))
-        self._b3 = np.ascontiguousarray((self.dirs.b[None, :] + shift).reshape(-1))
-        self._tmp = np.empty(self.eT.size)
         self._accepted = 0
-        self._w = self._tmp.reshape(self.eT.shape)       # p + p' (after the gathers)
+        self._w = np.empty_like(self.eT)                  # p + p'
         self._s, self._num = np.empty(len(self._k)), np.empty(len(self._k))
         self._mv = np.empty((3, len(self._mF)))
         if self.runs is not None:   # Δx over the free vertices: views of its runs
             self._dx_runs = [self._dxT[:, start:stop] for start, stop, _ in self.runs]
             self._dxF = np.empty_like(self._mv)
-
-    def _vectors(self, xT: np.ndarray, pT: np.ndarray) -> None:
-        """p = x_a − x_b into pT, all coordinates in two takes (as SpringDirections does)."""
-        flat, out = xT.reshape(-1), pT.reshape(-1)
-        flat.take(self._a3, out=out, mode="clip")
-        flat.take(self._b3, out=self._tmp, mode="clip")
-        np.subtract(out, self._tmp, out=out)
 
     def trial(self, deltaT: np.ndarray, step: np.ndarray | None = None) -> float:
         """g(y + δ) − g(x) without cancellation, x the current iterate [J·s²].
@@ -91,7 +78,7 @@ class EnergyDifferences:
             np.subtract(xT, self._xT, out=dxT)
         else:   # zero at the pins (dxT starts zero there and only free columns are set)
             dxT[:, self.free] = step
-        self._vectors(dxT, dp)
+        self.dirs.vectors_into(dxT, dp)
         np.add(p, dp, out=pn)                          # p' = p + Δp (accept re-syncs)
         ln = self._l_spare                             # |p'|, kept for accept
         np.einsum("ij,ij->j", pn, pn, out=ln)
@@ -135,7 +122,7 @@ class EnergyDifferences:
         self._l, self._l_spare = self._l_spare, self._l
         self._accepted += 1
         if self._accepted % RESYNC == 1:   # the first move and every RESYNC-th: p(x) afresh
-            self._vectors(self._xT, self._p)
+            self.dirs.vectors_into(self._xT, self._p)
             np.einsum("ij,ij->j", self._p, self._p, out=self._l)
             np.sqrt(self._l, out=self._l)
         self._local(self._l, self._p)

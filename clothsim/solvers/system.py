@@ -20,6 +20,11 @@ from ..factorization import Factor
 from ..model import Model
 from ..problem import StepProblem
 
+try:  # y += A x for CSC A and several vectors, without A @ x's copies
+    from scipy.sparse._sparsetools import csc_matvecs as _csc_matvecs
+except ImportError:  # pragma: no cover
+    _csc_matvecs = None
+
 log = logging.getLogger(__name__)
 
 
@@ -50,6 +55,9 @@ class SystemFactor:
     work : ndarray, shape (3, 3, f)
         Coordinate-major buffers: two consecutive right-hand sides (the older one turned into
         ∇g once the newer is formed) and the constant c_F.
+    coupled : (ndarray of int, csr_matrix)
+        The free vertices (positions in F) with a pinned neighbour, and their rows of A_FP:
+        the only rows where − A_FP δ_P is not zero.
     """
 
     A: sp.csc_matrix
@@ -62,6 +70,29 @@ class SystemFactor:
     pinned_springs: np.ndarray | None = None
     work: np.ndarray | None = None
     mode: ModeChoice | None = None
+    coupled: tuple | None = None
+
+    def free_product(self, delta: np.ndarray) -> np.ndarray:
+        """A_FF δ_F, coordinate-major (the factor's A_FF, column by column).
+
+        Parameters
+        ----------
+        delta : ndarray, shape (f, 3), C-contiguous
+            δ over the free vertices, vertex-major [m].
+
+        Returns
+        -------
+        ndarray, shape (3, f)
+            A_FF δ [kg·m], a new array: each row's sum in the order of A δ̃ over all
+            vertices with δ̃ zero on the pins (the same values).
+        """
+        A = self.A_FF_factor.A
+        if _csc_matvecs is None or not delta.flags.c_contiguous:  # pragma: no cover
+            return np.ascontiguousarray((A @ delta).T)
+        out = np.zeros_like(delta)
+        _csc_matvecs(A.shape[0], A.shape[1], 3, A.indptr, A.indices, A.data,
+                     delta.reshape(-1), out.reshape(-1))
+        return np.ascontiguousarray(out.T)
 
 
 def factor_system(model: Model, problem: StepProblem, Js: sp.csr_matrix, a: np.ndarray,
@@ -124,6 +155,9 @@ def factor_system(model: Model, problem: StepProblem, Js: sp.csr_matrix, a: np.n
         runs = [(int(free[i]), int(free[j - 1]) + 1, int(i)) for i, j in zip(starts, stops)
                 if j > i]
     pinned_springs = np.flatnonzero(np.isin(a, fixed) | np.isin(b, fixed))
-    return SystemFactor(A, free, fixed, factor, A_FP.tocsr(), h2J_F, runs, pinned_springs,
+    A_FP = A_FP.tocsr()
+    coupled = np.flatnonzero(np.diff(A_FP.indptr))
+    return SystemFactor(A, free, fixed, factor, A_FP, h2J_F, runs, pinned_springs,
                         np.empty((3, 3, len(free))),
-                        mode if factor.backend == "cholmod" else None)
+                        mode if factor.backend == "cholmod" else None,
+                        (coupled, A_FP[coupled]))

@@ -88,7 +88,7 @@ def test_run_json_records_the_information_of_the_hand_over(tmp_path):
     folder.write_frame(1, x, 0 * x, {"frame": 1}, wait=False)
     folder.info["state"] = 1             # the next frame's, while frame 1 is in flight
     run = json.loads((tmp_path / "r" / "run.json").read_text())
-    assert run["last_frame"] is None     # frame 1 is not claimed before it is on disk
+    assert run["last_frame"] == 0        # frame 1 is not claimed before it is on disk
     gate.set()
     folder.wait()
     run = json.loads((tmp_path / "r" / "run.json").read_text())
@@ -134,3 +134,21 @@ def test_an_interruption_waits_for_the_frame_in_flight(tmp_path):
     assert seen == [1, 2] and run["status"] == "interrupted" and run["last_frame"] == 2
     assert run["trajectory_frames"] == 3 and (out / "frame_000002.vtu").exists()
     assert not (out / "frame_000003.vtu").exists()
+
+
+def test_the_end_rebuilds_trajectory_npz_only_when_it_lacks_frames(tmp_path, monkeypatch):
+    model = cs.load_scene("hanging").build_model()
+    folder = folder_with_frames(tmp_path / "r", model, 2, wait=False)
+    folder.save_npz(force=True)                  # frames 0..2: all of them
+    rebuilt = []
+    real = folder.store.write_npz
+    monkeypatch.setattr(folder.store, "write_npz", lambda *a: (rebuilt.append(a[1]), real(*a)))
+    folder.end("complete", None)
+    assert rebuilt == []                         # it held every frame already
+    folder.write_frame(3, model.mesh.vertices, 0 * model.mesh.vertices, {"frame": 3})
+    folder.end("complete", None)
+    assert rebuilt == [4]                        # frame 3 was missing: rebuilt once
+    folder.__exit__(None, None, None)
+    with np.load(tmp_path / "r" / "trajectory.npz") as z:
+        assert z["positions"].shape[0] == 4
+    assert json.loads((tmp_path / "r" / "run.json").read_text())["trajectory_frames"] == 4

@@ -82,6 +82,9 @@ def test_benchmark_builds_agrees_and_reports(program, capsys, monkeypatch):
     assert shares["per step: start, gradient at x_0"] > 0   # the x_n start's gradient
     full, product = result["start_gradient"][9]
     assert full > 0 and product > 0
+    setup, solve, slices, takes = result["setup"][9]
+    assert 0 < setup < solve                  # a step's setup is part of its solve
+    assert slices > 0 and takes > 0
     out = capsys.readouterr().out
     assert "| 9² |" in out and f"| {side.CHECK_SIZE}² (check only) |" in out
 

@@ -1,0 +1,137 @@
+"""Faults planted in clothsim's own steps on scenes the other port tests do not use.
+
+A non-square 16 × 10 curtain (area-lumped masses, three pins, converged steps) and a
+30 × 20 cloth falling on a sphere with contact projected after the solve. The port is
+clothsim itself with one key of the scene changed (``--set``, as a user's mistake would
+change it); each verdict must name the fault, never advise iterations for a converged port.
+"""
+
+from __future__ import annotations
+
+from importlib import resources
+
+import clothsim as cs
+from clothsim.ports.check import check_steps
+
+from .test_check_verdicts import trajectory
+
+CURTAIN = """
+[scene]
+name = "curtain"
+frames = 3
+fps = 30
+
+[cloth]
+shape = "grid"
+size = [1.5, 1.0]
+resolution = [16, 10]
+center = [0.0, 1.0, 0.0]
+plane = "xy"
+mass = 0.8
+mass_lumping = "area"
+
+[springs]
+structural = 600.0
+shear = 400.0
+bending = 40.0
+
+[solver]
+method = "local-global"
+iterations = {iterations}
+{tolerance}
+
+[[effects]]
+kind = "gravity"
+acceleration = [0.0, -9.81, 0.0]
+
+[[effects]]
+kind = "pin"
+grid = [[-1, 0], [-1, 7], [-1, -1]]
+"""
+
+
+def curtain(tmp_path, converged=True):
+    path = tmp_path / f"curtain-{converged}.toml"
+    path.write_text(CURTAIN.format(iterations=500 if converged else 10,
+                                   tolerance="tolerance = 1e-10" if converged else ""))
+    return path
+
+
+def port(path, *overrides):
+    """clothsim's own trajectory of the scene with ``overrides``: the port."""
+    scene = cs.load_scene(path, overrides)
+    return trajectory(scene.build_simulation(scene.build_model()), scene.frames)
+
+
+def verdict(path, *overrides):
+    report = check_steps(cs.load_scene(path), *port(path, *overrides))
+    return report, report.summary()
+
+
+def test_the_unchanged_curtain_passes(tmp_path):
+    report, summary = verdict(curtain(tmp_path))
+    assert report.passed and {s.status for s in report.steps} == {"agrees"}, summary
+
+
+def test_another_mass_lumping_is_named_not_sent_to_iterations(tmp_path):
+    report, summary = verdict(curtain(tmp_path), 'cloth.mass_lumping="uniform"')
+    assert summary.startswith("FAIL at step 0 -> 1: model differs"), summary
+    assert 'other vertex masses: those of mass_lumping = "uniform" (0.8 kg in all)' in summary
+    assert "raise its iterations" not in summary
+    assert {s.status for s in report.steps} == {"model differs"}, summary
+
+
+def test_vertex_masses_off_on_a_few_vertices_are_listed(tmp_path):
+    """Not a lumping: the masses of the bottom row doubled (a per-vertex mass table)."""
+    path = curtain(tmp_path)
+    scene = cs.load_scene(path)
+    model = scene.build_model()
+    masses = model.vertex_mass.copy()
+    masses[:16] *= 2
+    heavy = cs.Model(model.mesh, model.springs, masses)
+    xs, vs = trajectory(scene.build_simulation(heavy), 2)
+    summary = check_steps(scene, xs, vs).summary()
+    assert "other vertex masses: the scene's × 2 on 16 of 160 vertices (0, 1, 2" in summary, \
+        summary
+
+
+def test_bending_springs_left_out_are_named(tmp_path):
+    _, summary = verdict(curtain(tmp_path), "springs.bending=0")
+    assert summary.startswith("FAIL at step 0 -> 1: model differs"), summary
+    assert "the bending springs only" in summary and "stiffness × 0.000" in summary, summary
+
+
+def test_a_doubled_time_step_is_named_as_h(tmp_path):
+    _, summary = verdict(curtain(tmp_path), "scene.fps=15")
+    assert "as if h were 0.06667 s there, not 0.03333 s" in summary, summary
+    assert summary.startswith("FAIL at step 0 -> 1: model differs"), summary
+
+
+def test_one_pin_left_free_is_named_at_that_pin(tmp_path):
+    path = curtain(tmp_path)
+    report, summary = verdict(path, "effects[1].grid=[[-1, 0], [-1, -1]]")
+    middle = 9 * 16 + 7                                  # row -1, column 7
+    assert summary.startswith("FAIL at step 0 -> 1: pinned vertex moved"), summary
+    assert f"at vertex {middle} (pinned exactly)" in summary, summary
+
+
+def test_an_unconverged_port_of_another_model_is_not_told_to_match_its_settings(tmp_path):
+    """Same start and iterations as the scene: matching them cannot be the advice."""
+    report, summary = verdict(curtain(tmp_path, converged=False), 'cloth.mass_lumping="uniform"')
+    assert not report.passed
+    assert "match the port's settings" not in summary, summary
+    assert "never come within the tolerance of the port's answer" in summary, summary
+
+
+def test_damping_left_out_on_a_sphere_in_post_solve_mode_fails(tmp_path):
+    """The velocity update v = (x₁ − x₀) / h without the scene's damping, on a 30 × 20
+    cloth that reaches a sphere (contact projected after the solve)."""
+    text = resources.files("clothsim.scenes").joinpath("drape-sphere.toml").read_text()
+    text = (text.replace("frames = 90", "frames = 8")
+            .replace("resolution = [25, 25]", "resolution = [30, 20]")
+            + '\n[contact]\nmode = "post-solve"\n')
+    path = tmp_path / "sphere.toml"
+    path.write_text(text)
+    assert check_steps(cs.load_scene(path), *port(path)).passed
+    report, summary = verdict(path, "effects[3].coefficient=0")
+    assert summary.startswith("FAIL") and "velocities differ" in summary, summary
