@@ -8,9 +8,9 @@ The built-in scene ``drop-on-square`` (``.venv/bin/clothsim run`` runs it into
 local/global with Anderson acceleration (so that the cloth comes to rest within the scene's
 4 s: docs/effects.md, "Coming to rest"). The box and the floor hold the vertices they push
 on their contact planes during the next solve (``[contact] mode = "hold"``, the default;
-docs/effects.md), so the cloth folds over the box's edges without tearing. Here we run its
-first 1.5 s in memory, draw three moments with :func:`clothsim.plotting.draw`, and compare
-the seed's projection after the solve.
+docs/effects.md), so the cloth folds over the box's edges without tearing.
+Here we run its first 1.5 s in memory, draw three moments with
+:func:`clothsim.plotting.draw`, and compare the seed's projection after the solve.
 """
 
 import matplotlib.pyplot as plt

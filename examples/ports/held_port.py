@@ -35,10 +35,14 @@ from clothsim.scene import Scene, builtin_scene_text, load_scene
 FAULTS = ("none", "post-solve", "frictionless", "flipped")
 
 
-def builtin(name: str = "drop-on-square", resolution: int = 25, **contact) -> Scene:
-    """A built-in scene at ``resolution``², its [contact] table as given."""
+def builtin(name: str = "drop-on-square", resolution: int = 25, solver: dict | None = None,
+            **contact) -> Scene:
+    """A built-in scene at ``resolution``², its [contact] table as given, its [solver]
+    table replaced by ``solver`` when given."""
     doc = tomllib.loads(builtin_scene_text(name))
     doc["cloth"]["resolution"] = [resolution, resolution]
+    if solver is not None:
+        doc["solver"] = dict(solver)
     if contact:
         doc["contact"] = dict(contact)
     return Scene.from_dict(doc, source=f"{name}.toml")
