@@ -36,8 +36,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from ..model import MASS_LUMPINGS, Model
-from .cause_words import cause_text, describe, evidence_text, head, listing, span
+from .cause_words import cause_text, describe, evidence_text, head, listing, masses_text, span
 from .hypotheses import (
     REPLACING,
     StepData,
@@ -47,6 +46,7 @@ from .hypotheses import (
     fit_vertex_scale,
     relative,
 )
+from .replayed import replay_cause
 from .replays import approach, replay
 
 log = logging.getLogger(__name__)
@@ -302,31 +302,9 @@ def _vertex_mass_cause(step: StepData) -> Cause | None:
     if not _explains(step, "vertex mass", c, gradients, evidence):
         return None
     fitted = (1 + c) * m
-    text = (f"{head(evidence)} other vertex masses: {_masses_text(step, fitted, free)}"
+    text = (f"{head(evidence)} other vertex masses: {masses_text(step, fitted, free)}"
             f"{evidence_text([step], gradients, evidence)}")
     return Cause(text, "vertex mass", c, gradients, evidence)
-
-
-def _masses_text(step: StepData, fitted: np.ndarray, free: np.ndarray) -> str:
-    """The fitted masses in words: a mass lumping's when they are spread as it spreads
-    them (on the free vertices, the only ones the step shows), else their range."""
-    m = step.model.vertex_mass
-    for lumping in MASS_LUMPINGS:
-        try:
-            unit = Model.build(step.model.mesh, step.model.springs, total_mass=1.0,
-                               mass_lumping=lumping).vertex_mass
-        except ValueError:
-            continue
-        u = unit[free]
-        total = float(fitted[free] @ u / (u @ u))     # the port's total mass, least squares
-        lumped = total * unit
-        if np.allclose(fitted[free], lumped[free], rtol=1e-3, atol=0) and \
-                not np.allclose(m[free], lumped[free], rtol=1e-3, atol=0):
-            return (f"those of mass_lumping = \"{lumping}\" ({total:.4g} kg in all), not the "
-                    f"scene's masses ({m.sum():.4g} kg in all; clothsim diff-model compares them)")
-    changed = free & (np.abs(fitted - m) > 1e-3 * m)
-    return (f"the scene's × {span(fitted[changed] / m[changed])} on {int(changed.sum())} of "
-            f"{len(m)} vertices ({listing(np.flatnonzero(changed))})")
 
 
 #: The verdicts a fitted model may replace: a port that solves another problem gets them.
@@ -355,6 +333,9 @@ def name_cause(checks: dict, steps: list[StepData], others=()) -> Cause | None:
     -------
     Cause or None
     """
+    every = sorted(list(steps) + list(others), key=lambda s: s.k)
+    if every and every[0].settings and _replayed(checks, every):
+        return None                 # a fixed-iteration port: its replays name the cause
     cause = infer_cause(steps)
     if cause is None:
         if steps and checks[steps[0].k].status in ("not a minimizer", "model differs"):
@@ -375,3 +356,23 @@ def name_cause(checks: dict, steps: list[StepData], others=()) -> Cause | None:
                           f"the model fitted at step {first} -> {first + 1} explains it "
                           f"(relative gradient {cause.gradients[s.k]:.1e} under it)")
     return cause
+
+
+def _replayed(checks: dict, steps: list[StepData]) -> bool:
+    """A fixed-iteration port: the cause whose replays reproduce its steps
+    (:mod:`clothsim.ports.replayed`), written into the steps it explains, or the note
+    that no single hypothesis does; True when a cause was named."""
+    found = replay_cause(steps)
+    if found is None:
+        checks[steps[0].k].note += (
+            "; no single model change reproduces the port's answer when clothsim's iteration "
+            f"is replayed at {steps[0].settings} (tried: the external force, stiffness, rest "
+            "lengths, pins, h, per spring family, mass lumping)")
+        return False
+    text, distances = found
+    k0 = min(distances)
+    for k, d in distances.items():
+        checks[k].status = "model differs"
+        checks[k].note = (text if k == k0 else f"the model fitted at step {k0} -> {k0 + 1} "
+                          f"explains it (its replay is {d:.1e} m off the port's answer)")
+    return True

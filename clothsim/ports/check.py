@@ -102,6 +102,25 @@ def step_tolerance(sim, x: np.ndarray, precision: str = "float64") -> float:
     return tol
 
 
+def fixed_settings(sim) -> str:
+    """"10 local/global iterations from y": the scene's fixed iteration count, or "".
+
+    Parameters
+    ----------
+    sim : Simulation
+
+    Returns
+    -------
+    str
+        "" for a converged method (Newton) or a scene with a solver tolerance.
+    """
+    solver = sim.solver
+    if solver.name == "newton" or solver.tolerance:
+        return ""
+    name = solver.name.replace("-", "/")
+    return f"{solver.iterations} {name} iterations from {sim.initial_guess}"
+
+
 def system_condition_number(sim) -> float:
     """κ(M + h²L) of the simulation's next step, with its penalty pins.
 
@@ -246,7 +265,8 @@ def check_steps(simulation, positions, velocities=None, *, precision: str = "flo
                                          printed and printed.unit)
                 (unexplained if step.status in FITTED else others).append(StepData(
                     k, model, problem, x_port, g0, opt, step.gradient_clothsim,
-                    float(err[worst]), tol, replay, step.status == "not converged"))
+                    float(err[worst]), tol, replay, step.status == "not converged",
+                    fixed_settings(sim)))
             if precision == "float64" and printed is not None and not step.passed:
                 printed.hint32(step, float(err[worst]), lambda b=bound32, t=tol_k: max(t, b()))
             off = off_plane_note(held, x_port, tol) if held else ""

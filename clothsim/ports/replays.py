@@ -51,6 +51,9 @@ def variant(step: StepData, hypothesis: str, theta) -> tuple:
         mass = scale * mass
         f = np.zeros_like(step.x_port) if p.f_ext is None else p.f_ext
         p = dataclasses.replace(p, f_ext=f * scale[:, None])
+    elif hypothesis == "time step":   # θ: h' / h − 1; the inertial target y moves with h
+        h = max(one, 1e-6) * p.h
+        p = dataclasses.replace(p, h=h, y=p.x + (h / p.h) * (p.y - p.x))
     elif hypothesis == "pins":
         p = dataclasses.replace(p, anchor_stiffness=max(one, 0.0) * p.anchor_stiffness)
     else:

@@ -10,6 +10,8 @@ from __future__ import annotations
 
 from importlib import resources
 
+import pytest
+
 import clothsim as cs
 from clothsim.ports.check import check_steps
 
@@ -115,12 +117,58 @@ def test_one_pin_left_free_is_named_at_that_pin(tmp_path):
     assert f"at vertex {middle} (pinned exactly)" in summary, summary
 
 
-def test_an_unconverged_port_of_another_model_is_not_told_to_match_its_settings(tmp_path):
-    """Same start and iterations as the scene: matching them cannot be the advice."""
-    report, summary = verdict(curtain(tmp_path, converged=False), 'cloth.mass_lumping="uniform"')
-    assert not report.passed
+UNCONVERGED = [
+    ('cloth.mass_lumping="uniform"', 'other vertex masses: those of mass_lumping = "uniform"'),
+    ("scene.fps=15", "h = 0.06667 s instead of 0.03333 s"),
+    ("springs.bending=0", "springs that exert no force (stiffness × 0.000, the bending"),
+    ("effects[0].acceleration=[0.0, 9.81, 0.0]", "the external force (0, +9.81, 0)"),
+    ("springs.structural=300.0", "stiffness × 0.500 (the structural springs only)"),
+]
+
+
+def test_a_right_port_at_ten_iterations_passes(tmp_path):
+    report, summary = verdict(curtain(tmp_path, converged=False))
+    assert report.passed and {s.status for s in report.steps} == {"agrees"}, summary
+
+
+@pytest.mark.parametrize(("fault", "named"), UNCONVERGED)
+def test_each_fault_of_a_ten_iteration_port_is_named_by_replay(tmp_path, fault, named):
+    """The port runs the scene's 10 local/global iterations from y: no answer minimizes
+    any g, and the replay of clothsim's iteration with the fitted change names the fault
+    (it was UNDECIDED, start-dependent, for the lumping and h)."""
+    report, summary = verdict(curtain(tmp_path, converged=False), fault)
+    assert summary.startswith("FAIL at step 0 -> 1: model differs"), summary
+    assert named in summary, summary
+    assert "replayed at 10 local/global iterations from y" in summary, summary
     assert "match the port's settings" not in summary, summary
-    assert "never come within the tolerance of the port's answer" in summary, summary
+    assert {s.status for s in report.steps} == {"model differs"}, summary
+
+
+def test_a_ten_iteration_port_from_x_n_is_replayed_from_x_n(tmp_path):
+    path = curtain(tmp_path, converged=False)
+    path.write_text(path.read_text().replace("iterations = 10", 'iterations = 10\n'
+                                             'initial_guess = "x_n"'))
+    report, summary = verdict(path, "scene.fps=15")
+    assert "h = 0.06667 s instead of 0.03333 s (replayed at 10 local/global iterations " \
+           "from x_n" in summary, summary
+
+
+def test_two_faults_at_once_name_no_single_cause(tmp_path):
+    """h doubled and another lumping: neither alone reproduces the port, so neither is
+    named (a wrong single cause would be worse than none)."""
+    report, summary = verdict(curtain(tmp_path, converged=False), "scene.fps=15",
+                              'cloth.mass_lumping="uniform"')
+    assert not report.passed
+    assert "no single model change reproduces the port's answer" in summary, summary
+    assert "h = " not in summary and "mass_lumping" not in summary, summary
+
+
+def test_a_float32_ten_iteration_port_of_the_scene_passes(tmp_path):
+    path = curtain(tmp_path, converged=False)
+    xs, vs = port(path)
+    report = check_steps(cs.load_scene(path), xs.astype("float32"), vs.astype("float32"),
+                         precision="float32")
+    assert report.passed, report.summary()
 
 
 def test_damping_left_out_on_a_sphere_in_post_solve_mode_fails(tmp_path):

@@ -1,0 +1,179 @@
+"""Causes for a port that stops after a fixed number of iterations: hypotheses tested by replay.
+
+A port that runs the paper's 10 local/global iterations per step does not minimize any g,
+so the gradient fits of :mod:`clothsim.ports.causes` cannot explain it. What it does is
+clothsim's iteration, at the port's settings, on the port's model: each hypothesis of a
+model fault is therefore tested by *replaying* clothsim's own iteration (the scene's
+iteration count and start, from the port's previous state) with the hypothesised model
+change. The parameters are fitted on the replays (Gauss–Newton with finite differences,
+started from the gradient's least-squares θ), and a hypothesis is named when its replay
+lands within the step's tolerance of the port's answer, or within :data:`REPLAY` of the
+distance of clothsim's step of the scene's model, on every fitted step.
+
+The hypotheses: those of :func:`clothsim.ports.hypotheses.applicable` (the inertia term's
+scale replaced by another time step h, which also moves the inertial target y = x + h v),
+and each other mass lumping (the scene's total mass spread as that lumping spreads it).
+Two faults at once are explained by none of them: then nothing is named.
+"""
+
+from __future__ import annotations
+
+import logging
+import warnings
+
+import numpy as np
+
+from ..model import MASS_LUMPINGS, Model
+from .cause_words import describe, masses_text
+from .hypotheses import REPLACING, StepData, applicable, fit
+from .replays import replay
+
+log = logging.getLogger(__name__)
+
+__all__ = ["REPLAY", "replay_cause", "replay_count"]
+
+#: A replay explains a step within the tolerance, or this share of the scene's distance.
+REPLAY = 0.01
+#: Gauss–Newton iterations on the replays (each costs 1 + len(θ) replays).
+REFINE = 6
+#: Failing steps the hypotheses are fitted on jointly.
+JOINT = 2
+#: Further failing steps tested by one replay each with the fitted model.
+MAX_REPLAYS = 8
+
+
+def replay_count(step: StepData) -> int:
+    """Replays the hypotheses may cost on ``step`` at most (for the docs' runtime note).
+
+    Parameters
+    ----------
+    step : StepData
+
+    Returns
+    -------
+    int
+        Σ over the hypotheses of 1 + REFINE × (1 + len(θ)) + 1, plus one per other lumping.
+    """
+    total = 0
+    for hyp, theta in _candidates([step]):
+        total += 2 + (REFINE * (1 + len(theta)) if hyp != "vertex mass" else 0)
+    return total
+
+
+def _candidates(steps) -> list:
+    """(hypothesis, θ₀) to replay: fewest parameters first, then the other lumpings."""
+    out = []
+    for hyp in applicable(steps):
+        theta = fit(steps[:1], hyp)
+        if theta is None:
+            continue
+        if hyp == "inertia":         # M (x − y) / h² × (1 + θ): h' = h / √(1 + θ)
+            one = float(1 + theta[0])
+            hyp, theta = "time step", np.array([(1 / np.sqrt(one) if one > 0 else 1.0) - 1])
+        out.append((hyp, np.asarray(theta, dtype=np.float64)))
+    out.sort(key=lambda c: len(c[1]))
+    s = steps[0]
+    m = s.model.vertex_mass
+    for lumping in MASS_LUMPINGS:
+        try:
+            unit = Model.build(s.model.mesh, s.model.springs, total_mass=1.0,
+                               mass_lumping=lumping).vertex_mass
+        except ValueError:
+            continue
+        other = unit * m.sum()
+        if np.all(m > 0) and not np.allclose(other, m, rtol=1e-6, atol=0):
+            out.append(("vertex mass", other / m - 1.0))
+    return out
+
+
+def _refine(step, hyp, theta):
+    """θ whose replay lands nearest the port's answer on ``step`` (Gauss–Newton)."""
+    theta = np.array(theta, dtype=np.float64)
+
+    def misfit(th):
+        x = replay(step, hyp, th, positions=True)
+        return None if x is None else (x - step.x_port).ravel()
+
+    r = misfit(theta)
+    for _ in range(REFINE if r is not None and np.all(np.isfinite(r)) else 0):
+        delta = 1e-6 * np.maximum(1.0, np.abs(theta))
+        cols = []
+        for j in range(len(theta)):
+            trial = theta.copy()
+            trial[j] += delta[j]
+            rj = misfit(trial)
+            if rj is None:
+                return theta
+            cols.append((rj - r) / delta[j])
+        change, *_ = np.linalg.lstsq(np.stack(cols, 1), -r, rcond=None)
+        new = misfit(theta + change)
+        if new is None or not np.linalg.norm(new) < np.linalg.norm(r):
+            break
+        theta, r = theta + change, new
+        if np.all(np.abs(change) <= 1e-10 * np.maximum(1.0, np.abs(theta))):
+            break
+    return theta
+
+
+def _reproduces(step, d) -> bool:
+    return d <= max(step.tolerance, REPLAY * step.error)
+
+
+def replay_cause(steps: list[StepData]):
+    """The single hypothesis whose replays reproduce the port's first failing steps.
+
+    Parameters
+    ----------
+    steps : list of StepData
+        The failing steps, in order, of a scene solved with a fixed iteration count
+        (:attr:`StepData.settings` says which).
+
+    Returns
+    -------
+    (str, dict) or None
+        The cause's text and step k → distance of the fitted model's replay from the
+        port's answer [m] for the steps it explains (the fitted ones and up to
+        :data:`MAX_REPLAYS` later ones); None when no single hypothesis reproduces them.
+    """
+    if not steps or steps[0].solve is None:
+        return None
+    with warnings.catch_warnings():   # a replayed model may be badly conditioned
+        warnings.simplefilter("ignore")
+        return _first_reproducing(steps)
+
+
+def _first_reproducing(steps):
+    fitted = steps[:JOINT]
+    for hyp, theta0 in _candidates(fitted):
+        theta = theta0 if hyp == "vertex mass" else _refine(fitted[0], hyp, theta0)
+        if hyp not in REPLACING:       # a scale below −1 is replayed as 0 (variant clamps)
+            theta = np.maximum(theta, -1.0)
+        d = {s.k: replay(s, hyp, theta) for s in fitted}
+        log.debug("replayed %s, θ = %s: %s", hyp, theta, d)
+        if all(_reproduces(s, d[s.k]) for s in fitted):
+            for s in steps[JOINT:JOINT + MAX_REPLAYS]:
+                dk = replay(s, hyp, theta)
+                if _reproduces(s, dk):
+                    d[s.k] = dk
+            return _text(fitted, hyp, theta, d), d
+    return None
+
+
+def _text(fitted, hyp, theta, d) -> str:
+    s = fitted[0]
+    if hyp == "time step":
+        h = s.problem.h
+        what = f"h = {h * (1 + theta[0]):.4g} s instead of {h:.4g} s"
+    elif hyp == "vertex mass":
+        free = s.problem.free_mask(len(s.model.vertex_mass))
+        masses = masses_text(s, (1 + theta) * s.model.vertex_mass, free)
+        what = f"other vertex masses: {masses}"
+    else:
+        what = describe(fitted, hyp, theta)
+    ks = [f.k for f in fitted]
+    where = ", ".join(f"{k} -> {k + 1}" for k in ks)
+    return (f"the port's steps are clothsim's steps with {what} (replayed at "
+            f"{s.settings or 'the scene settings'}, from the port's x_k and v_k: "
+            f"{max(d[k] for k in ks):.1e} m off the port's answer, against "
+            f"{max(f.error for f in fitted):.1e} m for the scene's model; step"
+            f"{'s' if len(ks) > 1 else ''} {where})")
