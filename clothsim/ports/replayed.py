@@ -8,7 +8,9 @@ iteration count and start, from the port's previous state) with the hypothesised
 change. The parameters are fitted on the replays (Gauss–Newton with finite differences,
 started from the gradient's least-squares θ), and a hypothesis is named when its replay
 lands within the step's tolerance of the port's answer, or within :data:`REPLAY` of the
-distance of clothsim's step of the scene's model, on every fitted step.
+distance of clothsim's step of the scene's model, on every fitted step; of several, the
+nearest (relative to the tolerance) is named, and the search stops at the first within
+the tolerance. A port whose answer is its start point is left to the judge.
 
 The hypotheses: those of :func:`clothsim.ports.hypotheses.applicable` (the inertia term's
 scale replaced by another time step h, which also moves the inertial target y = x + h v),
@@ -143,20 +145,33 @@ def replay_cause(steps: list[StepData]):
 
 
 def _first_reproducing(steps):
+    """The nearest reproducing hypothesis; the search stops at one within the tolerance."""
     fitted = steps[:JOINT]
+    if any(float(np.linalg.norm(s.x_port - s.problem.initial_guess(), axis=1).max())
+           <= s.tolerance for s in fitted):
+        return None                     # a port that does not move: judge says so
+    best = None
     for hyp, theta0 in _candidates(fitted):
         theta = theta0 if hyp == "vertex mass" else _refine(fitted[0], hyp, theta0)
         if hyp not in REPLACING:       # a scale below −1 is replayed as 0 (variant clamps)
             theta = np.maximum(theta, -1.0)
         d = {s.k: replay(s, hyp, theta) for s in fitted}
         log.debug("replayed %s, θ = %s: %s", hyp, theta, d)
-        if all(_reproduces(s, d[s.k]) for s in fitted):
-            for s in steps[JOINT:JOINT + MAX_REPLAYS]:
-                dk = replay(s, hyp, theta)
-                if _reproduces(s, dk):
-                    d[s.k] = dk
-            return _text(fitted, hyp, theta, d), d
-    return None
+        if not all(_reproduces(s, d[s.k]) for s in fitted):
+            continue
+        score = max(d[s.k] / max(s.tolerance, 1e-300) for s in fitted)
+        if best is None or score < best[0]:
+            best = (score, hyp, theta, d)
+        if score <= 1:                 # within the tolerance: no nearer hypothesis needed
+            break
+    if best is None:
+        return None
+    _, hyp, theta, d = best
+    for s in steps[JOINT:JOINT + MAX_REPLAYS]:
+        dk = replay(s, hyp, theta)
+        if _reproduces(s, dk):
+            d[s.k] = dk
+    return _text(fitted, hyp, theta, d), d
 
 
 def _text(fitted, hyp, theta, d) -> str:

@@ -171,15 +171,37 @@ def test_a_float32_ten_iteration_port_of_the_scene_passes(tmp_path):
     assert report.passed, report.summary()
 
 
-def test_damping_left_out_on_a_sphere_in_post_solve_mode_fails(tmp_path):
-    """The velocity update v = (x₁ − x₀) / h without the scene's damping, on a 30 × 20
-    cloth that reaches a sphere (contact projected after the solve)."""
+def sphere_scene(tmp_path):
+    """drape-sphere at 30 × 20, 8 frames, contact projected after the solve."""
     text = resources.files("clothsim.scenes").joinpath("drape-sphere.toml").read_text()
     text = (text.replace("frames = 90", "frames = 8")
             .replace("resolution = [25, 25]", "resolution = [30, 20]")
             + '\n[contact]\nmode = "post-solve"\n')
     path = tmp_path / "sphere.toml"
     path.write_text(text)
+    return path
+
+
+def test_damping_left_out_on_a_sphere_in_post_solve_mode_fails(tmp_path):
+    """The velocity update v = (x₁ − x₀) / h without the scene's damping, on a 30 × 20
+    cloth that reaches a sphere (contact projected after the solve): the damping is named."""
+    path = sphere_scene(tmp_path)
     assert check_steps(cs.load_scene(path), *port(path)).passed
     report, summary = verdict(path, "effects[3].coefficient=0")
     assert summary.startswith("FAIL") and "velocities differ" in summary, summary
+    assert ('the damping (model "rigid") left out (coefficient 0 instead of 0.1)'
+            in summary), summary
+
+
+def test_another_damping_coefficient_is_fitted(tmp_path):
+    _, summary = verdict(sphere_scene(tmp_path), "effects[3].coefficient=0.05")
+    assert "of another coefficient (0.05 instead of 0.1)" in summary, summary
+
+
+def test_a_smaller_sphere_in_post_solve_mode_is_named(tmp_path):
+    """The port's sphere has radius 0.25 m, the scene's 0.3 m: the port's vertices in
+    contact share their distance from the centre, and the replay with it is the port's."""
+    report, summary = verdict(sphere_scene(tmp_path), "effects[1].radius=0.25")
+    assert summary.startswith("FAIL at step"), summary
+    assert "model differs" in summary, summary
+    assert "a sphere of radius 0.25 m instead of 0.3 m" in summary, summary
