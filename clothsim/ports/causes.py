@@ -317,7 +317,9 @@ def name_cause(checks: dict, steps: list[StepData], others=()) -> Cause | None:
     The steps the fitted model explains become ``model differs`` with the cause as their
     note (their vertex stays the one of largest error). When no model fits, the first
     step's note says so if its verdict is ``not a minimizer`` or ``model differs``;
-    unconverged verdicts keep their explanation.
+    unconverged verdicts keep their explanation. In a scene of a fixed iteration count
+    (:attr:`StepData.settings`), a first failing step the gradient fits cannot take (start-
+    dependent) or do not explain is explained by replays (:mod:`clothsim.ports.replayed`).
 
     Parameters
     ----------
@@ -334,9 +336,11 @@ def name_cause(checks: dict, steps: list[StepData], others=()) -> Cause | None:
     Cause or None
     """
     every = sorted(list(steps) + list(others), key=lambda s: s.k)
-    if every and every[0].settings and _replayed(checks, every):
+    cause = infer_cause(steps) if steps and steps[0] is every[0] else None
+    if cause is None and every and every[0].settings and _replayed(checks, every):
         return None                 # a fixed-iteration port: its replays name the cause
-    cause = infer_cause(steps)
+    if cause is None and steps and steps[0] is not every[0]:
+        cause = infer_cause(steps)
     if cause is None:
         if steps and checks[steps[0].k].status in ("not a minimizer", "model differs"):
             near = closest(steps[0])

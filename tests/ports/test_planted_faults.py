@@ -139,7 +139,10 @@ def test_each_fault_of_a_ten_iteration_port_is_named_by_replay(tmp_path, fault, 
     report, summary = verdict(curtain(tmp_path, converged=False), fault)
     assert summary.startswith("FAIL at step 0 -> 1: model differs"), summary
     assert named in summary, summary
-    assert "replayed at 10 local/global iterations from y" in summary, summary
+    # the gradient fit of the first step explains gravity's sign (its step is "model
+    # differs" from the judge); the others are start-dependent there and named by replay
+    assert ("replayed at 10 local/global iterations from y" in summary
+            or "clothsim's step with that model is within 2.5e-16 m" in summary), summary
     assert "match the port's settings" not in summary, summary
     assert {s.status for s in report.steps} == {"model differs"}, summary
 
