@@ -337,7 +337,8 @@ def name_cause(checks: dict, steps: list[StepData], others=()) -> Cause | None:
     """
     every = sorted(list(steps) + list(others), key=lambda s: s.k)
     cause = infer_cause(steps) if steps and steps[0] is every[0] else None
-    if cause is None and every and every[0].settings and _replayed(checks, every):
+    weak = cause is None or any(how == "approaches" for how, _ in cause.evidence.values())
+    if weak and every and every[0].settings and _replayed(checks, every):
         return None                 # a fixed-iteration port: its replays name the cause
     if cause is None and steps and steps[0] is not every[0]:
         cause = infer_cause(steps)

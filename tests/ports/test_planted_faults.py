@@ -208,3 +208,30 @@ def test_a_smaller_sphere_in_post_solve_mode_is_named(tmp_path):
     assert summary.startswith("FAIL at step"), summary
     assert "model differs" in summary, summary
     assert "a sphere of radius 0.25 m instead of 0.3 m" in summary, summary
+
+
+def drop_on_square(tmp_path, frames=16):
+    """The seed's demo at 25², 10 local/global iterations, contact projected after the solve."""
+    text = resources.files("clothsim.scenes").joinpath("drop-on-square.toml").read_text()
+    path = tmp_path / "drop.toml"
+    path.write_text(text.replace("frames = 90", f"frames = {frames}")
+                    + '\n[contact]\nmode = "post-solve"\n')
+    return path
+
+
+def test_bending_left_out_on_the_box_is_named_through_the_contact_steps(tmp_path):
+    """The flat cloth falls as one until it lands (step 10): the replays there include the
+    box's projection, and the bending springs are named (it was UNDECIDED)."""
+    path = drop_on_square(tmp_path)
+    assert check_steps(cs.load_scene(path), *port(path)).passed
+    report, summary = verdict(path, "springs.bending=0")
+    assert summary.startswith("FAIL at step 10 -> 11: model differs"), summary
+    assert "the bending springs only" in summary, summary
+    assert {s.status for s in report.steps if not s.passed} == {"model differs"}, summary
+
+
+def test_a_doubled_time_step_on_the_box_is_named(tmp_path):
+    report, summary = verdict(drop_on_square(tmp_path, 4), "scene.fps=15")
+    assert summary.startswith("FAIL at step 0 -> 1: model differs"), summary
+    assert "h = 0.06667 s instead of 0.03333 s (replayed at 10 local/global iterations" \
+        in summary, summary
