@@ -221,6 +221,28 @@ def describe(steps, hyp, theta) -> str:
     return what
 
 
+def lumpings(model) -> list:
+    """Each mass lumping's vertex masses for a total of 1 kg on the model's mesh.
+
+    Parameters
+    ----------
+    model : Model
+
+    Returns
+    -------
+    list of (str, ndarray)
+        (lumping, masses [kg], shape (n,)); a lumping the mesh cannot take is left out.
+    """
+    out = []
+    for lumping in MASS_LUMPINGS:
+        try:
+            out.append((lumping, Model.build(model.mesh, model.springs, total_mass=1.0,
+                                             mass_lumping=lumping).vertex_mass))
+        except ValueError:
+            continue
+    return out
+
+
 def masses_text(step, fitted: np.ndarray, free: np.ndarray) -> str:
     """The fitted masses in words: a mass lumping's when they are spread as it spreads
     them (on the free vertices, the only ones the step shows), else their range.
@@ -238,12 +260,7 @@ def masses_text(step, fitted: np.ndarray, free: np.ndarray) -> str:
     str
     """
     m = step.model.vertex_mass
-    for lumping in MASS_LUMPINGS:
-        try:
-            unit = Model.build(step.model.mesh, step.model.springs, total_mass=1.0,
-                               mass_lumping=lumping).vertex_mass
-        except ValueError:
-            continue
+    for lumping, unit in lumpings(step.model):
         u = unit[free]
         total = float(fitted[free] @ u / (u @ u))     # the port's total mass, least squares
         lumped = total * unit

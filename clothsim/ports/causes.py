@@ -38,7 +38,6 @@ import numpy as np
 
 from .cause_words import cause_text, describe, evidence_text, head, listing, masses_text, span
 from .hypotheses import (
-    REPLACING,
     StepData,
     applicable,
     columns,
@@ -47,7 +46,7 @@ from .hypotheses import (
     relative,
 )
 from .replayed import replay_cause
-from .replays import approach, replay
+from .replays import approach, refine, replay
 
 log = logging.getLogger(__name__)
 
@@ -179,7 +178,7 @@ def infer_cause(steps: list[StepData]) -> Cause | None:
             gradients, evidence = {}, {}
             fitted_theta = theta
             if _replayable(fitted, hyp, theta) and _promising(fitted[0], hyp, theta):
-                theta = _refine(fitted[:1], hyp, theta)
+                theta = refine(fitted[:1], hyp, theta, REFINE)
             if all(_explains(s, hyp, theta, gradients, evidence, fitted=fitted_theta)
                    for s in fitted):
                 return Cause(cause_text(fitted, hyp, theta, gradients, evidence), hyp, theta,
@@ -192,40 +191,6 @@ def _replayable(fitted, hyp, theta) -> bool:
     r = [relative(s, columns(s, hyp), theta, hyp) for s in fitted]
     return (any(ri > s.optimality for ri, s in zip(r, fitted))
             and all(ri <= GAIN * relative(s, [], ()) for ri, s in zip(r, fitted)))
-
-
-def _refine(fitted, hyp, theta, iterations: int = REFINE):
-    """θ that brings clothsim's replayed steps nearest the port's answers (Gauss–Newton,
-    finite differences): the least-squares θ of an unconverged port is biased."""
-    theta = np.array(theta, dtype=np.float64)
-
-    def misfit(th):
-        xs = [replay(s, hyp, th, positions=True) for s in fitted]
-        if any(x is None for x in xs):
-            return None
-        return np.concatenate([(x - s.x_port).ravel() for x, s in zip(xs, fitted)])
-
-    r = misfit(theta)
-    for _ in range(iterations if r is not None else 0):
-        delta = 1e-6 * np.maximum(1.0, np.abs(theta))
-        columns_ = []
-        for j in range(len(theta)):
-            step_ = theta.copy()
-            step_[j] += delta[j]
-            rj = misfit(step_)
-            if rj is None:
-                return theta
-            columns_.append((rj - r) / delta[j])
-        change, *_ = np.linalg.lstsq(np.stack(columns_, 1), -r, rcond=None)
-        if hyp not in REPLACING:          # a scale stays >= 0 (the replay clamps it there)
-            change = np.maximum(theta + change, -1.0) - theta
-        trial = misfit(theta + change)
-        if trial is None or np.linalg.norm(trial) >= np.linalg.norm(r):
-            break
-        theta, r = theta + change, trial
-        if np.all(np.abs(change) <= 1e-9 * np.maximum(1.0, np.abs(theta))):
-            break
-    return theta
 
 
 def _promising(step, hyp, theta) -> bool:

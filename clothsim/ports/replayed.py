@@ -25,14 +25,13 @@ import warnings
 
 import numpy as np
 
-from ..model import MASS_LUMPINGS, Model
-from .cause_words import describe, masses_text
+from .cause_words import describe, lumpings, masses_text
 from .hypotheses import REPLACING, StepData, applicable, fit
-from .replays import replay
+from .replays import refine, replay
 
 log = logging.getLogger(__name__)
 
-__all__ = ["REPLAY", "replay_cause", "replay_count"]
+__all__ = ["REPLAY", "replay_cause"]
 
 #: A replay explains a step within the tolerance, or this share of the scene's distance.
 REPLAY = 0.01
@@ -42,24 +41,6 @@ REFINE = 6
 JOINT = 2
 #: Further failing steps tested by one replay each with the fitted model.
 MAX_REPLAYS = 8
-
-
-def replay_count(step: StepData) -> int:
-    """Replays the hypotheses may cost on ``step`` at most (for the docs' runtime note).
-
-    Parameters
-    ----------
-    step : StepData
-
-    Returns
-    -------
-    int
-        Σ over the hypotheses of 1 + REFINE × (1 + len(θ)) + 1, plus one per other lumping.
-    """
-    total = 0
-    for hyp, theta in _candidates([step]):
-        total += 2 + (REFINE * (1 + len(theta)) if hyp != "vertex mass" else 0)
-    return total
 
 
 def _candidates(steps) -> list:
@@ -76,45 +57,11 @@ def _candidates(steps) -> list:
     out.sort(key=lambda c: len(c[1]))
     s = steps[0]
     m = s.model.vertex_mass
-    for lumping in MASS_LUMPINGS:
-        try:
-            unit = Model.build(s.model.mesh, s.model.springs, total_mass=1.0,
-                               mass_lumping=lumping).vertex_mass
-        except ValueError:
-            continue
+    for _, unit in lumpings(s.model):
         other = unit * m.sum()
         if np.all(m > 0) and not np.allclose(other, m, rtol=1e-6, atol=0):
             out.append(("vertex mass", other / m - 1.0))
     return out
-
-
-def _refine(step, hyp, theta):
-    """θ whose replay lands nearest the port's answer on ``step`` (Gauss–Newton)."""
-    theta = np.array(theta, dtype=np.float64)
-
-    def misfit(th):
-        x = replay(step, hyp, th, positions=True)
-        return None if x is None else (x - step.x_port).ravel()
-
-    r = misfit(theta)
-    for _ in range(REFINE if r is not None and np.all(np.isfinite(r)) else 0):
-        delta = 1e-6 * np.maximum(1.0, np.abs(theta))
-        cols = []
-        for j in range(len(theta)):
-            trial = theta.copy()
-            trial[j] += delta[j]
-            rj = misfit(trial)
-            if rj is None:
-                return theta
-            cols.append((rj - r) / delta[j])
-        change, *_ = np.linalg.lstsq(np.stack(cols, 1), -r, rcond=None)
-        new = misfit(theta + change)
-        if new is None or not np.linalg.norm(new) < np.linalg.norm(r):
-            break
-        theta, r = theta + change, new
-        if np.all(np.abs(change) <= 1e-10 * np.maximum(1.0, np.abs(theta))):
-            break
-    return theta
 
 
 def _reproduces(step, d) -> bool:
@@ -152,7 +99,7 @@ def _first_reproducing(steps):
         return None                     # a port that does not move: judge says so
     best = None
     for hyp, theta0 in _candidates(fitted):
-        theta = theta0 if hyp == "vertex mass" else _refine(fitted[0], hyp, theta0)
+        theta = theta0 if hyp == "vertex mass" else refine(fitted[:1], hyp, theta0, REFINE)
         if hyp not in REPLACING:       # a scale below −1 is replayed as 0 (variant clamps)
             theta = np.maximum(theta, -1.0)
         d = {s.k: replay(s, hyp, theta) for s in fitted}

@@ -13,48 +13,15 @@ from importlib import resources
 import pytest
 
 import clothsim as cs
+from benchmarks.port_causes_fixed import CURTAIN
 from clothsim.ports.check import check_steps
 
 from .test_check_verdicts import trajectory
 
-CURTAIN = """
-[scene]
-name = "curtain"
-frames = 3
-fps = 30
-
-[cloth]
-shape = "grid"
-size = [1.5, 1.0]
-resolution = [16, 10]
-center = [0.0, 1.0, 0.0]
-plane = "xy"
-mass = 0.8
-mass_lumping = "area"
-
-[springs]
-structural = 600.0
-shear = 400.0
-bending = 40.0
-
-[solver]
-method = "local-global"
-iterations = {iterations}
-{tolerance}
-
-[[effects]]
-kind = "gravity"
-acceleration = [0.0, -9.81, 0.0]
-
-[[effects]]
-kind = "pin"
-grid = [[-1, 0], [-1, 7], [-1, -1]]
-"""
-
 
 def curtain(tmp_path, converged=True):
     path = tmp_path / f"curtain-{converged}.toml"
-    path.write_text(CURTAIN.format(iterations=500 if converged else 10,
+    path.write_text(CURTAIN.format(nx=16, ny=10, mid=7, iterations=500 if converged else 10,
                                    tolerance="tolerance = 1e-10" if converged else ""))
     return path
 
