@@ -10,6 +10,7 @@ from __future__ import annotations
 
 from importlib import resources
 
+import numpy as np
 import pytest
 
 import clothsim as cs
@@ -202,3 +203,25 @@ def test_a_doubled_time_step_on_the_box_is_named(tmp_path):
     assert summary.startswith("FAIL at step 0 -> 1: model differs"), summary
     assert "h = 0.06667 s instead of 0.03333 s (replayed at 10 local/global iterations" \
         in summary, summary
+
+
+def test_a_right_ten_iteration_port_printed_with_g_passes(tmp_path):
+    """Six significant digits (printf %g): no step is taken for a model fault."""
+    path = curtain(tmp_path, converged=False)
+    xs, vs = port(path)
+    printed = np.vectorize(lambda c: float(f"{c:g}"))
+    report = check_steps(cs.load_scene(path), printed(xs), printed(vs))
+    assert report.passed, report.summary()
+    assert "model differs" not in report.summary()
+
+
+def test_a_doubled_time_step_printed_with_g_is_still_named(tmp_path):
+    """The replay lands within the printed output's rounding (5e-6 m), not on it: the
+    cause is named where the judge alone says 'not converged' (the gradient's rounding
+    floor at six digits is above the port's relative gradient)."""
+    path = curtain(tmp_path, converged=False)
+    printed = np.vectorize(lambda c: float(f"{c:g}"))
+    xs, vs = port(path, "scene.fps=15")
+    summary = check_steps(cs.load_scene(path), printed(xs), printed(vs)).summary()
+    assert summary.startswith("FAIL at step 0 -> 1: model differs"), summary
+    assert "h = 0.06667 s instead of 0.03333 s" in summary, summary
