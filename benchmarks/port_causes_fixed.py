@@ -82,7 +82,7 @@ def _cases():
                                                     tolerance=""), CURTAIN_FAULTS)
     yield ("drop-on-square 25², post-solve", _builtin("drop-on-square", 16),
            ['cloth.mass_lumping="area"', "scene.fps=15", "springs.bending=0",
-            "effects[3].coefficient=0"])
+            "effects[3].coefficient=0", "effects[1].max=[0.25, 0.45, 0.25]"])
     yield ("drape-sphere 30x20, post-solve", _builtin("drape-sphere", 8, "resolution = [30, 20]"),
            ["effects[3].coefficient=0", "effects[3].coefficient=0.05", "effects[1].radius=0.25",
             "scene.fps=15", "effects[1].radius=0.25 + scene.fps=15"])

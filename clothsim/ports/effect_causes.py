@@ -6,9 +6,9 @@ corrections, velocity update) from the port's state with the effect changed.
   differ"). A velocity-changing damping ("velocity", "rigid") makes v_{k+1} linear in its
   coefficient c: two replays (c = 0 and the scene's c) fit the port's c, a third checks it.
 - :func:`obstacle_cause`: in post-solve contact the port's projected vertices lie on its
-  own obstacle: a sphere's radius (their common distance from the centre, less the
-  contact margin) is read off them, and the step replayed with it. (Planes and boxes are
-  not read yet.)
+  own obstacle: a sphere's radius (their common distance from the centre), a plane's
+  offset (their common n · x) or a box's face (their common coordinate over the box's
+  footprint), less the contact margin, is read off them, and the step replayed with it.
 """
 
 from __future__ import annotations
@@ -109,7 +109,7 @@ def obstacle_cause(sim, state, x_port, tol: float) -> str:
     scene = float(np.linalg.norm(x_scene - x_port, axis=1).max())
     for effect in _obstacles(sim):
         for name, value, read in _readings(effect, x_port):
-            if read is None or np.isclose(read, value, rtol=1e-9, atol=tol):
+            if read is None or np.allclose(read, value, rtol=1e-9, atol=tol):
                 continue
             try:
                 _set(effect, name, read)
@@ -130,7 +130,7 @@ def obstacle_cause(sim, state, x_port, tol: float) -> str:
 
 
 def _set(effect, name, value):
-    setattr(effect, name, value)
+    setattr(effect, name, np.array(value, dtype=np.float64) if np.ndim(value) else value)
     effect.set_margin(effect.margin)     # the contact surface follows the size
 
 
@@ -155,3 +155,19 @@ def _readings(effect, x):
     if effect.kind == "sphere":     # the contact surface is radius + margin
         shell = _shared(np.linalg.norm(x - effect.center, axis=1), scale)
         yield "radius", effect.radius, None if shell is None else shell - effect.margin
+    elif effect.kind == "plane":    # n · x = n · point + margin
+        level = _shared(x @ effect.normal, scale)
+        shift = None if level is None else level - effect.margin - effect.point @ effect.normal
+        yield "point", effect.point, None if shift is None else effect.point + shift * effect.normal
+    elif effect.kind == "box":      # a face: its coordinate, over the box's footprint
+        for name, side in (("min", -1), ("max", 1)):
+            for axis in range(3):
+                other = [a for a in range(3) if a != axis]
+                over = np.all((x[:, other] >= effect.min[other]) &
+                              (x[:, other] <= effect.max[other]), axis=1)
+                face = _shared(x[over, axis], scale)
+                if face is None:
+                    continue
+                read = getattr(effect, name).copy()
+                read[axis] = face - side * effect.margin
+                yield name, getattr(effect, name), read

@@ -225,3 +225,59 @@ def test_a_doubled_time_step_printed_with_g_is_still_named(tmp_path):
     summary = check_steps(cs.load_scene(path), printed(xs), printed(vs)).summary()
     assert summary.startswith("FAIL at step 0 -> 1: model differs"), summary
     assert "h = 0.06667 s instead of 0.03333 s" in summary, summary
+
+
+def test_a_lower_box_top_in_post_solve_mode_is_named(tmp_path):
+    """The port's box is 0.45 m tall, the scene's 0.5 m: named at the landing step (the
+    later steps also carry the port's contacts of its previous step, which the replay from
+    x_k, v_k does not have: they stay as judged)."""
+    report, summary = verdict(drop_on_square(tmp_path, 11), "effects[1].max=[0.25, 0.45, 0.25]")
+    assert summary.startswith("FAIL at step 9 -> 10: model differs"), summary
+    assert "a box of max (0.25, 0.45, 0.25) m instead of (0.25, 0.5, 0.25) m" in summary, summary
+
+
+FLOOR = """[scene]
+name = "floor"
+frames = 8
+fps = 30
+
+[cloth]
+shape = "grid"
+size = [1.0, 1.0]
+resolution = [10, 10]
+center = [0.0, 0.06, 0.0]
+plane = "xz"
+mass = 1.0
+
+[springs]
+structural = 800.0
+shear = 800.0
+bending = 80.0
+
+[solver]
+method = "local-global"
+iterations = 10
+
+[[effects]]
+kind = "gravity"
+acceleration = [0.0, -9.81, 0.0]
+
+[[effects]]
+kind = "plane"
+point = [0.0, 0.0, 0.0]
+normal = [0.0, 1.0, 0.0]
+friction = 0.5
+
+[contact]
+mode = "post-solve"
+"""
+
+
+def test_a_raised_floor_in_post_solve_mode_is_named(tmp_path):
+    path = tmp_path / "floor.toml"
+    path.write_text(FLOOR)
+    assert verdict(path)[0].passed
+    report, summary = verdict(path, "effects[1].point=[0.0, 0.02, 0.0]")
+    assert summary.startswith("FAIL at step 2 -> 3: model differs"), summary
+    assert "a plane of point (0, 0.02, 0) m instead of (0, 0, 0) m" in summary, summary
+    assert {s.status for s in report.steps if not s.passed} == {"model differs"}, summary
