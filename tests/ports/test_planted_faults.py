@@ -8,6 +8,8 @@ change it); each verdict must name the fault, never advise iterations for a conv
 
 from __future__ import annotations
 
+import re
+
 from importlib import resources
 
 import numpy as np
@@ -182,8 +184,10 @@ def drop_on_square(tmp_path, frames=16):
     """The seed's demo at 25², 10 local/global iterations, contact projected after the solve."""
     text = resources.files("clothsim.scenes").joinpath("drop-on-square.toml").read_text()
     path = tmp_path / "drop.toml"
-    path.write_text(text.replace("frames = 90", f"frames = {frames}")
-                    + '\n[contact]\nmode = "post-solve"\n')
+    text = re.sub(r"(?m)^frames = \d+$", f"frames = {frames}", text)
+    text = re.sub(r'(?m)^method = "\w+"$', 'method = "local-global"', text)
+    text = re.sub(r"(?m)^iterations = \d+$", "iterations = 10", text)
+    path.write_text(text + '\n[contact]\nmode = "post-solve"\n')
     return path
 
 
