@@ -22,6 +22,14 @@ inertial target y = x_k + h v_k (and the start point), with a sensitivity ∂x_{
 (M + h²∇²E)⁻¹ M whose ∞-norm is at most 1 when M + h²∇²E is an M-matrix (a spring
 Laplacian, positive pins): an error of the start moves the answer by no more than itself.
 Without stored velocities v_k = (x_k − x_{k−1}) / h, so y = 2 x_k − x_{k−1} carries 3 u |x|.
+
+That sensitivity bound holds for a step that is a contraction of its start: a converged
+minimizer, or local/global iterations. An accelerated solver stopped after a fixed number
+of iterations (Anderson, L-BFGS, Chebyshev) is a nonlinear function of its start and can
+move its answer more than the start moved: the drape-sphere's Anderson 30 step 13 → 14 of a
+6-digit port misses the bound by 2 %. A step that fails the bound is therefore replayed
+(:func:`replayed_tolerance`): clothsim's own step from the port's start moved by the printed
+rounding, in a few sign patterns, bounds the start's effect by the spread of the answers.
 """
 
 from __future__ import annotations
@@ -44,6 +52,11 @@ COARSEST = 5
 #: A printed precision whose step tolerance exceeds this fraction of the cloth's size is
 #: too coarse to judge a step (6 digits at |x| = 1000 m round a 1 m cloth by centimetres).
 COARSE = 1e-3
+#: Sign patterns of the printed rounding a failing step is replayed from (seeds 0, 1, ...).
+PATTERNS = 4
+#: Safety factor over the replayed spread: the printed rounding is one pattern among many,
+#: and a few sign patterns sample the directions the step amplifies, not the worst one.
+SPREAD_MARGIN = 2.0
 #: Distinct values needed before their digits count as the printed precision: a handful of
 #: short numbers (a velocity of 0.01, a grid of 0.25 spacing) are exact, not rounded.
 DISTINCT = 30
@@ -167,6 +180,56 @@ def printed_tolerances(positions, velocities, h: float, digits: int,
     return MARGIN * np.sqrt(3.0) * (u * x[1:] + start)
 
 
+def replayed_tolerance(restart, x, v, x_answer, x_port, unit_x: float, unit_v: float,
+                       h: float, x_before=None) -> float:
+    """The printed-precision tolerance [m] of one step, its start term measured by replay.
+
+    The port's start (x_k, v_k) is known to within its printed rounding, u |c| per
+    coordinate. clothsim's step is replayed from the start moved by ± u |c| in each
+    coordinate (:data:`PATTERNS` sign patterns drawn from seeds 0, 1, ...); the largest
+    distance of a replayed answer from ``x_answer`` (the step from the start as read),
+    times :data:`SPREAD_MARGIN`, bounds the start's effect for whatever the solver is.
+    The answer's own rounding, √3 u max|x_{k+1}|, is added.
+
+    Parameters
+    ----------
+    restart : callable
+        (x, v) -> clothsim's x_{k+1} from that start, the step's settings and contact planes
+        unchanged.
+    x, v : ndarray, shape (n, 3)
+        The port's x_k [m] and v_k [m/s] as read.
+    x_answer : ndarray, shape (n, 3)
+        clothsim's x_{k+1} from (x, v) [m].
+    x_port : ndarray, shape (n, 3)
+        The port's x_{k+1} [m].
+    unit_x, unit_v : float
+        Relative rounding of the positions and of the velocities (:func:`unit`).
+    h : float
+        Time step [s].
+    x_before : ndarray, shape (n, 3), optional
+        x_{k−1} [m] when the velocities are derived, v_k = (x_k − x_{k−1}) / h (its
+        rounding then moves v_k); None for stored velocities, or v_k = 0 at frame 0.
+
+    Returns
+    -------
+    float
+        Tolerance [m].
+    """
+    x, v = np.asarray(x, np.float64), np.asarray(v, np.float64)
+    spread = 0.0
+    for seed in range(PATTERNS):
+        rng = np.random.default_rng(seed)
+        dx = unit_x * np.abs(x) * rng.choice((-1.0, 1.0), x.shape)
+        if x_before is None:
+            dv = unit_v * np.abs(v) * rng.choice((-1.0, 1.0), v.shape)
+        else:
+            dv = (dx - unit_x * np.abs(x_before) * rng.choice((-1.0, 1.0), x.shape)) / h
+        moved = np.linalg.norm(restart(x + dx, v + dv) - x_answer, axis=1)
+        spread = max(spread, float(np.nan_to_num(moved, nan=np.inf).max()))
+    return (SPREAD_MARGIN * spread
+            + np.sqrt(3.0) * unit_x * float(np.abs(np.asarray(x_port)).max()))
+
+
 def describe(digits: int) -> str:
     """The phrase the verdict uses: "printed with 6 significant digits".
 
@@ -208,6 +271,12 @@ class Printed:
     unit : float or None
         Relative rounding of the numbers when :attr:`text` is set (the gradient's rounding
         floor scales with it), else None.
+    units : tuple of float or None
+        The relative rounding of the positions and of the velocities when :attr:`text` is
+        set (:func:`replayed_tolerance`), else None.
+    limit : float
+        The largest tolerance a replayed step may get [m]: :data:`COARSE` of the cloth's
+        size.
     note : str
         Why the tolerance was not widened when the printing is too coarse to judge a step
         (below :data:`COARSEST` digits, or a tolerance above :data:`COARSE` of the cloth's
@@ -220,7 +289,8 @@ class Printed:
         self.digits = min(xd, 17 if vd is None else vd)
         self.float32 = float32_valued(positions, xd)
         self.tolerances = np.full(len(positions) - 1, float(tolerance))
-        self.text, self.unit, self.note = "", None, ""
+        self.text, self.unit, self.note, self.units = "", None, "", None
+        self.limit = COARSE * cloth_size(np.asarray(positions)[0])
         coarse = (f"the output is {describe(self.digits)}: too coarse to judge a step; "
                   f"print 17 digits (float64) or 9 (float32)")
         if self.digits < COARSEST:
@@ -235,6 +305,7 @@ class Printed:
             elif printed.max() > tolerance:
                 self.tolerances = np.maximum(self.tolerances, printed)
                 self.text, self.unit = describe(self.digits), unit(self.digits)
+                self.units = (unit(xd), unit(xd if vd is None else vd))
 
     def hint32(self, step, error: float, bound) -> None:
         """Name float32 arithmetic on a step that fails when checked as float64, in place.
