@@ -55,7 +55,9 @@ COARSE = 1e-3
 #: Sign patterns of the printed rounding a failing step is replayed from (seeds 0, 1, ...).
 PATTERNS = 4
 #: Safety factor over the replayed spread: the printed rounding is one pattern among many,
-#: and a few sign patterns sample the directions the step amplifies, not the worst one.
+#: and a few sign patterns sample the directions the step amplifies, not the worst one
+#: (benchmarks/replay_spread.py prints the spread of 4 and of 32 patterns, and of uniform
+#: draws in the rounding's range, beside the port's error).
 SPREAD_MARGIN = 2.0
 #: Distinct values needed before their digits count as the printed precision: a handful of
 #: short numbers (a velocity of 0.01, a grid of 0.25 spacing) are exact, not rounded.
@@ -181,7 +183,8 @@ def printed_tolerances(positions, velocities, h: float, digits: int,
 
 
 def replayed_tolerance(restart, x, v, x_answer, x_port, unit_x: float, unit_v: float,
-                       h: float, x_before=None) -> float:
+                       h: float, x_before=None, *, patterns: int = PATTERNS,
+                       signs: bool = True) -> float:
     """The printed-precision tolerance [m] of one step, its start term measured by replay.
 
     The port's start (x_k, v_k) is known to within its printed rounding, u |c| per
@@ -209,6 +212,11 @@ def replayed_tolerance(restart, x, v, x_answer, x_port, unit_x: float, unit_v: f
     x_before : ndarray, shape (n, 3), optional
         x_{k−1} [m] when the velocities are derived, v_k = (x_k − x_{k−1}) / h (its
         rounding then moves v_k); None for stored velocities, or v_k = 0 at frame 0.
+    patterns : int, default :data:`PATTERNS`
+        Perturbations replayed (seeds 0 to ``patterns`` − 1).
+    signs : bool, default True
+        Each coordinate moved by ± u |c|; False: by a uniform draw in [−u |c|, u |c|], as
+        rounding is (benchmarks/replay_spread.py compares the two).
 
     Returns
     -------
@@ -217,13 +225,17 @@ def replayed_tolerance(restart, x, v, x_answer, x_port, unit_x: float, unit_v: f
     """
     x, v = np.asarray(x, np.float64), np.asarray(v, np.float64)
     spread = 0.0
-    for seed in range(PATTERNS):
+    for seed in range(patterns):
         rng = np.random.default_rng(seed)
-        dx = unit_x * np.abs(x) * rng.choice((-1.0, 1.0), x.shape)
+
+        def draw(shape, rng=rng):
+            return rng.choice((-1.0, 1.0), shape) if signs else rng.uniform(-1.0, 1.0, shape)
+
+        dx = unit_x * np.abs(x) * draw(x.shape)
         if x_before is None:
-            dv = unit_v * np.abs(v) * rng.choice((-1.0, 1.0), v.shape)
+            dv = unit_v * np.abs(v) * draw(v.shape)
         else:
-            dv = (dx - unit_x * np.abs(x_before) * rng.choice((-1.0, 1.0), x.shape)) / h
+            dv = (dx - unit_x * np.abs(x_before) * draw(x.shape)) / h
         moved = np.linalg.norm(restart(x + dx, v + dv) - x_answer, axis=1)
         spread = max(spread, float(np.nan_to_num(moved, nan=np.inf).max()))
     return (SPREAD_MARGIN * spread
