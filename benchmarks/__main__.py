@@ -8,7 +8,8 @@ import sys
 import time
 
 BENCHMARKS = ("stiffness", "stability_figures", "performance", "factor_modes", "iteration_cost",
-              "accuracy_bench", "accuracy_quick", "port_causes", "held_port_check")
+              "accuracy_bench", "accuracy_quick", "port_causes", "port_causes_fixed",
+              "held_port_check")
 #: run only when named: the 257² × 500-frame memory run, the scale ladder up to 1025² and
 #: the full accuracy study at 41² take minutes each; accuracy_docs regenerates the accuracy
 #: page's two study reports (minutes)

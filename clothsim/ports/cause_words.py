@@ -9,6 +9,7 @@ from __future__ import annotations
 
 import numpy as np
 
+from ..model import MASS_LUMPINGS, Model
 from .hypotheses import relative
 
 
@@ -218,3 +219,55 @@ def describe(steps, hyp, theta) -> str:
     else:
         what = _force_text(steps, hyp, theta)
     return what
+
+
+def lumpings(model) -> list:
+    """Each mass lumping's vertex masses for a total of 1 kg on the model's mesh.
+
+    Parameters
+    ----------
+    model : Model
+
+    Returns
+    -------
+    list of (str, ndarray)
+        (lumping, masses [kg], shape (n,)); a lumping the mesh cannot take is left out.
+    """
+    out = []
+    for lumping in MASS_LUMPINGS:
+        try:
+            out.append((lumping, Model.build(model.mesh, model.springs, total_mass=1.0,
+                                             mass_lumping=lumping).vertex_mass))
+        except ValueError:
+            continue
+    return out
+
+
+def masses_text(step, fitted: np.ndarray, free: np.ndarray) -> str:
+    """The fitted masses in words: a mass lumping's when they are spread as it spreads
+    them (on the free vertices, the only ones the step shows), else their range.
+
+    Parameters
+    ----------
+    step : StepData
+    fitted : ndarray, shape (n,)
+        The port's vertex masses [kg].
+    free : ndarray, shape (n,), bool
+        The vertices the step shows (free, of positive mass).
+
+    Returns
+    -------
+    str
+    """
+    m = step.model.vertex_mass
+    for lumping, unit in lumpings(step.model):
+        u = unit[free]
+        total = float(fitted[free] @ u / (u @ u))     # the port's total mass, least squares
+        lumped = total * unit
+        if np.allclose(fitted[free], lumped[free], rtol=1e-3, atol=0) and \
+                not np.allclose(m[free], lumped[free], rtol=1e-3, atol=0):
+            return (f"those of mass_lumping = \"{lumping}\" ({total:.4g} kg in all), not the "
+                    f"scene's masses ({m.sum():.4g} kg in all; clothsim diff-model compares them)")
+    changed = free & (np.abs(fitted - m) > 1e-3 * m)
+    return (f"the scene's × {span(fitted[changed] / m[changed])} on {int(changed.sum())} of "
+            f"{len(m)} vertices ({listing(np.flatnonzero(changed))})")

@@ -36,10 +36,8 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from ..model import MASS_LUMPINGS, Model
-from .cause_words import cause_text, describe, evidence_text, head, listing, span
+from .cause_words import cause_text, describe, evidence_text, head, listing, masses_text, span
 from .hypotheses import (
-    REPLACING,
     StepData,
     applicable,
     columns,
@@ -47,7 +45,8 @@ from .hypotheses import (
     fit_vertex_scale,
     relative,
 )
-from .replays import approach, replay
+from .replayed import replay_cause
+from .replays import approach, refine, replay
 
 log = logging.getLogger(__name__)
 
@@ -179,7 +178,7 @@ def infer_cause(steps: list[StepData]) -> Cause | None:
             gradients, evidence = {}, {}
             fitted_theta = theta
             if _replayable(fitted, hyp, theta) and _promising(fitted[0], hyp, theta):
-                theta = _refine(fitted[:1], hyp, theta)
+                theta = refine(fitted[:1], hyp, theta, REFINE)
             if all(_explains(s, hyp, theta, gradients, evidence, fitted=fitted_theta)
                    for s in fitted):
                 return Cause(cause_text(fitted, hyp, theta, gradients, evidence), hyp, theta,
@@ -192,40 +191,6 @@ def _replayable(fitted, hyp, theta) -> bool:
     r = [relative(s, columns(s, hyp), theta, hyp) for s in fitted]
     return (any(ri > s.optimality for ri, s in zip(r, fitted))
             and all(ri <= GAIN * relative(s, [], ()) for ri, s in zip(r, fitted)))
-
-
-def _refine(fitted, hyp, theta, iterations: int = REFINE):
-    """θ that brings clothsim's replayed steps nearest the port's answers (Gauss–Newton,
-    finite differences): the least-squares θ of an unconverged port is biased."""
-    theta = np.array(theta, dtype=np.float64)
-
-    def misfit(th):
-        xs = [replay(s, hyp, th, positions=True) for s in fitted]
-        if any(x is None for x in xs):
-            return None
-        return np.concatenate([(x - s.x_port).ravel() for x, s in zip(xs, fitted)])
-
-    r = misfit(theta)
-    for _ in range(iterations if r is not None else 0):
-        delta = 1e-6 * np.maximum(1.0, np.abs(theta))
-        columns_ = []
-        for j in range(len(theta)):
-            step_ = theta.copy()
-            step_[j] += delta[j]
-            rj = misfit(step_)
-            if rj is None:
-                return theta
-            columns_.append((rj - r) / delta[j])
-        change, *_ = np.linalg.lstsq(np.stack(columns_, 1), -r, rcond=None)
-        if hyp not in REPLACING:          # a scale stays >= 0 (the replay clamps it there)
-            change = np.maximum(theta + change, -1.0) - theta
-        trial = misfit(theta + change)
-        if trial is None or np.linalg.norm(trial) >= np.linalg.norm(r):
-            break
-        theta, r = theta + change, trial
-        if np.all(np.abs(change) <= 1e-9 * np.maximum(1.0, np.abs(theta))):
-            break
-    return theta
 
 
 def _promising(step, hyp, theta) -> bool:
@@ -302,31 +267,9 @@ def _vertex_mass_cause(step: StepData) -> Cause | None:
     if not _explains(step, "vertex mass", c, gradients, evidence):
         return None
     fitted = (1 + c) * m
-    text = (f"{head(evidence)} other vertex masses: {_masses_text(step, fitted, free)}"
+    text = (f"{head(evidence)} other vertex masses: {masses_text(step, fitted, free)}"
             f"{evidence_text([step], gradients, evidence)}")
     return Cause(text, "vertex mass", c, gradients, evidence)
-
-
-def _masses_text(step: StepData, fitted: np.ndarray, free: np.ndarray) -> str:
-    """The fitted masses in words: a mass lumping's when they are spread as it spreads
-    them (on the free vertices, the only ones the step shows), else their range."""
-    m = step.model.vertex_mass
-    for lumping in MASS_LUMPINGS:
-        try:
-            unit = Model.build(step.model.mesh, step.model.springs, total_mass=1.0,
-                               mass_lumping=lumping).vertex_mass
-        except ValueError:
-            continue
-        u = unit[free]
-        total = float(fitted[free] @ u / (u @ u))     # the port's total mass, least squares
-        lumped = total * unit
-        if np.allclose(fitted[free], lumped[free], rtol=1e-3, atol=0) and \
-                not np.allclose(m[free], lumped[free], rtol=1e-3, atol=0):
-            return (f"those of mass_lumping = \"{lumping}\" ({total:.4g} kg in all), not the "
-                    f"scene's masses ({m.sum():.4g} kg in all; clothsim diff-model compares them)")
-    changed = free & (np.abs(fitted - m) > 1e-3 * m)
-    return (f"the scene's × {span(fitted[changed] / m[changed])} on {int(changed.sum())} of "
-            f"{len(m)} vertices ({listing(np.flatnonzero(changed))})")
 
 
 #: The verdicts a fitted model may replace: a port that solves another problem gets them.
@@ -339,7 +282,9 @@ def name_cause(checks: dict, steps: list[StepData], others=()) -> Cause | None:
     The steps the fitted model explains become ``model differs`` with the cause as their
     note (their vertex stays the one of largest error). When no model fits, the first
     step's note says so if its verdict is ``not a minimizer`` or ``model differs``;
-    unconverged verdicts keep their explanation.
+    unconverged verdicts keep their explanation. In a scene of a fixed iteration count
+    (:attr:`StepData.settings`), a first failing step the gradient fits cannot take (start-
+    dependent) or do not explain is explained by replays (:mod:`clothsim.ports.replayed`).
 
     Parameters
     ----------
@@ -355,7 +300,13 @@ def name_cause(checks: dict, steps: list[StepData], others=()) -> Cause | None:
     -------
     Cause or None
     """
-    cause = infer_cause(steps)
+    every = sorted(list(steps) + list(others), key=lambda s: s.k)
+    cause = infer_cause(steps) if steps and steps[0] is every[0] else None
+    weak = cause is None or any(how == "approaches" for how, _ in cause.evidence.values())
+    if weak and every and every[0].settings and _replayed(checks, every):
+        return None                 # a fixed-iteration port: its replays name the cause
+    if cause is None and steps and steps[0] is not every[0]:
+        cause = infer_cause(steps)
     if cause is None:
         if steps and checks[steps[0].k].status in ("not a minimizer", "model differs"):
             near = closest(steps[0])
@@ -375,3 +326,23 @@ def name_cause(checks: dict, steps: list[StepData], others=()) -> Cause | None:
                           f"the model fitted at step {first} -> {first + 1} explains it "
                           f"(relative gradient {cause.gradients[s.k]:.1e} under it)")
     return cause
+
+
+def _replayed(checks: dict, steps: list[StepData]) -> bool:
+    """A fixed-iteration port: the cause whose replays reproduce its steps
+    (:mod:`clothsim.ports.replayed`), written into the steps it explains, or the note
+    that no single hypothesis does; True when a cause was named."""
+    found = replay_cause(steps)
+    if found is None:
+        checks[steps[0].k].note += (
+            "; no single model change reproduces the port's answer when clothsim's iteration "
+            f"is replayed at {steps[0].settings} (tried: the external force, stiffness, rest "
+            "lengths, pins, h, per spring family, mass lumping)")
+        return False
+    text, distances = found
+    k0 = min(distances)
+    for k, d in distances.items():
+        checks[k].status = "model differs"
+        checks[k].note = (text if k == k0 else f"the model fitted at step {k0} -> {k0 + 1} "
+                          f"explains it (its replay is {d:.1e} m off the port's answer)")
+    return True

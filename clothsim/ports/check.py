@@ -20,6 +20,7 @@ from ..solvers import make_solver
 from .causes import FITTED, StepData, name_cause
 from .compare import EPS32, RTOL64, cloth_size, condition_number
 from .contact_planes import PortPlanes
+from .effect_causes import damping_cause, obstacle_cause
 from .held_margins import adopt, position_rounding
 from .held_steps import HeldSteps
 from .held_verdicts import (
@@ -39,6 +40,9 @@ from .rounding import (
 )
 from .verdicts import PASSING, CheckReport, StepCheck
 
+#: Failing steps an obstacle of another size is read off (one or two replays each), and
+#: steps whose velocities alone differ that a damping is fitted to (three replays each).
+MAX_EFFECT = 3
 #: Failing steps whose settings are searched for along clothsim's iterations (the rest
 #: are judged without the search: a long failing run stays quick to check).
 MAX_SEARCHES = 3
@@ -100,6 +104,25 @@ def step_tolerance(sim, x: np.ndarray, precision: str = "float64") -> float:
         tol = float32_tolerance(model, problem, sim.solver.iterations, tol, x=x_min,
                                 iterated=iterated)
     return tol
+
+
+def fixed_settings(sim) -> str:
+    """"10 local/global iterations from y": the scene's fixed iteration count, or "".
+
+    Parameters
+    ----------
+    sim : Simulation
+
+    Returns
+    -------
+    str
+        "" for a converged method (Newton) or a scene with a solver tolerance.
+    """
+    solver = sim.solver
+    if solver.name == "newton" or solver.tolerance:
+        return ""
+    name = solver.name.replace("-", "/")
+    return f"{solver.iterations} {name} iterations from {sim.initial_guess}"
 
 
 def system_condition_number(sim) -> float:
@@ -178,10 +201,11 @@ def check_steps(simulation, positions, velocities=None, *, precision: str = "flo
                      f"[contact] mode = \"hold\")")
         contacts = contacts if held else None
     out, searches, unexplained, others = [], 0, [], []
-
-    def replay(model, problem):   # clothsim's step of another model, the same settings
-        return make_solver(sim.solver.name, model, iterations=iterations,
-                           tolerance=sim.solver.tolerance).solve(problem).x
+    # the failing steps an effect's cause was sought for (after a None: obstacles only
+    # when the scene has one)
+    obstacles = [None] if any(e.kind in ("sphere", "plane", "box") for e in sim.effects) \
+        else []
+    dampings = []
 
     t = sim.state.time  # accumulated as the simulation does (time-dependent effects)
     for k in range(count):
@@ -242,17 +266,29 @@ def check_steps(simulation, positions, velocities=None, *, precision: str = "flo
                     step = StepCheck(k, "velocities differ", float(err[worst]),
                                      int(np.argmax(verr)), tolerance=tol,
                                      note=f"|v_clothsim - v_port| = {verr.max():.3e} m/s")
+                    dampings.append(k)
+                    why = ("" if held or len(dampings) > MAX_EFFECT else
+                           damping_cause(sim, state, vs[k + 1], 10 * tol / h))
+                    step.note += f"; {why}" if why else ""
         else:
             step = judge(sim, model, problem, k, x_cs, x_port, err, tol, optimality, precision,
                          search=searches < MAX_SEARCHES, unit=printed and printed.unit)
             searches += 1
-            if (step.status in FITTED + ("start-dependent",) and not step.settings
+            why = ""
+            if obstacles and not held and not step.passed and len(obstacles) <= MAX_EFFECT:
+                obstacles.append(k)
+                why = obstacle_cause(sim, state, x_port, tol)
+            if why:
+                step.status, step.note = "model differs", why
+            elif (step.status in FITTED + ("start-dependent",) and not step.settings
                     and step.gradient_port >= CONVERGING):   # not a port that only stops short
                 g0, opt = gradient_scale(model, problem, x_port, optimality, precision,
                                          printed and printed.unit)
                 (unexplained if step.status in FITTED else others).append(StepData(
                     k, model, problem, x_port, g0, opt, step.gradient_clothsim,
-                    float(err[worst]), tol, replay, step.status == "not converged"))
+                    float(err[worst]), tol, _replayer(sim, state),
+                    step.status == "not converged",
+                    fixed_settings(sim)))
             if precision == "float64" and printed is not None and not step.passed:
                 printed.hint32(step, float(err[worst]), lambda b=bound32, t=tol_k: max(t, b()))
             off = off_plane_note(held, x_port, tol) if held else ""
@@ -310,6 +346,22 @@ def float32_report(scenes=("hanging", "jacobson-net", "jacobson-flag", "drop-on-
         stag = float32_newton_stagnation(sim.step_model(), problem, x_min)
         print(f"{name:16} {sim.model.vertex_count:5d} {K:4d} {dev:10.2e} {tol:10.2e} "
               f"{kappa:11.2e} {floor:9.2e} {stag:10.2e}")
+
+
+def _replayer(sim, state):
+    """``solve(model, problem) -> x``: clothsim's step of another model from ``state`` with
+    the scene's solver settings, its position corrections (post-solve contact) applied;
+    a hold-mode obstacle's is not (it would change the contacts the check holds)."""
+    hooks = [e for e in sim.effects if overrides(e, "correct_positions")
+             and getattr(e, "contact", None) != "hold"]
+
+    def solve(model, problem):
+        x = make_solver(sim.solver.name, model, iterations=sim.solver.iterations,
+                        tolerance=sim.solver.tolerance).solve(problem).x
+        for e in hooks:
+            x = e.correct_positions(state.time + sim.h, state, x)
+        return x
+    return solve
 
 
 def _step(sim, held, state, x_port):

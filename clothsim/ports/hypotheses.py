@@ -60,6 +60,10 @@ class StepData:
     approaching : bool
         The judge found the port's answer on its way to clothsim's minimizer ("not
         converged"): a cause must then explain nearly all of its gradient.
+    settings : str
+        The scene's fixed iteration count and start in words ("10 local/global iterations
+        from y"), or "" when its steps converge: only then are hypotheses tested by replay
+        alone (:mod:`clothsim.ports.replayed`).
     """
 
     k: int
@@ -73,6 +77,7 @@ class StepData:
     tolerance: float = 0.0
     solve: object = None
     approaching: bool = False
+    settings: str = ""
     cache: dict = dataclasses.field(default_factory=dict, repr=False)
 
 

@@ -15,7 +15,7 @@ import numpy as np
 from ..errors import ClothsimError
 from ..model import Model
 from ..springs import FAMILIES, Springs
-from .hypotheses import StepData
+from .hypotheses import REPLACING, StepData
 
 
 def variant(step: StepData, hypothesis: str, theta) -> tuple:
@@ -51,6 +51,9 @@ def variant(step: StepData, hypothesis: str, theta) -> tuple:
         mass = scale * mass
         f = np.zeros_like(step.x_port) if p.f_ext is None else p.f_ext
         p = dataclasses.replace(p, f_ext=f * scale[:, None])
+    elif hypothesis == "time step":   # θ: h' / h − 1; the inertial target y moves with h
+        h = max(one, 1e-6) * p.h
+        p = dataclasses.replace(p, h=h, y=p.x + (h / p.h) * (p.y - p.x))
     elif hypothesis == "pins":
         p = dataclasses.replace(p, anchor_stiffness=max(one, 0.0) * p.anchor_stiffness)
     else:
@@ -134,3 +137,52 @@ def approach(step: StepData, hypothesis: str, theta) -> tuple[float, float]:
     if "scene" not in step.cache:
         step.cache["scene"] = ratio(step.model, step.problem)
     return ratio(*variant(step, hypothesis, theta)), step.cache["scene"]
+
+
+def refine(fitted, hyp, theta, iterations: int):
+    """θ that brings clothsim's replayed steps nearest the port's answers (Gauss–Newton,
+    finite differences): the least-squares θ of an unconverged port is biased.
+
+    Parameters
+    ----------
+    fitted : list of StepData
+    hyp : str
+    theta : ndarray
+        The start (the gradient's least-squares θ).
+    iterations : int
+        Gauss–Newton iterations at most (each costs 1 + len(θ) replays per step).
+
+    Returns
+    -------
+    ndarray
+        θ; a scale of a hypothesis not in :data:`REPLACING` stays >= −1.
+    """
+    theta = np.array(theta, dtype=np.float64)
+
+    def misfit(th):
+        xs = [replay(s, hyp, th, positions=True) for s in fitted]
+        if any(x is None for x in xs):
+            return None
+        return np.concatenate([(x - s.x_port).ravel() for x, s in zip(xs, fitted)])
+
+    r = misfit(theta)
+    for _ in range(iterations if r is not None and np.all(np.isfinite(r)) else 0):
+        delta = 1e-6 * np.maximum(1.0, np.abs(theta))
+        columns_ = []
+        for j in range(len(theta)):
+            step_ = theta.copy()
+            step_[j] += delta[j]
+            rj = misfit(step_)
+            if rj is None:
+                return theta
+            columns_.append((rj - r) / delta[j])
+        change, *_ = np.linalg.lstsq(np.stack(columns_, 1), -r, rcond=None)
+        if hyp not in REPLACING:          # a scale stays >= 0 (the replay clamps it there)
+            change = np.maximum(theta + change, -1.0) - theta
+        trial = misfit(theta + change)
+        if trial is None or np.linalg.norm(trial) >= np.linalg.norm(r):
+            break
+        theta, r = theta + change, trial
+        if np.all(np.abs(change) <= 1e-9 * np.maximum(1.0, np.abs(theta))):
+            break
+    return theta

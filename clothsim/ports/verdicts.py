@@ -34,7 +34,8 @@ Verdicts that fail:
 ``float32 rounding``
     Checked as float64, but the difference is within what float32 arithmetic gives.
 ``velocities differ``
-    Positions agree but v_{k+1} does not (a damping or velocity update that differs).
+    Positions agree but v_{k+1} does not (a damping or velocity update that differs; a
+    damping left out or of another coefficient is named, :mod:`clothsim.ports.effect_causes`).
 ``contacts differ``
     Hold mode: the port's planes of the step are not the ones clothsim decides from the
     port's state (held by one and free in the other, sticking and sliding, another plane,
