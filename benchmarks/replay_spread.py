@@ -21,7 +21,7 @@ from unittest import mock
 
 import numpy as np
 
-from clothsim.ports import check
+from clothsim.ports import precision
 from clothsim.ports.check import check_steps
 from clothsim.ports.formats import read_trajectory, read_velocities
 from clothsim.ports.precision import SPREAD_MARGIN, printed_tolerances, replayed_tolerance
@@ -78,7 +78,7 @@ def main() -> list[str]:
                                          {"patterns": 32, "signs": False})]))
             return tol
 
-        with mock.patch.object(check, "replayed_tolerance", spy):
+        with mock.patch.object(precision, "replayed_tolerance", spy):
             report = check_steps(scene, X, V)
         for k, spreads in found:
             rows.append(f"| {label} | {k} → {k + 1} | {report.steps[k].error:.2e} | "

@@ -31,7 +31,7 @@ from .held_verdicts import (
     variant_verdict,
 )
 from .judge import CONVERGING, gradient_scale, judge, pin_role, pinned_moved, refine
-from .precision import Printed, replayed_tolerance
+from .precision import Printed
 from .rounding import (
     converged_float32_floor,
     float32_deviation,
@@ -238,8 +238,8 @@ def check_steps(simulation, positions, velocities=None, *, precision: str = "flo
                 problem, x_cs, v_cs, err, worst = _step(sim, held, state, x_port)
         unplaced = ""
         if printed is not None and printed.units and err[worst] > tol:   # not a contraction?
-            tol, unplaced = _replayed(sim, held, state, x_cs, x_port, printed, tol,
-                                      xs[k - 1] if velocities is None and k else None)
+            tol, unplaced = printed.replayed(sim, held, state, x_cs, x_port, tol,
+                                             xs[k - 1] if velocities is None and k else None)
             if not held:   # the obstacles' state as the step from the port's start left it
                 problem, x_cs, v_cs, err, worst = _step(sim, held, state, x_port)
         moved = pinned_moved(problem, x_port, tol if precision == "float64"
@@ -300,10 +300,9 @@ def check_steps(simulation, positions, velocities=None, *, precision: str = "flo
                               f"indicative")
         if not step.role:
             step.role = pin_role(problem, step.vertex)
-        if adopted:
-            step.note = f"{step.note}; {adopted}" if step.note else adopted
-        if unplaced and not step.passed:
-            step.note = f"{step.note}; {unplaced}" if step.note else unplaced
+        for extra in (adopted, "" if step.passed else unplaced):
+            if extra:
+                step.note = f"{step.note}; {extra}" if step.note else extra
         out.append(step)
     name_cause({s.k: s for s in out}, unexplained, others)   # a model the port solves?
     return CheckReport(out, float(tol64), precision, notes, expected_steps=expected_steps,
@@ -374,29 +373,6 @@ def _step(sim, held, state, x_port):
     err = np.linalg.norm(x_cs - x_port, axis=1)
     err = np.where(np.isfinite(err), err, np.inf)
     return problem, x_cs, v_cs, err, int(np.argmax(err))
-
-
-def _replayed(sim, held, state, x_cs, x_port, printed, tol, x_before):
-    """The step's tolerance widened to its printed precision measured by replay, and "" (at
-    most ``printed.limit``: a step whose answer the printed start cannot place keeps ``tol``
-    and a note saying so)."""
-
-    def restart(x, v):
-        moved = State(x, v, state.time, state.step)
-        if held:
-            return held.replay(moved, "hold")
-        sim.state = moved
-        sim.step()
-        return sim.state.positions.copy()
-
-    replayed = replayed_tolerance(restart, state.positions, state.velocities, x_cs, x_port,
-                                  *printed.units, sim.h, x_before)
-    if replayed <= printed.limit:
-        return max(tol, replayed), ""
-    return tol, (f"replayed from the port's start moved by its printed rounding, clothsim's "
-                 f"step would need a tolerance of {replayed:.1e} m, over {printed.limit:.1e} m "
-                 f"(1e-3 of the cloth): the printed state cannot place this step's answer; "
-                 f"print 17 digits (float64) or 9 (float32)")
 
 
 def _frames(sim, positions, velocities, steps):

@@ -36,6 +36,7 @@ from __future__ import annotations
 
 import numpy as np
 
+from ..simulation import State
 from .compare import cloth_size
 
 #: Values examined at most (evenly spaced over the data): the precision of printed numbers
@@ -349,3 +350,46 @@ class Printed:
                             f"--precision float32"))
         elif self.float32:
             step.note += "; the port's numbers are float32 values: check with --precision float32"
+
+    def replayed(self, sim, held, state, x_answer, x_port, tol: float, x_before=None):
+        """A failing step's tolerance, widened by replay (:func:`replayed_tolerance`).
+
+        Parameters
+        ----------
+        sim : Simulation
+            The checking simulation (its state is left as the replays leave it).
+        held : HeldSteps
+            Its holding obstacles: the replays keep the step's anchored contact planes.
+        state : State
+            The port's (x_k, v_k) of the step.
+        x_answer, x_port : ndarray, shape (n, 3)
+            clothsim's and the port's x_{k+1} [m].
+        tol : float
+            The step's tolerance so far [m].
+        x_before : ndarray, shape (n, 3), optional
+            x_{k−1} [m] when the velocities are derived from the positions.
+
+        Returns
+        -------
+        tuple of (float, str)
+            The tolerance, at least ``tol``, and "" — or ``tol`` and a note when the
+            replayed tolerance exceeds :attr:`limit` (the printed start cannot place the
+            step's answer).
+        """
+
+        def restart(x, v):
+            moved = State(x, v, state.time, state.step)
+            if held:
+                return held.replay(moved, "hold")
+            sim.state = moved
+            sim.step()
+            return sim.state.positions.copy()
+
+        replayed = replayed_tolerance(restart, state.positions, state.velocities, x_answer,
+                                      x_port, *self.units, sim.h, x_before)
+        if replayed <= self.limit:
+            return max(tol, replayed), ""
+        return tol, (f"replayed from the port's start moved by its printed rounding, "
+                     f"clothsim's step would need a tolerance of {replayed:.1e} m, over "
+                     f"{self.limit:.1e} m (1e-3 of the cloth): the printed state cannot place "
+                     f"this step's answer; print 17 digits (float64) or 9 (float32)")
