@@ -4,7 +4,7 @@ Runs the right port of examples/ports/held_port.py (clothsim's own step, printed
 ``%g``) on the contact scenes with their declared solver (Anderson, 30 iterations) and on
 ``hanging`` with Anderson, L-BFGS and Chebyshev at 30 iterations, 20 steps each, and checks
 it. For every step that fails the contraction bound and is replayed
-(:func:`clothsim.ports.precision.replayed_tolerance`), it prints the port's error, the
+(:func:`clothsim.ports.printed_replay.replayed_tolerance`), it prints the port's error, the
 contraction bound, the spread of the 4 sign patterns the check replays, of 32 sign patterns,
 and of 32 uniform draws (as rounding is), and the tolerance the step gets; and per case, how
 many steps were replayed and the summary. Writes docs/data/replay-spread.md (included by
@@ -24,7 +24,8 @@ import numpy as np
 from clothsim.ports import precision
 from clothsim.ports.check import check_steps
 from clothsim.ports.formats import read_trajectory, read_velocities
-from clothsim.ports.precision import SPREAD_MARGIN, printed_tolerances, replayed_tolerance
+from clothsim.ports.precision import printed_tolerances
+from clothsim.ports.printed_replay import SPREAD_MARGIN, replayed_tolerance
 from clothsim.scene import Scene, builtin_scene_text
 
 from .port_causes import ROOT

@@ -28,8 +28,9 @@ minimizer, or local/global iterations. An accelerated solver stopped after a fix
 of iterations (Anderson, L-BFGS, Chebyshev) is a nonlinear function of its start and can
 move its answer more than the start moved: the drape-sphere's Anderson 30 step 13 → 14 of a
 6-digit port misses the bound by 2 %. A step that fails the bound is therefore replayed
-(:func:`replayed_tolerance`): clothsim's own step from the port's start moved by the printed
-rounding, in a few sign patterns, bounds the start's effect by the spread of the answers.
+(:meth:`Printed.replayed`, :mod:`clothsim.ports.printed_replay`): clothsim's own step from
+the port's start moved by the printed rounding, in a few sign patterns, bounds the start's
+effect by the spread of the answers.
 """
 
 from __future__ import annotations
@@ -38,6 +39,7 @@ import numpy as np
 
 from ..simulation import State
 from .compare import cloth_size
+from .printed_replay import replayed_tolerance
 
 #: Values examined at most (evenly spaced over the data): the precision of printed numbers
 #: shows in any few thousand of them.
@@ -53,13 +55,6 @@ COARSEST = 5
 #: A printed precision whose step tolerance exceeds this fraction of the cloth's size is
 #: too coarse to judge a step (6 digits at |x| = 1000 m round a 1 m cloth by centimetres).
 COARSE = 1e-3
-#: Sign patterns of the printed rounding a failing step is replayed from (seeds 0, 1, ...).
-PATTERNS = 4
-#: Safety factor over the replayed spread: the printed rounding is one pattern among many,
-#: and a few sign patterns sample the directions the step amplifies, not the worst one
-#: (benchmarks/replay_spread.py prints the spread of 4 and of 32 patterns, and of uniform
-#: draws in the rounding's range, beside the port's error).
-SPREAD_MARGIN = 2.0
 #: Distinct values needed before their digits count as the printed precision: a handful of
 #: short numbers (a velocity of 0.01, a grid of 0.25 spacing) are exact, not rounded.
 DISTINCT = 30
@@ -183,66 +178,6 @@ def printed_tolerances(positions, velocities, h: float, digits: int,
     return MARGIN * np.sqrt(3.0) * (u * x[1:] + start)
 
 
-def replayed_tolerance(restart, x, v, x_answer, x_port, unit_x: float, unit_v: float,
-                       h: float, x_before=None, *, patterns: int = PATTERNS,
-                       signs: bool = True) -> float:
-    """The printed-precision tolerance [m] of one step, its start term measured by replay.
-
-    The port's start (x_k, v_k) is known to within its printed rounding, u |c| per
-    coordinate. clothsim's step is replayed from the start moved by ± u |c| in each
-    coordinate (:data:`PATTERNS` sign patterns drawn from seeds 0, 1, ...); the largest
-    distance of a replayed answer from ``x_answer`` (the step from the start as read),
-    times :data:`SPREAD_MARGIN`, bounds the start's effect for whatever the solver is.
-    The answer's own rounding, √3 u max|x_{k+1}|, is added.
-
-    Parameters
-    ----------
-    restart : callable
-        (x, v) -> clothsim's x_{k+1} from that start, the step's settings and contact planes
-        unchanged.
-    x, v : ndarray, shape (n, 3)
-        The port's x_k [m] and v_k [m/s] as read.
-    x_answer : ndarray, shape (n, 3)
-        clothsim's x_{k+1} from (x, v) [m].
-    x_port : ndarray, shape (n, 3)
-        The port's x_{k+1} [m].
-    unit_x, unit_v : float
-        Relative rounding of the positions and of the velocities (:func:`unit`).
-    h : float
-        Time step [s].
-    x_before : ndarray, shape (n, 3), optional
-        x_{k−1} [m] when the velocities are derived, v_k = (x_k − x_{k−1}) / h (its
-        rounding then moves v_k); None for stored velocities, or v_k = 0 at frame 0.
-    patterns : int, default :data:`PATTERNS`
-        Perturbations replayed (seeds 0 to ``patterns`` − 1).
-    signs : bool, default True
-        Each coordinate moved by ± u |c|; False: by a uniform draw in [−u |c|, u |c|], as
-        rounding is (benchmarks/replay_spread.py compares the two).
-
-    Returns
-    -------
-    float
-        Tolerance [m].
-    """
-    x, v = np.asarray(x, np.float64), np.asarray(v, np.float64)
-    spread = 0.0
-    for seed in range(patterns):
-        rng = np.random.default_rng(seed)
-
-        def draw(shape, rng=rng):
-            return rng.choice((-1.0, 1.0), shape) if signs else rng.uniform(-1.0, 1.0, shape)
-
-        dx = unit_x * np.abs(x) * draw(x.shape)
-        if x_before is None:
-            dv = unit_v * np.abs(v) * draw(v.shape)
-        else:
-            dv = (dx - unit_x * np.abs(x_before) * draw(x.shape)) / h
-        moved = np.linalg.norm(restart(x + dx, v + dv) - x_answer, axis=1)
-        spread = max(spread, float(np.nan_to_num(moved, nan=np.inf).max()))
-    return (SPREAD_MARGIN * spread
-            + np.sqrt(3.0) * unit_x * float(np.abs(np.asarray(x_port)).max()))
-
-
 def describe(digits: int) -> str:
     """The phrase the verdict uses: "printed with 6 significant digits".
 
@@ -290,6 +225,8 @@ class Printed:
     limit : float
         The largest tolerance a replayed step may get [m]: :data:`COARSE` of the cloth's
         size.
+    unplaced : dict
+        Step k → the note of a replay beyond :attr:`limit` (:meth:`annotate`).
     note : str
         Why the tolerance was not widened when the printing is too coarse to judge a step
         (below :data:`COARSEST` digits, or a tolerance above :data:`COARSE` of the cloth's
@@ -304,6 +241,7 @@ class Printed:
         self.tolerances = np.full(len(positions) - 1, float(tolerance))
         self.text, self.unit, self.note, self.units = "", None, "", None
         self.limit = COARSE * cloth_size(np.asarray(positions)[0])
+        self.unplaced: dict[int, str] = {}
         coarse = (f"the output is {describe(self.digits)}: too coarse to judge a step; "
                   f"print 17 digits (float64) or 9 (float32)")
         if self.digits < COARSEST:
@@ -351,11 +289,15 @@ class Printed:
         elif self.float32:
             step.note += "; the port's numbers are float32 values: check with --precision float32"
 
-    def replayed(self, sim, held, state, x_answer, x_port, tol: float, x_before=None):
+    def replayed(self, k: int, sim, held, state, x_answer, x_port, tol: float,
+                 x_before=None) -> float:
         """A failing step's tolerance, widened by replay (:func:`replayed_tolerance`).
 
         Parameters
         ----------
+        k : int
+            The step k → k + 1 (its note, when the replay exceeds :attr:`limit`, is kept
+            for :meth:`annotate`).
         sim : Simulation
             The checking simulation (its state is left as the replays leave it).
         held : HeldSteps
@@ -371,10 +313,9 @@ class Printed:
 
         Returns
         -------
-        tuple of (float, str)
-            The tolerance, at least ``tol``, and "" — or ``tol`` and a note when the
-            replayed tolerance exceeds :attr:`limit` (the printed start cannot place the
-            step's answer).
+        float
+            The tolerance [m], at least ``tol``; ``tol`` itself when the replayed tolerance
+            exceeds :attr:`limit` (the printed start cannot place the step's answer).
         """
 
         def restart(x, v):
@@ -388,8 +329,22 @@ class Printed:
         replayed = replayed_tolerance(restart, state.positions, state.velocities, x_answer,
                                       x_port, *self.units, sim.h, x_before)
         if replayed <= self.limit:
-            return max(tol, replayed), ""
-        return tol, (f"replayed from the port's start moved by its printed rounding, "
-                     f"clothsim's step would need a tolerance of {replayed:.1e} m, over "
-                     f"{self.limit:.1e} m (1e-3 of the cloth): the printed state cannot place "
-                     f"this step's answer; print 17 digits (float64) or 9 (float32)")
+            return max(tol, replayed)
+        self.unplaced[k] = (f"replayed from the port's start moved by its printed rounding, "
+                            f"clothsim's step would need a tolerance of {replayed:.1e} m, "
+                            f"over {self.limit:.1e} m (1e-3 of the cloth): the printed state "
+                            f"cannot place this step's answer; print 17 digits (float64) or 9 "
+                            f"(float32)")
+        return tol
+
+    def annotate(self, steps) -> None:
+        """Add to each failing step the printed state cannot place the note saying so.
+
+        Parameters
+        ----------
+        steps : list of StepCheck
+            The checked steps, changed in place (after their causes are named).
+        """
+        for step in steps:
+            if step.k in self.unplaced and not step.passed:
+                step.note = "; ".join(filter(None, (step.note, self.unplaced[step.k])))

@@ -3,7 +3,7 @@
 Such a step, stopped after a fixed number of iterations, is a nonlinear function of its
 start and can move its answer more than the printed start moved: a step that fails the
 cheap printed-precision bound is replayed from the start moved by its printed rounding
-(clothsim.ports.precision.replayed_tolerance). Right %g ports of the contact scenes with
+(clothsim.ports.printed_replay.replayed_tolerance). Right %g ports of the contact scenes with
 their declared Anderson 30 pass; a planted fault still fails, on the replayed step too.
 """
 
@@ -14,7 +14,8 @@ import pytest
 
 from clothsim.ports.check import check_steps
 from clothsim.ports.formats import read_trajectory, read_velocities
-from clothsim.ports.precision import SPREAD_MARGIN, replayed_tolerance, unit
+from clothsim.ports.precision import unit
+from clothsim.ports.printed_replay import SPREAD_MARGIN, replayed_tolerance
 
 from .test_check_held import builtin, run_port, write_port
 
@@ -68,17 +69,22 @@ def test_a_printed_frictionless_port_still_fails_under_anderson(tmp_path):
 @pytest.mark.parametrize("method", ["anderson", "lbfgs", "chebyshev"])
 def test_fixed_iteration_accelerated_solvers_on_hanging_pass_printed(method):
     scene = builtin("hanging", resolution=21, solver={"method": method, "iterations": 30})
+    X, V = _frames(scene, 12)
+    report = check_steps(scene, _g(X), _g(V))
+    assert report.passed, report.summary()
+    X[6:, 100] += 1e-3
+    assert check_steps(scene, _g(X), _g(V)).first_failure.k == 5
+
+
+def _frames(scene, frames):
+    """clothsim's own positions and velocities, frames + 1 of each (frames, n, 3)."""
     sim = scene.build_simulation()
     xs, vs = [sim.state.positions.copy()], [sim.state.velocities.copy()]
-    for _ in range(12):
+    for _ in range(frames):
         sim.step()
         xs.append(sim.state.positions.copy())
         vs.append(sim.state.velocities.copy())
-    report = check_steps(scene, _g(np.stack(xs)), _g(np.stack(vs)))
-    assert report.passed, report.summary()
-    moved = np.stack(xs).copy()
-    moved[6:, 100] += 1e-3
-    assert check_steps(scene, _g(moved), _g(np.stack(vs))).first_failure.k == 5
+    return np.stack(xs), np.stack(vs)
 
 
 def _linear_step(gain):
@@ -115,12 +121,6 @@ def test_a_step_the_printed_start_cannot_place_keeps_its_tolerance_and_says_so()
     # post-solve drop-on-square: vertex 156 sits on the box's edge (x = -0.25, z = 0.25)
     # when it lands in step 9 -> 10; its start's rounding decides whether it is caught
     scene = builtin("drop-on-square", mode="post-solve")
-    sim = scene.build_simulation()
-    xs, vs = [sim.state.positions.copy()], [sim.state.velocities.copy()]
-    for _ in range(10):
-        sim.step()
-        xs.append(sim.state.positions.copy())
-        vs.append(sim.state.velocities.copy())
-    step = check_steps(scene, _g(np.stack(xs)), _g(np.stack(vs))).steps[9]
+    step = check_steps(scene, *map(_g, _frames(scene, 10))).steps[9]
     assert not step.passed and step.tolerance < 1e-4 and step.error > 1e-2
     assert "the printed state cannot place this step's answer" in step.note, step.line()
