@@ -236,6 +236,11 @@ def check_steps(simulation, positions, velocities=None, *, precision: str = "flo
             if changes:   # too close to call from the port's state: the port's decision
                 adopt(held, changes, None if contacts is None else contacts.step(k))
                 problem, x_cs, v_cs, err, worst = _step(sim, held, state, x_port)
+        if printed is not None and printed.units and err[worst] > tol:   # not a contraction?
+            tol = printed.replayed(k, sim, held, state, x_cs, x_port, tol,
+                                   xs[k - 1] if velocities is None and k else None)
+            if not held:   # the obstacles' state as the step from the port's start left it
+                problem, x_cs, v_cs, err, worst = _step(sim, held, state, x_port)
         moved = pinned_moved(problem, x_port, tol if precision == "float64"
                              else max(tol_k, 4 * EPS32 * float(np.abs(x_port).max())))
         planes, differing = (None, []) if contacts is None else planes_verdict(
@@ -298,6 +303,8 @@ def check_steps(simulation, positions, velocities=None, *, precision: str = "flo
             step.note = f"{step.note}; {adopted}" if step.note else adopted
         out.append(step)
     name_cause({s.k: s for s in out}, unexplained, others)   # a model the port solves?
+    if printed is not None:   # the steps the printed state cannot place say so
+        printed.annotate(out)
     return CheckReport(out, float(tol64), precision, notes, expected_steps=expected_steps,
                        printed=printed.text if printed is not None else "")
 

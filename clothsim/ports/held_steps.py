@@ -229,7 +229,8 @@ class HeldSteps:
         ----------
         state : State
             The port's state of the step (the one :meth:`anchor` was given).
-        variant : {"post-solve", "frictionless", "flipped"}
+        variant : {"post-solve", "frictionless", "flipped", "hold"}
+            ``"hold"``: the step as anchored (its start moved, :mod:`clothsim.ports.precision`).
 
         Returns
         -------

@@ -22,13 +22,24 @@ inertial target y = x_k + h v_k (and the start point), with a sensitivity ∂x_{
 (M + h²∇²E)⁻¹ M whose ∞-norm is at most 1 when M + h²∇²E is an M-matrix (a spring
 Laplacian, positive pins): an error of the start moves the answer by no more than itself.
 Without stored velocities v_k = (x_k − x_{k−1}) / h, so y = 2 x_k − x_{k−1} carries 3 u |x|.
+
+That sensitivity bound holds for a step that is a contraction of its start: a converged
+minimizer, or local/global iterations. An accelerated solver stopped after a fixed number
+of iterations (Anderson, L-BFGS, Chebyshev) is a nonlinear function of its start and can
+move its answer more than the start moved: the drape-sphere's Anderson 30 step 13 → 14 of a
+6-digit port misses the bound by 2 %. A step that fails the bound is therefore replayed
+(:meth:`Printed.replayed`, :mod:`clothsim.ports.printed_replay`): clothsim's own step from
+the port's start moved by the printed rounding, in a few sign patterns, bounds the start's
+effect by the spread of the answers.
 """
 
 from __future__ import annotations
 
 import numpy as np
 
+from ..simulation import State
 from .compare import cloth_size
+from .printed_replay import replayed_tolerance
 
 #: Values examined at most (evenly spaced over the data): the precision of printed numbers
 #: shows in any few thousand of them.
@@ -208,6 +219,14 @@ class Printed:
     unit : float or None
         Relative rounding of the numbers when :attr:`text` is set (the gradient's rounding
         floor scales with it), else None.
+    units : tuple of float or None
+        The relative rounding of the positions and of the velocities when :attr:`text` is
+        set (:func:`replayed_tolerance`), else None.
+    limit : float
+        The largest tolerance a replayed step may get [m]: :data:`COARSE` of the cloth's
+        size.
+    unplaced : dict
+        Step k → the note of a replay beyond :attr:`limit` (:meth:`annotate`).
     note : str
         Why the tolerance was not widened when the printing is too coarse to judge a step
         (below :data:`COARSEST` digits, or a tolerance above :data:`COARSE` of the cloth's
@@ -220,7 +239,9 @@ class Printed:
         self.digits = min(xd, 17 if vd is None else vd)
         self.float32 = float32_valued(positions, xd)
         self.tolerances = np.full(len(positions) - 1, float(tolerance))
-        self.text, self.unit, self.note = "", None, ""
+        self.text, self.unit, self.note, self.units = "", None, "", None
+        self.limit = COARSE * cloth_size(np.asarray(positions)[0])
+        self.unplaced: dict[int, str] = {}
         coarse = (f"the output is {describe(self.digits)}: too coarse to judge a step; "
                   f"print 17 digits (float64) or 9 (float32)")
         if self.digits < COARSEST:
@@ -235,6 +256,7 @@ class Printed:
             elif printed.max() > tolerance:
                 self.tolerances = np.maximum(self.tolerances, printed)
                 self.text, self.unit = describe(self.digits), unit(self.digits)
+                self.units = (unit(xd), unit(xd if vd is None else vd))
 
     def hint32(self, step, error: float, bound) -> None:
         """Name float32 arithmetic on a step that fails when checked as float64, in place.
@@ -266,3 +288,63 @@ class Printed:
                             f"--precision float32"))
         elif self.float32:
             step.note += "; the port's numbers are float32 values: check with --precision float32"
+
+    def replayed(self, k: int, sim, held, state, x_answer, x_port, tol: float,
+                 x_before=None) -> float:
+        """A failing step's tolerance, widened by replay (:func:`replayed_tolerance`).
+
+        Parameters
+        ----------
+        k : int
+            The step k → k + 1 (its note, when the replay exceeds :attr:`limit`, is kept
+            for :meth:`annotate`).
+        sim : Simulation
+            The checking simulation (its state is left as the replays leave it).
+        held : HeldSteps
+            Its holding obstacles: the replays keep the step's anchored contact planes.
+        state : State
+            The port's (x_k, v_k) of the step.
+        x_answer, x_port : ndarray, shape (n, 3)
+            clothsim's and the port's x_{k+1} [m].
+        tol : float
+            The step's tolerance so far [m].
+        x_before : ndarray, shape (n, 3), optional
+            x_{k−1} [m] when the velocities are derived from the positions.
+
+        Returns
+        -------
+        float
+            The tolerance [m], at least ``tol``; ``tol`` itself when the replayed tolerance
+            exceeds :attr:`limit` (the printed start cannot place the step's answer).
+        """
+
+        def restart(x, v):
+            moved = State(x, v, state.time, state.step)
+            if held:
+                return held.replay(moved, "hold")
+            sim.state = moved
+            sim.step()
+            return sim.state.positions.copy()
+
+        replayed = replayed_tolerance(restart, state.positions, state.velocities, x_answer,
+                                      x_port, *self.units, sim.h, x_before)
+        if replayed <= self.limit:
+            return max(tol, replayed)
+        self.unplaced[k] = (f"replayed from the port's start moved by its printed rounding, "
+                            f"clothsim's step would need a tolerance of {replayed:.1e} m, "
+                            f"over {self.limit:.1e} m (1e-3 of the cloth): the printed state "
+                            f"cannot place this step's answer; print 17 digits (float64) or 9 "
+                            f"(float32)")
+        return tol
+
+    def annotate(self, steps) -> None:
+        """Add to each failing step the printed state cannot place the note saying so.
+
+        Parameters
+        ----------
+        steps : list of StepCheck
+            The checked steps, changed in place (after their causes are named).
+        """
+        for step in steps:
+            if step.k in self.unplaced and not step.passed:
+                step.note = "; ".join(filter(None, (step.note, self.unplaced[step.k])))

@@ -1,0 +1,81 @@
+"""A printed start's effect on a step, measured by replaying the step.
+
+:mod:`clothsim.ports.precision` bounds the effect of a port's printed x_k and v_k on the
+step's answer by the rounding itself, which holds for a step that contracts its start
+(local/global iterations, a converged minimizer). An accelerated solver stopped after a
+fixed number of iterations (Anderson, L-BFGS, Chebyshev) is a nonlinear function of its
+start and can move its answer more: :func:`replayed_tolerance` replays clothsim's step
+from the start moved by the printed rounding and takes the spread of the answers
+(docs/ports.md, "Printed precision").
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+#: Sign patterns of the printed rounding a failing step is replayed from (seeds 0, 1, ...).
+PATTERNS = 4
+#: Safety factor over the replayed spread: the printed rounding is one pattern among many,
+#: and a few sign patterns sample the directions the step amplifies, not the worst one
+#: (benchmarks/replay_spread.py prints the spread of 4 and of 32 patterns, and of uniform
+#: draws in the rounding's range, beside the port's error).
+SPREAD_MARGIN = 2.0
+
+def replayed_tolerance(restart, x, v, x_answer, x_port, unit_x: float, unit_v: float,
+                       h: float, x_before=None, *, patterns: int = PATTERNS,
+                       signs: bool = True) -> float:
+    """The printed-precision tolerance [m] of one step, its start term measured by replay.
+
+    The port's start (x_k, v_k) is known to within its printed rounding, u |c| per
+    coordinate. clothsim's step is replayed from the start moved by ± u |c| in each
+    coordinate (:data:`PATTERNS` sign patterns drawn from seeds 0, 1, ...); the largest
+    distance of a replayed answer from ``x_answer`` (the step from the start as read),
+    times :data:`SPREAD_MARGIN`, bounds the start's effect for whatever the solver is.
+    The answer's own rounding, √3 u max|x_{k+1}|, is added.
+
+    Parameters
+    ----------
+    restart : callable
+        (x, v) -> clothsim's x_{k+1} from that start, the step's settings and contact planes
+        unchanged.
+    x, v : ndarray, shape (n, 3)
+        The port's x_k [m] and v_k [m/s] as read.
+    x_answer : ndarray, shape (n, 3)
+        clothsim's x_{k+1} from (x, v) [m].
+    x_port : ndarray, shape (n, 3)
+        The port's x_{k+1} [m].
+    unit_x, unit_v : float
+        Relative rounding of the positions and of the velocities (:func:`unit`).
+    h : float
+        Time step [s].
+    x_before : ndarray, shape (n, 3), optional
+        x_{k−1} [m] when the velocities are derived, v_k = (x_k − x_{k−1}) / h (its
+        rounding then moves v_k); None for stored velocities, or v_k = 0 at frame 0.
+    patterns : int, default :data:`PATTERNS`
+        Perturbations replayed (seeds 0 to ``patterns`` − 1).
+    signs : bool, default True
+        Each coordinate moved by ± u |c|; False: by a uniform draw in [−u |c|, u |c|], as
+        rounding is (benchmarks/replay_spread.py compares the two).
+
+    Returns
+    -------
+    float
+        Tolerance [m].
+    """
+    x, v = np.asarray(x, np.float64), np.asarray(v, np.float64)
+    spread = 0.0
+    for seed in range(patterns):
+        rng = np.random.default_rng(seed)
+
+        def draw(shape, rng=rng):
+            return rng.choice((-1.0, 1.0), shape) if signs else rng.uniform(-1.0, 1.0, shape)
+
+        dx = unit_x * np.abs(x) * draw(x.shape)
+        if x_before is None:
+            dv = unit_v * np.abs(v) * draw(v.shape)
+        else:
+            dv = (dx - unit_x * np.abs(x_before) * draw(x.shape)) / h
+        moved = np.linalg.norm(restart(x + dx, v + dv) - x_answer, axis=1)
+        spread = max(spread, float(np.nan_to_num(moved, nan=np.inf).max()))
+    return (SPREAD_MARGIN * spread
+            + np.sqrt(3.0) * unit_x * float(np.abs(np.asarray(x_port)).max()))

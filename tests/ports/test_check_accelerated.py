@@ -1,0 +1,126 @@
+"""Printed ports of scenes whose solver is accelerated (Anderson, L-BFGS, Chebyshev).
+
+Such a step, stopped after a fixed number of iterations, is a nonlinear function of its
+start and can move its answer more than the printed start moved: a step that fails the
+cheap printed-precision bound is replayed from the start moved by its printed rounding
+(clothsim.ports.printed_replay.replayed_tolerance). Right %g ports of the contact scenes with
+their declared Anderson 30 pass; a planted fault still fails, on the replayed step too.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+from clothsim.ports.check import check_steps
+from clothsim.ports.formats import read_trajectory, read_velocities
+from clothsim.ports.precision import unit
+from clothsim.ports.printed_replay import SPREAD_MARGIN, replayed_tolerance
+
+from .test_check_held import builtin, run_port, write_port
+
+FRAMES = 20
+_g = np.vectorize(lambda c: float(f"{c:g}"))   # printed with %g and read back
+
+
+@pytest.fixture(scope="module", params=["drape-sphere", "drop-on-square"])
+def contact_port(request, tmp_path_factory):
+    """A contact scene with its declared solver and clothsim's own frames printed with %g."""
+    scene = builtin(request.param)
+    X, V, rows = run_port(scene, "none", FRAMES)
+    folder = tmp_path_factory.mktemp(request.param)
+    write_port(folder, X, V, rows, fmt="%g")
+    return scene, read_trajectory(folder), read_velocities(folder), folder
+
+
+def test_a_right_g_port_with_the_declared_anderson_solver_passes(contact_port):
+    scene, X, V, folder = contact_port
+    assert scene.build_simulation().solver.name == "anderson"
+    for planes in (None, folder / "contacts.txt"):
+        report = check_steps(scene, X, V, contacts=planes)
+        assert report.passed, report.summary()
+        assert "printed with 6 significant digits" in report.summary()
+        assert max(s.tolerance for s in report.steps) < 1e-3   # not the coarse limit
+
+
+def test_a_planted_1mm_fault_still_fails_under_anderson(contact_port):
+    scene, X, V, _ = contact_port
+    X = X.copy()
+    X[14:, 300] += [0.0, 0.0, 1e-3]   # from frame 14 on: step 13 -> 14 is the sphere's
+    X = _g(X)                         # replayed step (its bound 4.3e-4 m), printed again
+    report = check_steps(scene, X, V, steps=15)
+    first = report.first_failure
+    assert not report.passed and first is not None and first.k == 13, report.summary()
+    assert first.error > first.tolerance and first.tolerance < 1e-3
+    if scene.data["scene"]["name"] == "drape-sphere":   # judged on its replayed bound
+        assert first.tolerance > 10 * report.steps[12].tolerance
+    assert all(s.passed for s in report.steps[:13])
+
+
+def test_a_printed_frictionless_port_still_fails_under_anderson(tmp_path):
+    box = builtin("drop-on-square")
+    X, V, rows = run_port(box, "frictionless", 12)
+    write_port(tmp_path, X, V, rows, fmt="%g")
+    first = check_steps(box, read_trajectory(tmp_path), read_velocities(tmp_path)).first_failure
+    assert first is not None and first.status == "contacts differ", first
+    assert "without friction" in first.note
+
+
+@pytest.mark.parametrize("method", ["anderson", "lbfgs", "chebyshev"])
+def test_fixed_iteration_accelerated_solvers_on_hanging_pass_printed(method):
+    scene = builtin("hanging", resolution=21, solver={"method": method, "iterations": 30})
+    X, V = _frames(scene, 12)
+    report = check_steps(scene, _g(X), _g(V))
+    assert report.passed, report.summary()
+    X[6:, 100] += 1e-3
+    assert check_steps(scene, _g(X), _g(V)).first_failure.k == 5
+
+
+def _frames(scene, frames):
+    """clothsim's own positions and velocities, frames + 1 of each (frames, n, 3)."""
+    sim = scene.build_simulation()
+    xs, vs = [sim.state.positions.copy()], [sim.state.velocities.copy()]
+    for _ in range(frames):
+        sim.step()
+        xs.append(sim.state.positions.copy())
+        vs.append(sim.state.velocities.copy())
+    return np.stack(xs), np.stack(vs)
+
+
+def _linear_step(gain):
+    x0 = np.random.default_rng(7).uniform(-1, 1, (50, 3))
+    return x0, (lambda x, v: x0 + gain * (x - x0))
+
+
+def test_replayed_tolerance_measures_how_much_the_step_amplifies_its_start():
+    x0, _ = _linear_step(1.0)
+    u = unit(6)
+    answer_term = np.sqrt(3) * u * np.abs(x0).max()
+    assert replayed_tolerance(lambda x, v: x0, x0, 0 * x0, x0, x0, u, u, 0.1) == pytest.approx(
+        answer_term)                                         # a step that ignores its start
+    tol = {gain: replayed_tolerance(_linear_step(gain)[1], x0, 0 * x0, x0, x0, u, u, 0.1)
+           - answer_term for gain in (1.0, 10.0)}
+    per_vertex = np.linalg.norm(u * x0, axis=1).max()        # every sign pattern moves a
+    assert tol[1.0] == pytest.approx(SPREAD_MARGIN * per_vertex)   # vertex by exactly this
+    assert tol[10.0] == pytest.approx(10 * tol[1.0])
+
+
+def test_derived_velocities_carry_the_previous_frames_rounding():
+    x0, _ = _linear_step(1.0)
+    u, h = unit(6), 0.1
+
+    def through_velocity(x, v):   # the answer moves with h v only
+        return x0 + h * v
+
+    stored = replayed_tolerance(through_velocity, x0, 0 * x0, x0, x0, u, u, h)
+    derived = replayed_tolerance(through_velocity, x0, 0 * x0, x0, x0, u, u, h, x_before=x0)
+    assert derived > stored   # v = (x_k - x_{k-1}) / h: both frames' rounding
+
+
+def test_a_step_the_printed_start_cannot_place_keeps_its_tolerance_and_says_so():
+    # post-solve drop-on-square: vertex 156 sits on the box's edge (x = -0.25, z = 0.25)
+    # when it lands in step 9 -> 10; its start's rounding decides whether it is caught
+    scene = builtin("drop-on-square", mode="post-solve")
+    step = check_steps(scene, *map(_g, _frames(scene, 10))).steps[9]
+    assert not step.passed and step.tolerance < 1e-4 and step.error > 1e-2
+    assert "the printed state cannot place this step's answer" in step.note, step.line()
