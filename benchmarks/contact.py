@@ -297,6 +297,12 @@ def _rest(r: dict) -> str:
     return "yes" if r["max_speed"] < REST_SPEED else "no"
 
 
+def _lengths() -> str:
+    """Each scene's declared number of frames, as the page says it."""
+    return ", ".join(f"{s} {tomllib.loads(builtin_scene_text(s))['scene']['frames']}"
+                     for s in SCENES)
+
+
 def page(runs: list[dict]) -> str:
     """The Markdown table of ``runs`` (sorted by scene, size, mode)."""
     order = {s: i for i, s in enumerate(SCENES)}
@@ -305,7 +311,8 @@ def page(runs: list[dict]) -> str:
     out = ["Printed by `.venv/bin/python -m benchmarks contact` (sizes run separately with "
            "`--sizes`; each row names the commit it was measured at).", "",
            f"At rest means every vertex slower than {REST_SPEED} m/s over the last second. "
-           "\"hold\" runs the scene as it is (its 120 frames, declared solver and damping); "
+           "\"hold\" runs the scene as it is (its own frames: " + _lengths() + ", "
+           "declared solver and damping); "
            "\"post-solve\" runs the seed's scene as the seed did (90 frames of 10 local/global "
            "iterations, no damping). Contact set changes: frames whose held planes differ from "
            "the previous frame's (each one refactors the held-contact system).", "",
@@ -380,7 +387,6 @@ def main(argv=None) -> None:
                       f"over the last second {measure_projected_iterations(scene, n):.3f}",
                       flush=True)
         return
-    runs = _load()
     where = commit()
     for n in args.sizes:
         for scene in args.scenes:
@@ -396,7 +402,8 @@ def main(argv=None) -> None:
                       f"contact set changed in {r['set_changes']} frames, "
                       f"{r['seconds_per_frame']:.3f} s/frame, {r['factorizations']} factors",
                       flush=True)
-                runs = store(runs, r, ("scene", "resolution", "contact"), JSON, PAGE, page)
+                # Read again: other sizes may be run at the same time in other processes.
+                store(_load(), r, ("scene", "resolution", "contact"), JSON, PAGE, page)
 
 
 if __name__ == "__main__":
