@@ -11,6 +11,8 @@ implicit Euler objective of the paper, Eq. 4). The verdicts are listed in
 
 from __future__ import annotations
 
+from contextlib import ExitStack
+
 import numpy as np
 
 from ..effects.base import overrides
@@ -31,6 +33,7 @@ from .held_verdicts import (
     variant_verdict,
 )
 from .judge import CONVERGING, gradient_scale, judge, pin_role, pinned_moved
+from .postsolve_margins import PortDecisions
 from .precision import Printed
 from .rounding import float32_tolerance
 from .step_setup import (
@@ -112,6 +115,7 @@ def check_steps(simulation, positions, velocities=None, *, precision: str = "flo
     iterations = sim.solver.iterations
     iterated = sim.solver.name != "newton"   # a converged method: the converged floor only
     held = HeldSteps(sim)
+    post = PortDecisions(sim)   # post-solve obstacles: their decisions too close to call
     if contacts is not None and not isinstance(contacts, PortPlanes):
         contacts = PortPlanes(contacts, sim.model.vertex_count)
     if contacts is not None:
@@ -145,21 +149,25 @@ def check_steps(simulation, positions, velocities=None, *, precision: str = "flo
         if precision == "float32" and tolerance is None and err[worst] > tol_k:
             tol = max(tol_k, bound32())
         adopted = ""
+        rounding = position_rounding(xs[k], printed.digits if printed else 17,
+                                     precision == "float32" or bool(printed and
+                                                                    printed.float32), tol64)
         if held and (contacts is not None or err[worst] > tol):
-            rounding = position_rounding(xs[k], printed.digits if printed else 17,
-                                         precision == "float32" or bool(printed and
-                                                                        printed.float32),
-                                         tol64)
             changes, adopted = marginal_changes(k, held, model, problem, tol, contacts,
                                                 x_port, x_cs, rounding)
             if changes:   # too close to call from the port's state: the port's decision
                 adopt(held, changes, None if contacts is None else contacts.step(k))
                 problem, x_cs, v_cs, err, worst = _step(sim, held, state, x_port)
-        if printed is not None and printed.units and err[worst] > tol:   # not a contraction?
-            tol = printed.replayed(k, sim, held, state, x_cs, x_port, tol,
-                                   xs[k - 1] if velocities is None and k else None)
-            if not held:   # the obstacles' state as the step from the port's start left it
+        with ExitStack() as stack:
+            if post and err[worst] > tol:   # post-solve decisions too close to call
+                stack.enter_context(post.adopted(x_port, rounding, err))
                 problem, x_cs, v_cs, err, worst = _step(sim, held, state, x_port)
+                adopted = post.note()
+            if printed is not None and printed.units and err[worst] > tol:   # contraction?
+                tol = printed.replayed(k, sim, held, state, x_cs, x_port, tol,
+                                       xs[k - 1] if velocities is None and k else None)
+                if not held:   # the obstacles' state the port's start left
+                    problem, x_cs, v_cs, err, worst = _step(sim, held, state, x_port)
         moved = pinned_moved(problem, x_port, tol if precision == "float64"
                              else max(tol_k, 4 * EPS32 * float(np.abs(x_port).max())))
         planes, differing = (None, []) if contacts is None else planes_verdict(
@@ -196,7 +204,10 @@ def check_steps(simulation, positions, velocities=None, *, precision: str = "flo
             if obstacles and not held and not step.passed and len(obstacles) <= MAX_EFFECT:
                 obstacles.append(k)
                 why = obstacle_cause(sim, state, x_port, tol)
-            if why:
+            unprojected = post.unprojected(err, tol) if step.passed else ""
+            if unprojected:   # the minimizer of g knows no obstacle
+                step.status, step.note = "contacts differ", unprojected
+            elif why:
                 step.status, step.note = "model differs", why
             elif (step.status in FITTED + ("start-dependent",) and not step.settings
                     and step.gradient_port >= CONVERGING):   # not a port that only stops short

@@ -9,7 +9,6 @@ change it); each verdict must name the fault, never advise iterations for a conv
 from __future__ import annotations
 
 import re
-
 from importlib import resources
 
 import numpy as np
