@@ -201,12 +201,12 @@ def check_steps(simulation, positions, velocities=None, *, precision: str = "flo
                          search=searches < MAX_SEARCHES, unit=printed and printed.unit)
             searches += 1
             why = ""
+            unprojected = post.unprojected(err, tol) if step.passed else ""
             if obstacles and not held and not step.passed and len(obstacles) <= MAX_EFFECT:
                 obstacles.append(k)
                 why = obstacle_cause(sim, state, x_port, tol)
-            unprojected = post.unprojected(err, tol) if step.passed else ""
-            if unprojected:   # the minimizer of g knows no obstacle
-                step.status, step.note = "contacts differ", unprojected
+            if unprojected:   # the minimizer of g knows no obstacle; the port's answer did
+                step.status, step.note = "contacts differ", unprojected   # not reach it
             elif why:
                 step.status, step.note = "model differs", why
             elif (step.status in FITTED + ("start-dependent",) and not step.settings

@@ -125,8 +125,10 @@ def test_a_step_the_printed_start_cannot_place_keeps_its_tolerance_and_says_so(m
     # replays from the moved start cannot place the answer, and the note says so
     scene = builtin("drop-on-square", mode="post-solve")
     frames = list(map(_g, _frames(scene, 10)))
-    step = check_steps(scene, *frames).steps[9]
+    report = check_steps(scene, *frames)
+    step = report.steps[9]
     assert step.passed and "too close to call" in step.note, step.line()
+    assert report.passed, report.summary()
 
     class Undecided(PortDecisions):
         def __init__(self, sim):
