@@ -96,8 +96,11 @@ class PortDecisions:
     obstacles : list of Obstacle
         The scene's obstacles in ``"post-solve"`` mode.
     taken : list of (int, str)
-        The last solve's adopted decisions: vertex, words ("not projected", "on the box's
-        +y face").
+        The decisions adopted since :meth:`adopted` began (the check's solve from the
+        port's start first, then its replays): vertex, words ("not projected", "on the
+        box's +y face").
+    gap : float
+        How far the surfaces are moved to find the decisions too close to call [m].
     """
 
     def __init__(self, sim):
@@ -193,7 +196,7 @@ class PortDecisions:
             x_own = original(t, state, x)
             x_new, taken = self._decide(ob, state.positions, x, x_own, x_port, self.gap)
             if taken:
-                self.taken = [(v, words) for v, words, _ in taken]
+                self.taken += [(v, words) for v, words, _ in taken]
                 self._contacts(ob, taken)
             return x_new
         return correct
