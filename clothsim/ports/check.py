@@ -11,6 +11,8 @@ implicit Euler objective of the paper, Eq. 4). The verdicts are listed in
 
 from __future__ import annotations
 
+from contextlib import ExitStack
+
 import numpy as np
 
 from ..effects.base import overrides
@@ -18,7 +20,7 @@ from ..errors import InputError
 from ..simulation import State
 from ..solvers import make_solver
 from .causes import FITTED, StepData, name_cause
-from .compare import EPS32, RTOL64, cloth_size, condition_number
+from .compare import EPS32
 from .contact_planes import PortPlanes
 from .effect_causes import damping_cause, obstacle_cause
 from .held_margins import adopt, position_rounding
@@ -30,13 +32,16 @@ from .held_verdicts import (
     planes_verdict,
     variant_verdict,
 )
-from .judge import CONVERGING, gradient_scale, judge, pin_role, pinned_moved, refine
+from .judge import CONVERGING, gradient_scale, judge, pin_role, pinned_moved
+from .postsolve_margins import PortDecisions
 from .precision import Printed
-from .rounding import (
-    converged_float32_floor,
-    float32_deviation,
-    float32_newton_stagnation,
-    float32_tolerance,
+from .rounding import float32_tolerance
+from .step_setup import (
+    as_simulation,
+    fixed_settings,
+    float32_report,
+    step_tolerance,
+    system_condition_number,
 )
 from .verdicts import PASSING, CheckReport, StepCheck
 
@@ -51,95 +56,12 @@ __all__ = ["PASSING", "CheckReport", "StepCheck", "as_simulation", "check_steps"
            "float32_report", "step_tolerance", "system_condition_number"]
 
 
-def as_simulation(source):
-    """A fresh Simulation from a Scene, a Simulation factory, or a Simulation.
-
-    Parameters
-    ----------
-    source : Scene, Simulation or callable returning a Simulation
-
-    Returns
-    -------
-    Simulation
-        Built from the scene or the factory; a Simulation is returned as is.
-    """
-    if hasattr(source, "build_simulation"):
-        return source.build_simulation(source.build_model())
-    if callable(source):
-        return source()
-    if hasattr(source, "step") and hasattr(source, "problem"):
-        return source
-    raise InputError("simulation: expected a Scene, a Simulation or a function returning one")
 
 
-def step_tolerance(sim, x: np.ndarray, precision: str = "float64") -> float:
-    """Allowed per-vertex distance of one step [m] (docs/ports.md derives it).
-
-    float64: 1e-9 of the cloth size. float32: the next step's float32 bound
-    (:func:`clothsim.ports.rounding.float32_tolerance`), at least the float64 tolerance:
-    measured on its local/global iterations, or for a Newton scene the converged floor at
-    the step's minimizer.
-
-    Parameters
-    ----------
-    sim : Simulation
-        The simulation at the step's start (supplies M, L, h and the pins).
-    x : ndarray, shape (n, 3)
-        Positions [m] setting the cloth size.
-    precision : {"float64", "float32"}
-        The port's precision.
-
-    Returns
-    -------
-    float
-        Tolerance [m].
-    """
-    if precision not in ("float32", "float64"):
-        raise InputError(f"precision: must be 'float32' or 'float64', got {precision!r}")
-    tol = RTOL64 * cloth_size(x)
-    if precision == "float32":
-        problem, model = sim.problem(sim.state), sim.step_model()
-        iterated = sim.solver.name != "newton"
-        x_min = None if iterated else refine(model, problem, problem.initial_guess())
-        tol = float32_tolerance(model, problem, sim.solver.iterations, tol, x=x_min,
-                                iterated=iterated)
-    return tol
 
 
-def fixed_settings(sim) -> str:
-    """"10 local/global iterations from y": the scene's fixed iteration count, or "".
-
-    Parameters
-    ----------
-    sim : Simulation
-
-    Returns
-    -------
-    str
-        "" for a converged method (Newton) or a scene with a solver tolerance.
-    """
-    solver = sim.solver
-    if solver.name == "newton" or solver.tolerance:
-        return ""
-    name = solver.name.replace("-", "/")
-    return f"{solver.iterations} {name} iterations from {sim.initial_guess}"
 
 
-def system_condition_number(sim) -> float:
-    """κ(M + h²L) of the simulation's next step, with its penalty pins.
-
-    Parameters
-    ----------
-    sim : Simulation
-
-    Returns
-    -------
-    float
-        The 2-norm condition number (:func:`clothsim.ports.compare.condition_number`).
-    """
-    p = sim.problem(sim.state)
-    return condition_number(sim.model, sim.h, anchor_vertices=p.anchor_vertices,
-                            anchor_stiffness=p.anchor_stiffness)
 
 
 def check_steps(simulation, positions, velocities=None, *, precision: str = "float64",
@@ -193,6 +115,7 @@ def check_steps(simulation, positions, velocities=None, *, precision: str = "flo
     iterations = sim.solver.iterations
     iterated = sim.solver.name != "newton"   # a converged method: the converged floor only
     held = HeldSteps(sim)
+    post = PortDecisions(sim)   # post-solve obstacles: their decisions too close to call
     if contacts is not None and not isinstance(contacts, PortPlanes):
         contacts = PortPlanes(contacts, sim.model.vertex_count)
     if contacts is not None:
@@ -226,21 +149,25 @@ def check_steps(simulation, positions, velocities=None, *, precision: str = "flo
         if precision == "float32" and tolerance is None and err[worst] > tol_k:
             tol = max(tol_k, bound32())
         adopted = ""
+        rounding = position_rounding(xs[k], printed.digits if printed else 17,
+                                     precision == "float32" or bool(printed and
+                                                                    printed.float32), tol64)
         if held and (contacts is not None or err[worst] > tol):
-            rounding = position_rounding(xs[k], printed.digits if printed else 17,
-                                         precision == "float32" or bool(printed and
-                                                                        printed.float32),
-                                         tol64)
             changes, adopted = marginal_changes(k, held, model, problem, tol, contacts,
                                                 x_port, x_cs, rounding)
             if changes:   # too close to call from the port's state: the port's decision
                 adopt(held, changes, None if contacts is None else contacts.step(k))
                 problem, x_cs, v_cs, err, worst = _step(sim, held, state, x_port)
-        if printed is not None and printed.units and err[worst] > tol:   # not a contraction?
-            tol = printed.replayed(k, sim, held, state, x_cs, x_port, tol,
-                                   xs[k - 1] if velocities is None and k else None)
-            if not held:   # the obstacles' state as the step from the port's start left it
+        with ExitStack() as stack:
+            if post and err[worst] > tol:   # post-solve decisions too close to call
+                stack.enter_context(post.adopted(x_port, rounding, err))
                 problem, x_cs, v_cs, err, worst = _step(sim, held, state, x_port)
+                adopted = post.note()
+            if printed is not None and printed.units and err[worst] > tol:   # contraction?
+                tol = printed.replayed(k, sim, held, state, x_cs, x_port, tol,
+                                       xs[k - 1] if velocities is None and k else None)
+                if not held:   # the obstacles' state the port's start left
+                    problem, x_cs, v_cs, err, worst = _step(sim, held, state, x_port)
         moved = pinned_moved(problem, x_port, tol if precision == "float64"
                              else max(tol_k, 4 * EPS32 * float(np.abs(x_port).max())))
         planes, differing = (None, []) if contacts is None else planes_verdict(
@@ -274,10 +201,13 @@ def check_steps(simulation, positions, velocities=None, *, precision: str = "flo
                          search=searches < MAX_SEARCHES, unit=printed and printed.unit)
             searches += 1
             why = ""
+            unprojected = post.unprojected(err, tol) if step.passed else ""
             if obstacles and not held and not step.passed and len(obstacles) <= MAX_EFFECT:
                 obstacles.append(k)
                 why = obstacle_cause(sim, state, x_port, tol)
-            if why:
+            if unprojected:   # the minimizer of g knows no obstacle; the port's answer did
+                step.status, step.note = "contacts differ", unprojected   # not reach it
+            elif why:
                 step.status, step.note = "model differs", why
             elif (step.status in FITTED + ("start-dependent",) and not step.settings
                     and step.gradient_port >= CONVERGING):   # not a port that only stops short
@@ -309,42 +239,6 @@ def check_steps(simulation, positions, velocities=None, *, precision: str = "flo
                        printed=printed.text if printed is not None else "")
 
 
-def float32_report(scenes=("hanging", "jacobson-net", "jacobson-flag", "drop-on-square")) -> None:
-    """Print, per scene, the first step's float32 deviation, tolerance and κ bound, and the
-    converged float32 floor beside where a float32 Newton iteration from the minimizer
-    stagnates (a converged step's tolerance is ``MARGIN`` × the floor).
-
-    The numbers of docs/ports.md ("float32 ports") are this function's output.
-
-    Parameters
-    ----------
-    scenes : sequence of str
-        Scene names or ``.toml`` paths. A scene whose data set cannot be got (the
-        assignment's files, offline) gets a line saying so instead.
-    """
-    from ..scene import load_scene
-
-    print(f"{'scene':16} {'n':>5} {'K':>4} {'deviation':>10} {'tolerance':>10} "
-          f"{'kappa bound':>11} {'floor':>9} {'stagnation':>10}")
-    for name in scenes:
-        try:
-            sim = as_simulation(load_scene(name))
-        except InputError as exc:
-            if "`clothsim data fetch " not in str(exc):
-                raise
-            print(f"{name:16} skipped: {getattr(exc, 'detail', exc)}")
-            continue
-        x = sim.state.positions
-        problem = sim.problem(sim.state)
-        K = sim.solver.iterations
-        dev = float32_deviation(sim.step_model(), problem, K)
-        tol = step_tolerance(sim, x, "float32")
-        kappa = system_condition_number(sim) * EPS32 * float(np.abs(x).max())
-        x_min = refine(sim.step_model(), problem, problem.initial_guess())
-        floor = converged_float32_floor(sim.step_model(), problem, x_min)
-        stag = float32_newton_stagnation(sim.step_model(), problem, x_min)
-        print(f"{name:16} {sim.model.vertex_count:5d} {K:4d} {dev:10.2e} {tol:10.2e} "
-              f"{kappa:11.2e} {floor:9.2e} {stag:10.2e}")
 
 
 def _replayer(sim, state):

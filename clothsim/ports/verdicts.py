@@ -40,7 +40,9 @@ Verdicts that fail:
     Hold mode: the port's planes of the step are not the ones clothsim decides from the
     port's state (held by one and free in the other, sticking and sliding, another plane,
     the normal's sign), or its answer is clothsim's step under another contact treatment
-    (:mod:`clothsim.ports.held_verdicts`).
+    (:mod:`clothsim.ports.held_verdicts`). Post-solve mode: vertices clothsim's
+    projection moved are off in a port whose answer otherwise minimizes g
+    (:mod:`clothsim.ports.postsolve_margins`).
 """
 
 from __future__ import annotations

@@ -175,8 +175,13 @@ def test_a_smaller_sphere_in_post_solve_mode_is_named(tmp_path):
     contact share their distance from the centre, and the replay with it is the port's."""
     report, summary = verdict(sphere_scene(tmp_path), "effects[1].radius=0.25")
     assert summary.startswith("FAIL at step"), summary
-    assert "model differs" in summary, summary
-    assert "a sphere of radius 0.25 m instead of 0.3 m" in summary, summary
+    # the first step the scene's sphere catches vertices the port's does not reach yet:
+    # the port's answer minimizes g, clothsim's projection moved them
+    first = next(s for s in report.steps if not s.passed)
+    assert first.status == "contacts differ", first.line()
+    assert "the port projects otherwise, or not at all" in first.note
+    named = [s for s in report.steps if s.status == "model differs"]
+    assert named and "a sphere of radius 0.25 m instead of 0.3 m" in named[0].note, summary
 
 
 def drop_on_square(tmp_path, frames=16):
