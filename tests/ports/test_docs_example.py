@@ -2,6 +2,8 @@
 data set liu13-port)."""
 
 import shlex
+import subprocess
+import sys
 from pathlib import Path
 
 import pytest
@@ -13,9 +15,19 @@ from .conftest import REPO
 SCENE = REPO / "examples" / "ports" / "liu13-default.toml"
 
 
-def commands() -> list[list[str]]:
+def commands(programs=(".venv/bin/clothsim ",)) -> list[list[str]]:
+    """The page's command lines of ``programs``, in order, without the program (the
+    ``.venv/bin/python`` lines keep their script's path)."""
     lines = (REPO / "docs" / "ports.md").read_text().splitlines()
-    return [shlex.split(t)[1:] for t in lines if t.startswith(".venv/bin/clothsim ")]
+    return [shlex.split(t)[1:] for t in lines if t.startswith(programs)]
+
+
+def run(argv: list[str]) -> int:
+    """One command of the page: clothsim in this process, an example script in another
+    (``.venv/bin/python examples/...``, run from the repository's copy)."""
+    if argv[0].startswith("examples/"):
+        return subprocess.run([sys.executable, str(REPO / argv[0]), *argv[1:]]).returncode
+    return main(argv)
 
 
 def test_the_docs_show_every_step():
@@ -29,9 +41,9 @@ def test_worked_example_runs(tmp_path, monkeypatch, capsys):
         pytest.skip(f"{SCENE.relative_to(REPO)} is not in this checkout (it builds the port's "
                     f"model from its files)")
     monkeypatch.chdir(tmp_path)
-    for argv in commands():
+    for argv in commands((".venv/bin/clothsim ", ".venv/bin/python examples/")):
         argv = [str(SCENE) if a == "examples/ports/liu13-default.toml" else a for a in argv]
-        assert main(argv) == 0, (argv, capsys.readouterr())
+        assert run(argv) == 0, (argv, capsys.readouterr())
     out = capsys.readouterr().out
     assert "IDENTICAL" in out and "PASS: 60 steps agree" in out
     assert Path(tmp_path / "out" / "liu13" / "deviation.png").is_file()
@@ -60,8 +72,8 @@ def test_worked_example_runs_with_the_helper_model(tmp_path, monkeypatch, capsys
     monkeypatch.setattr(clothsim.scene, "load_scene", lambda s, overrides=(): _HelperScene()
                         if str(s).endswith("liu13-default.toml") else real(s, overrides))
     monkeypatch.chdir(tmp_path)
-    for argv in commands():
-        assert main(argv) == 0, (argv, capsys.readouterr())
+    for argv in commands((".venv/bin/clothsim ", ".venv/bin/python examples/")):
+        assert run(argv) == 0, (argv, capsys.readouterr())
     out = capsys.readouterr().out
     assert "IDENTICAL" in out and "PASS: 60 steps agree" in out
     assert "after dropping 6 attachment columns" in out
