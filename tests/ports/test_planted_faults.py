@@ -8,14 +8,11 @@ change it); each verdict must name the fault, never advise iterations for a conv
 
 from __future__ import annotations
 
-import re
-from importlib import resources
-
 import numpy as np
 import pytest
 
 import clothsim as cs
-from benchmarks.port_causes_fixed import CURTAIN
+from benchmarks.port_causes_fixed import CURTAIN, seed_scene_text
 from clothsim.ports.check import check_steps
 
 from .test_check_verdicts import trajectory
@@ -144,13 +141,10 @@ def test_a_float32_ten_iteration_port_of_the_scene_passes(tmp_path):
 
 
 def sphere_scene(tmp_path):
-    """drape-sphere at 30 × 20, 8 frames, contact projected after the solve."""
-    text = resources.files("clothsim.scenes").joinpath("drape-sphere.toml").read_text()
-    text = (text.replace("frames = 90", "frames = 8")
-            .replace("resolution = [25, 25]", "resolution = [30, 20]")
-            + '\n[contact]\nmode = "post-solve"\n')
+    """drape-sphere at 30 × 20, 8 frames, as the seed ran it (10 local/global iterations,
+    contact projected after the solve)."""
     path = tmp_path / "sphere.toml"
-    path.write_text(text)
+    path.write_text(seed_scene_text("drape-sphere", 8, "resolution = [30, 20]"))
     return path
 
 
@@ -186,12 +180,8 @@ def test_a_smaller_sphere_in_post_solve_mode_is_named(tmp_path):
 
 def drop_on_square(tmp_path, frames=16):
     """The seed's demo at 25², 10 local/global iterations, contact projected after the solve."""
-    text = resources.files("clothsim.scenes").joinpath("drop-on-square.toml").read_text()
     path = tmp_path / "drop.toml"
-    text = re.sub(r"(?m)^frames = \d+$", f"frames = {frames}", text)
-    text = re.sub(r'(?m)^method = "\w+"$', 'method = "local-global"', text)
-    text = re.sub(r"(?m)^iterations = \d+$", "iterations = 10", text)
-    path.write_text(text + '\n[contact]\nmode = "post-solve"\n')
+    path.write_text(seed_scene_text("drop-on-square", frames))
     return path
 
 
