@@ -58,6 +58,7 @@ def test_a_planted_1mm_fault_still_fails_under_anderson(contact_port):
     assert all(s.passed for s in report.steps[:13])
 
 
+@pytest.mark.slow   # a variant; the suite's fast run keeps the main case
 def test_a_printed_frictionless_port_still_fails_under_anderson(tmp_path):
     box = builtin("drop-on-square")
     X, V, rows = run_port(box, "frictionless", 12)

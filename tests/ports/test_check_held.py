@@ -101,6 +101,7 @@ def test_a_right_port_printed_with_g_passes(ports, box, tmp_path, with_planes):
     assert "printed with 6 significant digits" in report.summary()
 
 
+@pytest.mark.slow   # a variant; the suite's fast run keeps the main case
 def test_a_right_float32_port_passes_at_float32_and_is_told_so_at_float64(ports, box,
                                                                           tmp_path):
     X, V, rows = ports["none"]
@@ -117,6 +118,7 @@ def test_a_right_float32_port_passes_at_float32_and_is_told_so_at_float64(ports,
     assert {s.status for s in as64.steps} == {"float32 rounding"}, as64.summary()
 
 
+@pytest.mark.slow   # a variant; the suite's fast run keeps the main case
 def test_a_float32_frictionless_port_still_fails_at_float32(ports, box):
     X, V, _ = ports["frictionless"]
     report = check_steps(box, X.astype(np.float32), V.astype(np.float32),
@@ -179,6 +181,7 @@ def test_bad_contacts_files_are_named(tmp_path, text, words):
     assert words in str(info.value)
 
 
+@pytest.mark.slow   # a variant; the suite's fast run keeps the main case
 def test_contacts_file_on_the_command_line(ports, tmp_path, capsys):
     X, V, rows = ports["frictionless"]
     write_port(tmp_path / "port", X, V, rows)
@@ -196,6 +199,7 @@ def test_contacts_file_on_the_command_line(ports, tmp_path, capsys):
     assert len(err) == 1 and "bad.npz" in err[0]
 
 
+@pytest.mark.slow   # a variant; the suite's fast run keeps the main case
 @pytest.mark.parametrize("with_planes", [False, True])
 def test_resting_contact_printed_with_g_passes_and_no_friction_still_fails(tmp_path,
                                                                           with_planes):

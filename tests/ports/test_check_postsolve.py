@@ -63,6 +63,7 @@ def test_a_port_without_the_post_solve_projection_fails(tmp_path):
     assert report.steps[9].error > 1e-2, report.steps[9].line()
 
 
+@pytest.mark.slow   # a variant; the suite's fast run keeps the main case
 @pytest.mark.parametrize("shift", [[0.0, 0.0, 2e-3], [2e-3, 0.0, 0.0]])
 def test_an_edge_vertex_off_its_faces_by_more_than_rounding_fails(seed_demo, shift):
     """Vertex 156 (on the box's edge) put 2 mm off where either decision leaves it."""

@@ -65,6 +65,7 @@ class _HelperScene:
         return liu13_simulation()
 
 
+@pytest.mark.slow   # a variant; the suite's fast run keeps the main case
 def test_worked_example_runs_with_the_helper_model(tmp_path, monkeypatch, capsys):
     import clothsim.scene
 
