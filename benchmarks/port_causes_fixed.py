@@ -25,6 +25,8 @@ from clothsim.ports import check as check_module
 from clothsim.ports import effect_causes
 from clothsim.ports.check import check_steps
 
+from .contact import SEED
+
 ROOT = Path(__file__).resolve().parents[1]
 OUT = ROOT / "docs" / "data" / "port-causes-fixed.md"
 
@@ -70,12 +72,14 @@ CURTAIN_FAULTS = ['cloth.mass_lumping="uniform"', "scene.fps=15", "springs.bendi
 
 
 def seed_scene_text(name, frames, resolution=None) -> str:
-    """The built-in scene ``name`` as the seed ran it: post-solve contact, 10 local/global
-    iterations (whatever solver the scene declares now), ``frames`` frames."""
+    """The built-in scene ``name`` with the seed's solver (:data:`benchmarks.contact.SEED`:
+    10 local/global iterations, whatever solver the scene declares now), post-solve
+    contact and ``frames`` frames; its declared damping stays."""
+    solver = SEED["solver"]
     text = resources.files("clothsim.scenes").joinpath(f"{name}.toml").read_text()
     text = re.sub(r"(?m)^frames = \d+$", f"frames = {frames}", text)
-    text = re.sub(r'(?m)^method = "[\w-]+"$', 'method = "local-global"', text)
-    text = re.sub(r"(?m)^iterations = \d+$", "iterations = 10", text)
+    text = re.sub(r'(?m)^method = "[\w-]+"$', f'method = "{solver["method"]}"', text)
+    text = re.sub(r"(?m)^iterations = \d+$", f'iterations = {solver["iterations"]}', text)
     if resolution:
         text = text.replace("resolution = [25, 25]", resolution)
     return text + '\n[contact]\nmode = "post-solve"\n'
