@@ -60,6 +60,21 @@ def test_warnings_are_counted_one_line_per_kind(monkeypatch, capsys):
     assert ".py:" not in err  # no file paths
 
 
+def test_a_file_left_to_the_collector_adds_no_line(monkeypatch, capsys):
+    # a SIGTERM that lands inside an import leaves the module's open .pyc to the collector:
+    # its ResourceWarning once made an interrupted command print a second line (CI, stop 38)
+    def leaky(args):
+        warnings.warn("unclosed file <_io.BufferedReader name='gui.pyc'>", ResourceWarning,
+                      stacklevel=1)
+        warnings.warn("something else", UserWarning, stacklevel=1)
+        return 0
+
+    monkeypatch.setitem(cli.COMMANDS, "scenes", leaky)
+    assert cli.main(["scenes"]) == 0
+    lines = capsys.readouterr().err.strip().splitlines()
+    assert len(lines) == 1 and "UserWarning (once): something else" in lines[0], lines
+
+
 def test_progress_bars_are_off_when_stderr_is_not_a_terminal(monkeypatch, capsys):
     monkeypatch.delenv("TQDM_DISABLE", raising=False)
     seen = {}

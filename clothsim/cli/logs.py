@@ -39,7 +39,9 @@ def _warnings_to_log():
 
     A kind is the warning category plus its message with numbers blanked out. The first
     warning of each kind is logged at INFO (visible with -v); at exit one WARNING line per
-    kind gives its count and the first message.
+    kind gives its count and the first message. ``ResourceWarning`` stays ignored, as in
+    Python's default filters: it speaks of the interpreter's own files (a signal that lands
+    inside an import leaves the module's open ``.pyc`` to the collector), never of the run.
     """
     counts: dict[tuple[str, str], list] = {}
 
@@ -53,6 +55,7 @@ def _warnings_to_log():
 
     with warnings.catch_warnings():
         warnings.simplefilter("always")
+        warnings.simplefilter("ignore", ResourceWarning)
         warnings.showwarning = show
         try:
             yield counts
