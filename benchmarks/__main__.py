@@ -14,9 +14,10 @@ BENCHMARKS = ("stiffness", "stability_figures", "performance", "factor_modes", "
 #: the full accuracy study at 41² take minutes each; accuracy_docs regenerates the accuracy
 #: page's two study reports (minutes)
 LONG = ("memory", "scale_ladder", "accuracy_full", "accuracy_docs", "contact", "held_factor",
-        "contact_thickness", "fuzz_scenes", "cpp_side_by_side",
-        "replay_spread")  # fuzz_scenes: the fuzz behind docs/data/fuzz.md (a minute);
-# cpp_side_by_side: downloads and compiles a C++ port; replay_spread: docs/data/replay-spread.md
+        "contact_thickness", "fuzz_scenes", "cpp_side_by_side", "replay_spread",
+        "port_check_matrix")  # fuzz_scenes: the fuzz behind docs/data/fuzz.md (a minute);
+# cpp_side_by_side: downloads and compiles a C++ port; replay_spread: docs/data/replay-spread.md;
+# port_check_matrix: docs/data/port-check-matrix.md (minutes)
 
 
 def main(argv: list[str]) -> int:

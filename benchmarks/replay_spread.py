@@ -4,11 +4,12 @@ Runs the right port of examples/ports/held_port.py (clothsim's own step, printed
 ``%g``) on the contact scenes with their declared solver (Anderson, 30 iterations) and on
 ``hanging`` with Anderson, L-BFGS and Chebyshev at 30 iterations, 20 steps each, and checks
 it. For every step that fails the contraction bound and is replayed
-(:func:`clothsim.ports.printed_replay.replayed_tolerance`), it prints the port's error, the
-contraction bound, the spread of the 4 sign patterns the check replays, of 32 sign patterns,
-and of 32 uniform draws (as rounding is), and the tolerance the step gets; and per case, how
-many steps were replayed and the summary. Writes docs/data/replay-spread.md (included by
-docs/ports.md). Run from the repository root:
+(:func:`clothsim.ports.printed_replay.replayed_tolerance`, along the port's branch of the
+solver's discrete choices, :mod:`clothsim.ports.solver_branches`), it prints the port's
+error, the contraction bound, the spread of the 4 sign patterns the check replays, of 32
+sign patterns, and of 32 uniform draws (as rounding is), and the tolerance the step gets;
+and per case, how many steps were replayed and the summary. Writes
+docs/data/replay-spread.md (included by docs/ports.md). Run from the repository root:
 ``.venv/bin/python -m benchmarks replay_spread`` (about a minute of CPU).
 """
 
@@ -25,7 +26,7 @@ from clothsim.ports import precision
 from clothsim.ports.check import check_steps
 from clothsim.ports.formats import read_trajectory, read_velocities
 from clothsim.ports.precision import printed_tolerances
-from clothsim.ports.printed_replay import SPREAD_MARGIN, replayed_tolerance
+from clothsim.ports.printed_replay import SPREAD_MARGIN, moved_starts, spread_tolerance
 from clothsim.scene import Scene, builtin_scene_text
 
 from .port_causes import ROOT
@@ -69,17 +70,28 @@ def main() -> list[str]:
         cheap = printed_tolerances(X, V, sim.h, 6)
         found = []
 
-        def spy(restart, x, v, xa, xp, ux, uv, h, xb=None, found=found, X=X):
-            args = (restart, x, v, xa, xp, ux, uv, h, xb)
+        captured = {}
+
+        def starts_spy(*args, captured=captured, **kwargs):
+            captured["args"], captured["kwargs"] = args, kwargs
+            return moved_starts(*args, **kwargs)
+
+        def spy(replay, starts, xa, xp, ux, found=found, X=X, captured=captured):
+            # the check's replays (along the port's branch of the solver's choices), and
+            # 32 sign patterns and 32 uniform draws from the same start
             own = np.sqrt(3.0) * ux * float(np.abs(xp).max())
-            tol = replayed_tolerance(*args)
-            k = next(i for i in range(len(X)) if np.array_equal(X[i], x))
-            found.append((k, [(replayed_tolerance(*args, **kw) - own) / SPREAD_MARGIN
-                              for kw in ({}, {"patterns": 32},
-                                         {"patterns": 32, "signs": False})]))
+            tol = spread_tolerance(replay, starts, xa, xp, ux)
+            args, kwargs = captured["args"], captured["kwargs"]
+            k = next(i for i in range(len(X)) if np.array_equal(X[i], args[0]))
+            more = [moved_starts(*args, **{**kwargs, **kw})
+                    for kw in ({"patterns": 32}, {"patterns": 32, "signs": False})]
+            found.append((k, [(tol - own) / SPREAD_MARGIN] + [
+                (spread_tolerance(replay, st, xa, xp, ux) - own) / SPREAD_MARGIN
+                for st in more]))
             return tol
 
-        with mock.patch.object(precision, "replayed_tolerance", spy):
+        with mock.patch.object(precision, "moved_starts", starts_spy), \
+                mock.patch.object(precision, "spread_tolerance", spy):
             report = check_steps(scene, X, V)
         for k, spreads in found:
             rows.append(f"| {label} | {k} → {k + 1} | {report.steps[k].error:.2e} | "

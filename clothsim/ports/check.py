@@ -36,6 +36,7 @@ from .judge import CONVERGING, gradient_scale, judge, pin_role, pinned_moved
 from .postsolve_margins import PortDecisions
 from .precision import Printed
 from .rounding import float32_tolerance
+from .solver_branches import SolverBranches
 from .step_setup import (
     as_simulation,
     fixed_settings,
@@ -116,6 +117,7 @@ def check_steps(simulation, positions, velocities=None, *, precision: str = "flo
     iterated = sim.solver.name != "newton"   # a converged method: the converged floor only
     held = HeldSteps(sim)
     post = PortDecisions(sim)   # post-solve obstacles: their decisions too close to call
+    branches = SolverBranches(sim)   # the solver's own choices too close to call
     if contacts is not None and not isinstance(contacts, PortPlanes):
         contacts = PortPlanes(contacts, sim.model.vertex_count)
     if contacts is not None:
@@ -165,9 +167,16 @@ def check_steps(simulation, positions, velocities=None, *, precision: str = "flo
                 adopted = post.note()
             if printed is not None and printed.units and err[worst] > tol:   # contraction?
                 tol = printed.replayed(k, sim, held, state, x_cs, x_port, tol,
-                                       xs[k - 1] if velocities is None and k else None)
-                if not held:   # the obstacles' state the port's start left
-                    problem, x_cs, v_cs, err, worst = _step(sim, held, state, x_port)
+                                       xs[k - 1] if velocities is None and k else None,
+                                       branches)
+                adopted_branch = bool(branches) and branches.adopted
+                if not held or adopted_branch:   # the obstacles' state the port's start left
+                    with ExitStack() as along:
+                        if adopted_branch:
+                            along.enter_context(branches.following(branches.path))
+                        problem, x_cs, v_cs, err, worst = _step(sim, held, state, x_port)
+                if branches and branches.note:
+                    adopted = "; ".join(filter(None, (adopted, branches.note)))
         moved = pinned_moved(problem, x_port, tol if precision == "float64"
                              else max(tol_k, 4 * EPS32 * float(np.abs(x_port).max())))
         planes, differing = (None, []) if contacts is None else planes_verdict(

@@ -39,7 +39,7 @@ import numpy as np
 
 from ..simulation import State
 from .compare import cloth_size
-from .printed_replay import replayed_tolerance
+from .printed_replay import moved_starts, spread_tolerance
 
 #: Values examined at most (evenly spaced over the data): the precision of printed numbers
 #: shows in any few thousand of them.
@@ -290,7 +290,7 @@ class Printed:
             step.note += "; the port's numbers are float32 values: check with --precision float32"
 
     def replayed(self, k: int, sim, held, state, x_answer, x_port, tol: float,
-                 x_before=None) -> float:
+                 x_before=None, branches=None) -> float:
         """A failing step's tolerance, widened by replay (:func:`replayed_tolerance`).
 
         Parameters
@@ -310,6 +310,10 @@ class Printed:
             The step's tolerance so far [m].
         x_before : ndarray, shape (n, 3), optional
             x_{k−1} [m] when the velocities are derived from the positions.
+        branches : SolverBranches, optional
+            For a solver whose iteration makes discrete choices: the replays follow the
+            port's branch of them (:mod:`clothsim.ports.solver_branches`; its
+            :attr:`~SolverBranches.adopted` says when that is not clothsim's own).
 
         Returns
         -------
@@ -326,8 +330,18 @@ class Printed:
             sim.step()
             return sim.state.positions.copy()
 
-        replayed = replayed_tolerance(restart, state.positions, state.velocities, x_answer,
-                                      x_port, *self.units, sim.h, x_before)
+        solids = [e for e in sim.effects if e.kind in ("sphere", "plane", "box")]
+        starts = moved_starts(state.positions, state.velocities, *self.units, sim.h, x_before,
+                              solids=solids)
+        replay = restart
+        if branches:   # the solver's choices along the port's branch
+            x_answer = branches.choose(restart, state.positions, state.velocities, starts,
+                                       x_port)
+
+            def replay(x, v, path=branches.path):
+                with branches.following(path):
+                    return restart(x, v)
+        replayed = spread_tolerance(replay, starts, x_answer, x_port, self.units[0])
         if replayed <= self.limit:
             return max(tol, replayed)
         self.unplaced[k] = (f"replayed from the port's start moved by its printed rounding, "

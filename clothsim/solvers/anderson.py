@@ -128,7 +128,8 @@ class AndersonSolver(LocalGlobalSolver):
                 np.subtract(gx, window.extrapolation(f), out=cand)
                 # a non-finite candidate needs no check of its own: its energy difference
                 # is then +inf or NaN (the mass term ½ m Δx (δ + δ') is), never < 0
-                if step.trial(cand[:m].reshape(shape)) < 0.0:
+                accept = step.trial(cand[:m].reshape(shape)) < 0.0
+                if accept if self.decisions is None else self.decisions(accept):
                     step.accept()
                     new = cand
                 else:

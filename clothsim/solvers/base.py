@@ -146,9 +146,19 @@ class Solver:
         limit is hit above it, a :class:`ConvergenceWarning` names the residual.
     backend : {"auto", "cholmod", "splu"}
         Sparse factorization backend (see :mod:`clothsim.factorization`).
+
+    Attributes
+    ----------
+    decisions : callable or None
+        ``decisions(taken) -> taken``, consulted by a solver at each discrete choice of its
+        iteration (Anderson's energy safeguard, L-BFGS's Armijo test; a solver without
+        one never calls it) with the choice it made; the choice returned is followed. None
+        (default): the solver's own. The port checker records a step's choices with it and
+        replays a step along them (:mod:`clothsim.ports.solver_branches`).
     """
 
     name = "base"
+    decisions = None
 
     def __init__(self, model: Model, *, iterations: int = 10, tolerance: float | None = None,
                  backend: str = "auto"):

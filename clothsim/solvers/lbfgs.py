@@ -122,7 +122,8 @@ class LBFGSSolver(LocalGlobalSolver):
             for _ in range(MAX_HALVINGS):   # backtracking Armijo (descent.armijo), fused
                 np.multiply(r, -alpha, out=s)           # s = −α r: exact (α a power of 2)
                 np.add(delta, s, out=cand)              # δ − α r
-                if step.trial(cand, s if exact else None) <= ARMIJO_C * alpha * slope:
+                armijo = step.trial(cand, s if exact else None) <= ARMIJO_C * alpha * slope
+                if armijo if self.decisions is None else self.decisions(armijo):
                     break
                 alpha *= 0.5
             else:
