@@ -19,6 +19,7 @@ from ..effects.base import overrides
 from ..errors import InputError
 from ..simulation import State
 from ..solvers import make_solver
+from ..solvers.local_global import LocalGlobalSolver
 from .causes import FITTED, StepData, name_cause
 from .compare import EPS32
 from .contact_planes import PortPlanes
@@ -80,7 +81,9 @@ def check_steps(simulation, positions, velocities=None, *, precision: str = "flo
         The port's x_k [m].
     velocities : ndarray, shape (frames, n, 3), optional
         The port's v_k [m/s] (after its damping). Default: (x_k − x_{k−1}) / h, and 0 at
-        frame 0 — only right without a velocity-changing damping.
+        frame 0 — only right without a velocity-changing damping; in a scene with
+        post-solve obstacles, put through the scene's velocity corrections (the contacts
+        read off the port's frames, :meth:`PortDecisions.derived_velocities`).
     precision : {"float64", "float32"}
         The port's arithmetic; sets the default tolerance (:func:`step_tolerance`).
     tolerance : float, optional
@@ -112,11 +115,17 @@ def check_steps(simulation, positions, velocities=None, *, precision: str = "flo
                       tol64) if tolerance is None else None
     if printed is not None and printed.note:
         notes.append(printed.note)
+    post = PortDecisions(sim)   # post-solve obstacles: their decisions too close to call
+    if velocities is None and post:   # the seed's velocity correction at the port's contacts
+        notes[0] += ("; then the scene's velocity corrections (post-solve contact at the "
+                     "vertices the port's x_k has on an obstacle, damping)")
+        vs = post.derived_velocities(xs, vs, max(tol64, float(position_rounding(
+            xs[0], printed.digits if printed else 17, bool(printed and printed.float32),
+            tol64).max())))
     projected = [e.kind for e in sim.effects if overrides(e, "correct_positions")]
     iterations = sim.solver.iterations
     iterated = sim.solver.name != "newton"   # a converged method: the converged floor only
     held = HeldSteps(sim)
-    post = PortDecisions(sim)   # post-solve obstacles: their decisions too close to call
     branches = SolverBranches(sim)   # the solver's own choices too close to call
     if contacts is not None and not isinstance(contacts, PortPlanes):
         contacts = PortPlanes(contacts, sim.model.vertex_count)
@@ -141,7 +150,10 @@ def check_steps(simulation, positions, velocities=None, *, precision: str = "flo
             held.starts(state)
         model = sim.step_model(state)
         x_port = xs[k + 1]
+        estimations = getattr(sim.solver, "rho_estimations", 0)
         problem, x_cs, v_cs, err, worst = _step(sim, held, state, x_port)
+        carried = _carried(sim, estimations, model, problem, precision,
+                           printed.unit if printed else None)
 
         def bound32(model=model, problem=problem, x_cs=x_cs):
             return float32_tolerance(model, problem, iterations, tol64, x=x_cs,
@@ -240,6 +252,7 @@ def check_steps(simulation, positions, velocities=None, *, precision: str = "flo
             step.role = pin_role(problem, step.vertex)
         if adopted:
             step.note = f"{step.note}; {adopted}" if step.note else adopted
+        sim.solver.set_state(carried)
         out.append(step)
     name_cause({s.k: s for s in out}, unexplained, others)   # a model the port solves?
     if printed is not None:   # the steps the printed state cannot place say so
@@ -248,6 +261,27 @@ def check_steps(simulation, positions, velocities=None, *, precision: str = "flo
                        printed=printed.text if printed is not None else "")
 
 
+
+
+def _carried(sim, estimations, model, problem, precision, unit) -> dict:
+    """What the solver carries to the next step, as the port's run would (Chebyshev's ρ).
+
+    The replays and searches of a step solve from other starts: the state after the
+    step's own solve is restored after them. Chebyshev estimates ρ at its first step that
+    does not converge at once (ρ = 0 stays provisional). From a printed start, a step the
+    port solved in one local/global iteration (a free fall) no longer does so to float64
+    rounding, only to the printed rounding: an estimate made on a step whose first
+    iterate meets the rounding floor of the port's precision (:func:`gradient_scale`:
+    ``precision``, and ``unit`` the printed rounding) is dropped, as the port's run
+    dropped it.
+    """
+    if getattr(sim.solver, "rho_estimations", 0) > estimations:
+        first = next(it for it in LocalGlobalSolver.iterates(sim.solver, problem)
+                     if it.k == 1)
+        g0, floor = gradient_scale(model, problem, first.x, 0.0, precision, unit)
+        if first.gradient_norm <= floor * g0:
+            sim.solver.set_state({"rho": None})
+    return sim.solver.get_state()
 
 
 def _replayer(sim, state):

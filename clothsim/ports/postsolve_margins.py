@@ -29,6 +29,8 @@ from contextlib import contextmanager
 
 import numpy as np
 
+from ..simulation import State
+
 __all__ = ["PortDecisions"]
 
 _AXES = "xyz"
@@ -62,6 +64,27 @@ def _on_surface(ob, x, r):
         return grown & ~ob.inside(x)
     finally:
         ob.set_margin(margin)
+
+
+def _normals(ob, x, v, r):
+    """The outward normals of the faces points on the surface are on; of a box's faces a
+    point is on (an edge, a corner), the one its velocity v runs into most."""
+    if ob.kind != "box":
+        return ob.closest(x)[1]
+    best, normals = np.full(len(x), np.inf), ob.closest(x)[1]
+    for face in range(6):
+        a, upper = face % 3, face >= 3
+        n = np.zeros(3)
+        n[a] = 1.0 if upper else -1.0
+        plane = ob._hi[a] if upper else ob._lo[a]
+        along = np.delete(np.arange(3), a)
+        on = ((np.abs(x[:, a] - plane) <= r)
+              & np.all((x[:, along] >= ob._lo[along] - r) & (x[:, along] <= ob._hi[along] + r),
+                       axis=1))
+        into = v @ n
+        take = on & (into < best)
+        normals[take], best[take] = n, into[take]
+    return normals
 
 
 def _place(ob, x0, x, face):
@@ -104,6 +127,7 @@ class PortDecisions:
     """
 
     def __init__(self, sim):
+        self.sim = sim
         self.obstacles = [e for e in sim.effects if e.kind in ("sphere", "plane", "box")
                           and getattr(e, "contact", None) == "post-solve"]
         self.taken = []
@@ -147,6 +171,51 @@ class PortDecisions:
         finally:
             for ob in self.obstacles:
                 del ob.correct_positions   # the class's method again
+
+    def derived_velocities(self, xs, vs, rounding) -> np.ndarray:
+        """Derived velocities (x_k − x_{k−1}) / h put through the step's velocity corrections.
+
+        A step ends with the velocity corrections of the scene's effects, in order: the
+        seed's projection removes the inward normal velocity of the vertices it caught
+        (:meth:`Obstacle.correct_velocities`), a damping acts after it. A port's v_k is
+        therefore not (x_k − x_{k−1}) / h. Which vertices it caught is read off the port's
+        own frames, not off clothsim's decisions: those on an obstacle's surface at x_k
+        (within ``rounding``), each with the normal of the face it is on (of a box's faces
+        it is on, the one its motion x_{k−1} → x_k ran into most).
+
+        Parameters
+        ----------
+        xs : ndarray, shape (frames, n, 3)
+            The port's positions [m].
+        vs : ndarray, shape (frames, n, 3)
+            (x_k − x_{k−1}) / h, and 0 at frame 0 [m/s].
+        rounding : float
+            How far a printed vertex on a surface may be from it [m].
+
+        Returns
+        -------
+        ndarray, shape (frames, n, 3)
+            The velocities after the corrections.
+        """
+        sim = self.sim
+        vs = np.array(vs, np.float64)
+        saved = [(ob.contact_vertices, ob.contact_normals) for ob in self.obstacles]
+        t = sim.state.time
+        try:
+            for k in range(1, len(xs)):
+                for ob in self.obstacles:
+                    i = np.flatnonzero(_on_surface(ob, xs[k], rounding))
+                    ob.contact_vertices = i
+                    ob.contact_normals = _normals(ob, xs[k][i], vs[k][i], rounding)
+                start, v = State(xs[k - 1], vs[k - 1], t, k - 1), vs[k]
+                t = t + sim.h
+                for e in sim._hooks["correct_velocities"]:   # as Simulation.step
+                    v = e.correct_velocities(t, start, xs[k], v)
+                vs[k] = v
+        finally:
+            for ob, (cv, cn) in zip(self.obstacles, saved, strict=True):
+                ob.contact_vertices, ob.contact_normals = cv, cn
+        return vs
 
     def note(self) -> str:
         """The note of the last solve's adopted decisions.

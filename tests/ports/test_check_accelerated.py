@@ -16,7 +16,9 @@ from clothsim.ports.check import check_steps
 from clothsim.ports.formats import read_trajectory, read_velocities
 from clothsim.ports.postsolve_margins import PortDecisions
 from clothsim.ports.precision import unit
-from clothsim.ports.printed_replay import SPREAD_MARGIN, replayed_tolerance
+from clothsim.ports.printed_replay import SPREAD_MARGIN, moved_starts, replayed_tolerance
+from clothsim.ports.solver_branches import SolverBranches
+from clothsim.simulation import State
 
 from .test_check_held import builtin, run_port, write_port
 
@@ -139,3 +141,76 @@ def test_a_step_the_printed_start_cannot_place_keeps_its_tolerance_and_says_so(m
     step = check_steps(scene, *frames).steps[9]
     assert not step.passed and step.tolerance < 1e-4 and step.error > 1e-2
     assert "the printed state cannot place this step's answer" in step.note, step.line()
+
+
+@pytest.fixture(scope="module")
+def post_solve_anderson():
+    """drop-on-square in post-solve mode with its declared Anderson 30: 16 frames, through
+    step 14 -> 15, whose safeguard test 22 is too close to call from the printed start."""
+    scene = builtin("drop-on-square", solver={"method": "anderson", "iterations": 30},
+                    mode="post-solve")
+    return scene, *_frames(scene, 16)
+
+
+def test_a_right_post_solve_anderson_port_passes_printed_and_float32(post_solve_anderson):
+    scene, X, V = post_solve_anderson
+    calls = []
+    real = SolverBranches.choose
+
+    def counted(self, *args):
+        calls.append(1)
+        return real(self, *args)
+
+    with pytest.MonkeyPatch.context() as m:
+        m.setattr(SolverBranches, "choose", counted)
+        report = check_steps(scene, _g(X), _g(V))
+    assert report.passed, report.summary()
+    step = report.steps[14]
+    assert "energy safeguard test" in step.note and "too close to call" in step.note, \
+        step.line()
+    assert step.tolerance < 1e-3 and len(calls) <= 3   # only the failing steps replay
+    report = check_steps(scene, X.astype("float32"), V.astype("float32"), precision="float32")
+    assert report.passed, report.summary()
+
+
+def test_a_1mm_fault_in_the_branching_step_still_fails(post_solve_anderson):
+    scene, X, V = post_solve_anderson
+    X = X.copy()
+    X[15:, 321] += [0.0, 0.0, 1e-3]   # the vertex the replays move most
+    report = check_steps(scene, _g(X), _g(V), steps=15)
+    first = report.first_failure
+    assert first is not None and first.k == 14 and first.error > first.tolerance, \
+        report.summary()
+    assert all(s.passed for s in report.steps[:14])
+
+
+def test_a_step_replayed_along_its_recorded_choices_is_the_step_itself(post_solve_anderson):
+    """Choices recorded and followed reproduce the step bit for bit; one choice flipped
+    takes the other branch (the hook the replays rest on)."""
+    scene, X, V = post_solve_anderson
+    sim = scene.build_simulation()
+    branches = SolverBranches(sim)
+    assert branches
+
+    def step(path=()):
+        sim.state = State(_g(X[14]), _g(V[14]), 14 * sim.h, 14)
+        with branches.following(path) as hooks:
+            sim.step()
+        return sim.state.positions.copy(), tuple(hooks[-1].taken)
+
+    x, path = step()
+    assert np.array_equal(step(path)[0], x)
+    flipped = path[:21] + (not path[21],)
+    assert np.linalg.norm(step(flipped)[0] - x, axis=1).max() > 1e-4
+    assert sim.solver.decisions is None   # the hook is removed after the block
+
+
+def test_moved_starts_stay_out_of_the_solids():
+    """A vertex on the box's top (printed 0.5 exactly) is not moved into the box."""
+    box = builtin("drop-on-square", mode="post-solve").build_simulation().effects[1]
+    assert box.kind == "box"
+    x = np.array([[-0.2, 0.5, -0.2], [-0.25, 0.5, 0.1], [0.0, 0.8, 0.0], [0.0, 0.3, 0.0]])
+    u = unit(6)
+    for xm, _ in moved_starts(x, 0 * x, u, u, 0.03, patterns=8, solids=[box]):
+        assert not box.inside(xm[:3]).any() and box.inside(xm[3:]).all()
+        assert np.all(np.abs(xm - x) <= u * np.abs(x) * (1 + 1e-6))

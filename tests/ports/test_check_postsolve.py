@@ -14,6 +14,7 @@ import pytest
 
 import clothsim as cs
 from clothsim.ports.check import check_steps
+from clothsim.ports.postsolve_margins import PortDecisions
 
 from .test_check_accelerated import _g
 from .test_planted_faults import drop_on_square, port
@@ -84,3 +85,71 @@ def test_a_vertex_moved_onto_a_face_its_start_is_not_near_fails(seed_demo):
     report = check_steps(cs.load_scene(path), _g(xs), _g(vs))
     step = report.steps[9]
     assert not step.passed and step.vertex == v, step.line()
+
+
+def test_later_steps_are_judged_from_the_ports_state_not_clothsims_decisions(seed_demo):
+    """Step 9 -> 10 takes 48 post-solve decisions as the port's where clothsim's own step
+    from the printed start decides otherwise (vertex 156 projected onto the top). The
+    steps after it are judged as when the check starts at frame 10 (no history at all),
+    and as when every obstacle's contacts are scrambled before each step (all vertices on
+    a +y face): a post-solve step's projection, friction and velocity correction read the
+    port's x_k and v_k only, never the contacts clothsim decided at k - 1."""
+    path, xs, vs = seed_demo
+    scene = cs.load_scene(path)
+    X, V = _g(xs), _g(vs)
+    full = check_steps(scene, X, V)
+    assert full.passed and "too close to call" in full.steps[9].note
+    errors = [s.error for s in full.steps[10:]]
+    assert [s.error for s in check_steps(scene, X[10:], V[10:]).steps] == errors
+
+    def scrambled():
+        sim = scene.build_simulation()
+        step, n = sim.step, sim.model.vertex_count
+
+        def step_after_other_contacts():
+            for e in sim.effects:
+                if e.kind in ("box", "sphere", "plane"):
+                    e.contact_vertices = np.arange(n)
+                    e.contact_normals = np.tile([0.0, 1.0, 0.0], (n, 1))
+            return step()
+        sim.step = step_after_other_contacts
+        return sim
+
+    report = check_steps(scrambled, X, V)
+    assert [s.error for s in report.steps] == [s.error for s in full.steps], report.summary()
+
+
+def test_derived_velocities_take_the_ports_contacts_and_the_damping(seed_demo):
+    """Without velocities, v_k = (x_k - x_{k-1}) / h misses the projection's zeroing of
+    the inward velocity at the vertices the port caught in step k - 1, and the scene's
+    rigid damping after it (they failed the seed demo from step 10 on, 2e-3 m off, even
+    unprinted). Read off the port's own frames, they are its velocities exactly."""
+    path, xs, vs = seed_demo
+    scene = cs.load_scene(path)
+    sim = scene.build_simulation()
+    raw = np.concatenate([np.zeros_like(xs[:1]), np.diff(xs, axis=0) / sim.h])
+    assert np.abs(raw - vs).max() > 0.1
+    derived = PortDecisions(sim).derived_velocities(xs, raw, 1e-12)
+    assert np.abs(derived - vs).max() < 1e-12
+    report = check_steps(scene, xs[:16])
+    assert report.passed and report.steps[-1].error < 1e-12, report.summary()
+    assert "velocity corrections" in report.notes[0]
+    report = check_steps(scene, _g(xs[:16]))
+    assert report.passed, report.summary()
+
+
+def test_a_port_that_keeps_its_inward_velocities_fails_without_velocity_files(tmp_path):
+    """The port's box does not zero the velocity of the vertices it caught: judged from
+    its positions alone, its steps after the landing fail."""
+    path = drop_on_square(tmp_path, 13)
+    scene = cs.load_scene(path)
+    sim = scene.build_simulation()
+    box = next(e for e in sim.effects if e.kind == "box")
+    box.correct_velocities = lambda t, state, x, v: v
+    xs = [sim.state.positions.copy()]
+    for _ in range(13):
+        sim.step()
+        xs.append(sim.state.positions.copy())
+    report = check_steps(scene, np.stack(xs))
+    first = report.first_failure
+    assert not report.passed and first.k in (10, 11) and first.error > 1e-4, report.summary()
