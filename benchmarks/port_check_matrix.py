@@ -5,10 +5,11 @@ seed's ``post-solve`` projection), with Anderson, L-BFGS and Chebyshev at 10 and
 iterations, clothsim's own trajectory (:data:`FRAMES` steps, through the landing) is the
 port: printed with ``%g`` and read back (checked as float64), and rounded to float32
 (checked with ``precision="float32"``). Each row gives the verdict, the step of the largest
-error / tolerance with both numbers, how many steps needed a replay (the printed start's
-effect measured by replaying the step, :mod:`clothsim.ports.printed_replay`), and whether a
-1 mm fault planted in that step (on the vertex of its largest error, in x_{k+1}) still
-fails (that step checked alone, from the port's x_k and v_k). Writes
+error / tolerance with both numbers, the loosest step (the largest tolerance), whether a
+1 mm fault planted in that step (on the vertex of its largest error, in x_{k+1}; the step
+checked alone, from the port's x_k and v_k) still fails, and how many steps needed a
+replay (the printed start's effect measured by replaying it,
+:mod:`clothsim.ports.printed_replay`). Writes
 docs/data/port-check-matrix.md (included by docs/ports.md). Run from the repository root:
 ``.venv/bin/python -m benchmarks port_check_matrix`` (minutes of CPU; :data:`WORKERS`
 rows at once).
@@ -28,6 +29,7 @@ from clothsim.ports.check import check_steps
 from clothsim.scene import Scene, builtin_scene_text
 
 from .port_causes import ROOT
+from .replay_spread import _held_port
 
 OUT = ROOT / "docs" / "data" / "port-check-matrix.md"
 FRAMES = 16
@@ -51,14 +53,9 @@ def scene_for(name: str, mode: str, method: str, iterations: int) -> Scene:
 
 
 def trajectory(scene: Scene, frames: int = FRAMES):
-    """clothsim's own positions and velocities, (frames + 1, n, 3) each: the right port."""
-    sim = scene.build_simulation()
-    xs, vs = [sim.state.positions.copy()], [sim.state.velocities.copy()]
-    for _ in range(frames):
-        sim.step()
-        xs.append(sim.state.positions.copy())
-        vs.append(sim.state.velocities.copy())
-    return np.stack(xs), np.stack(vs)
+    """clothsim's own positions and velocities, (frames + 1, n, 3) each: the right port
+    (examples/ports/held_port.py without a fault)."""
+    return _held_port().run_port(scene, "none", frames)[:2]
 
 
 def printed(X, V, port: str):
@@ -85,14 +82,16 @@ def row(name: str, mode: str, method: str, iterations: int, port: str) -> dict:
         report = check_steps(scene, Xp, Vp, precision=prec)
     cpu = time.process_time() - t0
     worst = max(report.steps, key=lambda s: s.error / s.tolerance)
-    k, v = worst.k, worst.vertex
+    loose = max(report.steps, key=lambda s: (s.tolerance, s.error / s.tolerance))
+    k, v = loose.k, loose.vertex
     Xf = np.array(X[k:k + 2])   # that step alone, from the port's x_k and v_k
     Xf[1, v] += [0.0, 0.0, FAULT]
     Xf, Vf, _ = printed(Xf, V[k:k + 2], port)
     caught = not check_steps(scene, Xf, Vf, precision=prec).passed
     return {"scene": name, "mode": mode, "solver": f"{method} {iterations}", "port": port,
             "passed": report.passed, "verdict": report.summary().split(";")[0],
-            "k": k, "error": worst.error, "tolerance": worst.tolerance,
+            "k": worst.k, "error": worst.error, "tolerance": worst.tolerance,
+            "loose": k, "loose_tolerance": loose.tolerance,
             "replays": len(replays), "fault": caught, "cpu": cpu,
             "failing": [s.line() for s in report.steps if not s.passed][:1]}
 
@@ -108,7 +107,8 @@ def main() -> list[dict]:
     with ProcessPoolExecutor(WORKERS) as pool:
         for (name, mode, method, iterations, port), r in zip(cells, pool.map(_row, cells)):
             print(f"{name} {mode} {method} {iterations} {port}: {r['verdict']} "
-                  f"(step {r['k']}: {r['error']:.2e} / {r['tolerance']:.2e}; "
+                  f"(step {r['k']}: {r['error']:.2e} / {r['tolerance']:.2e}; loosest "
+                  f"{r['loose']}: {r['loose_tolerance']:.2e}; "
                   f"{r['replays']} replayed; fault caught {r['fault']}; "
                   f"{r['cpu']:.1f} s)", flush=True)
             for line in r["failing"]:
@@ -122,17 +122,19 @@ def _write(rows) -> None:
     lines = [f"Printed by `.venv/bin/python -m benchmarks port_check_matrix` (right ports: "
              f"clothsim's own {FRAMES} steps at 25², printed with `%g` and checked as float64, "
              f"or rounded to float32 and checked with `--precision float32`; the fault: "
-             f"{FAULT * 1e3:g} mm on the vertex of the largest error / tolerance, from the "
-             f"next frame, that step checked alone):", "",
-             "| scene | contact | solver | port | verdict | step | max error [m] | "
-             "tolerance [m] | error / tolerance | steps replayed | 1 mm fault there |",
-             "|---|---|---|---|---|---|---|---|---|---|---|"]
+             f"{FAULT * 1e3:g} mm on the vertex of the largest error in the step of the "
+             f"largest tolerance (the loosest), that step checked alone):", "",
+             "| scene | contact | solver | port | verdict | largest error / tolerance "
+             "(step: error, tolerance [m]) | loosest step: tolerance [m] | 1 mm fault there "
+             "| steps replayed |",
+             "|---|---|---|---|---|---|---|---|---|"]
     for r in rows:
         lines.append(f"| {r['scene']} | {r['mode']} | {r['solver']} | {r['port']} | "
-                     f"{'PASS' if r['passed'] else 'FAIL'} | {r['k']} → {r['k'] + 1} | "
-                     f"{r['error']:.2e} | {r['tolerance']:.2e} | "
-                     f"{r['error'] / r['tolerance']:.2f} | {r['replays']} | "
-                     f"{'fails' if r['fault'] else 'MISSED'} |")
+                     f"{'PASS' if r['passed'] else 'FAIL'} | "
+                     f"{r['error'] / r['tolerance']:.2f} ({r['k']} → {r['k'] + 1}: "
+                     f"{r['error']:.2e}, {r['tolerance']:.2e}) | "
+                     f"{r['loose']} → {r['loose'] + 1}: {r['loose_tolerance']:.2e} | "
+                     f"{'fails' if r['fault'] else 'MISSED'} | {r['replays']} |")
     failing = [r for r in rows if not r["passed"]]
     lines += ["", f"{len(rows) - len(failing)} of {len(rows)} right ports pass; "
               f"{sum(r['fault'] for r in rows)} of {len(rows)} planted faults fail at their "
