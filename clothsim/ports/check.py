@@ -143,7 +143,10 @@ def check_steps(simulation, positions, velocities=None, *, precision: str = "flo
 
     t = sim.state.time  # accumulated as the simulation does (time-dependent effects)
     for k in range(count):
-        state = State(xs[k].copy(), vs[k].copy(), t, k)
+        rounding = position_rounding(xs[k], printed.digits if printed else 17,
+                                     precision == "float32" or bool(printed and
+                                                                    printed.float32), tol64)
+        state = State(post.start(xs[k], rounding), vs[k].copy(), t, k)
         t = t + h
         if held:
             held.anchor(xs[k])   # the planes clothsim decided, sticking ones at the port's x_k
@@ -163,9 +166,6 @@ def check_steps(simulation, positions, velocities=None, *, precision: str = "flo
         if precision == "float32" and tolerance is None and err[worst] > tol_k:
             tol = max(tol_k, bound32())
         adopted = ""
-        rounding = position_rounding(xs[k], printed.digits if printed else 17,
-                                     precision == "float32" or bool(printed and
-                                                                    printed.float32), tol64)
         if held and (contacts is not None or err[worst] > tol):
             changes, adopted = marginal_changes(k, held, model, problem, tol, contacts,
                                                 x_port, x_cs, rounding)

@@ -16,7 +16,8 @@ import clothsim as cs
 from clothsim.ports.check import check_steps
 from clothsim.ports.postsolve_margins import PortDecisions
 
-from .test_check_accelerated import _g
+from .test_check_accelerated import _frames, _g
+from .test_check_held import builtin
 from .test_planted_faults import drop_on_square, port
 
 FRAMES = 20   # through the landing (step 9 -> 10) and the slide off the edges
@@ -153,3 +154,22 @@ def test_a_port_that_keeps_its_inward_velocities_fails_without_velocity_files(tm
     report = check_steps(scene, np.stack(xs))
     first = report.first_failure
     assert not report.passed and first.k in (10, 11) and first.error > 1e-4, report.summary()
+
+
+def test_a_printed_start_inside_the_sphere_is_put_back_on_it():
+    """drape-sphere in post-solve mode, Anderson 10, printed with %g: at step 6 -> 7, 20
+    vertices the port put on the sphere read up to 4.7e-7 m inside it. Taken as starting
+    inside, clothsim put them on the surface point nearest their answer, 6e-3 m from where
+    their path entered (UNDECIDED); restarted on the surface, the step agrees, and a 1 mm
+    fault there still fails."""
+    scene = builtin("drape-sphere", solver={"method": "anderson", "iterations": 10},
+                    mode="post-solve")
+    X, V = _frames(scene, 8)
+    sphere = next(e for e in scene.build_simulation().effects if e.kind == "sphere")
+    assert sphere.inside(_g(X[6])).sum() > 0 and not sphere.inside(X[6]).any()
+    report = check_steps(scene, _g(X), _g(V))
+    assert report.passed and report.steps[6].error < 1e-5, report.summary()
+    X = X.copy()
+    X[7, 264] += [0.0, 1e-3, 0.0]
+    step = check_steps(scene, _g(X[:8]), _g(V[:8])).steps[6]
+    assert not step.passed and step.error > 9e-4, step.line()
