@@ -75,7 +75,24 @@ def moved_starts(x, v, unit_x: float, unit_v: float, h: float, x_before=None, *,
 
 def spread_tolerance(restart, starts, x_answer, x_port, unit_x: float) -> float:
     """:data:`SPREAD_MARGIN` × the largest distance of a replayed answer from ``x_answer``,
-    plus the answer's own rounding √3 u max|x_{k+1}| [m] (:func:`replayed_tolerance`)."""
+    plus the answer's own rounding √3 u max|x_{k+1}| [m] (:func:`replayed_tolerance`).
+
+    Parameters
+    ----------
+    restart : callable
+        (x, v) -> clothsim's x_{k+1} from that start.
+    starts : list of (ndarray, ndarray)
+        The moved starts (:func:`moved_starts`).
+    x_answer, x_port : ndarray, shape (n, 3)
+        clothsim's x_{k+1} from the start as read, and the port's [m].
+    unit_x : float
+        Relative rounding of the positions.
+
+    Returns
+    -------
+    float
+        Tolerance [m].
+    """
     spread = 0.0
     for xm, vm in starts:
         moved = np.linalg.norm(restart(xm, vm) - x_answer, axis=1)

@@ -99,6 +99,11 @@ class SolverBranches:
     def following(self, path=()):
         """Within the block, the simulation's steps record their choices, following ``path``.
 
+        Parameters
+        ----------
+        path : sequence of bool, default ()
+            The choices to take, in order (the solver's own after them).
+
         Yields
         ------
         list of Choices
