@@ -50,7 +50,7 @@ def test_a_planted_1mm_fault_still_fails_under_anderson(contact_port):
     scene, X, V, _ = contact_port
     X = X.copy()
     X[14:, 300] += [0.0, 0.0, 1e-3]   # from frame 14 on: step 13 -> 14 is the sphere's
-    X = _g(X)                         # replayed step (its bound 4.3e-4 m), printed again
+    X = _g(X)                         # replayed step (its bound 3.2e-4 m), printed again
     report = check_steps(scene, X, V, steps=15)
     first = report.first_failure
     assert not report.passed and first is not None and first.k == 13, report.summary()
