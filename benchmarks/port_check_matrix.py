@@ -46,8 +46,10 @@ KNOWN = {
         "hold mode: the step's held-contact decisions too close to call are taken as the "
         "port's (clothsim.ports.held_margins), and still clothsim's step and all its replays "
         "from the printed start (on every branch of L-BFGS's Armijo tests they reach) stay "
-        "farther from the port's answer than the tolerance; a printed start can move the "
-        "held decisions themselves, which the replays keep as anchored: not replayed yet",
+        "farther from the port's answer than the tolerance (unprinted, the port agrees "
+        "exactly). The replays keep the step's held planes as anchored, so what the printed "
+        "start does to the held decisions themselves is not measured: the likely cause, not "
+        "established",
 }
 _g = np.vectorize(lambda c: float(f"{c:g}"))   # printed with %g and read back
 
