@@ -1,0 +1,86 @@
+"""Hostile users and fresh machines, round 2: what an outsider found with paths, folders and
+resumes that the first rounds did not try.
+
+Each case is a reproducer of a finding: one line naming the path or key, exit status 2 (bad
+input) and nothing written, or a correct result.
+"""
+
+from __future__ import annotations
+
+import os
+
+import pytest
+
+from clothsim.cli import main
+from clothsim.errors import InputError
+from clothsim.scene import find_scene
+
+
+def _one_line(capsys, code, expected_code=2) -> str:
+    err = capsys.readouterr().err
+    assert code == expected_code and err.count("\n") == 1, (code, err)
+    assert "Error:" not in err and "Traceback" not in err, err
+    return err.strip().removeprefix("clothsim: error: ")
+
+
+# ------------------------------------------------------------------ the scene argument
+def test_a_folder_as_the_scene_is_named_once(tmp_path, capsys):
+    line = _one_line(capsys, main(["validate", str(tmp_path)]))
+    assert line == f"{tmp_path}: is a directory, not a scene file"  # was: the path twice
+
+
+@pytest.mark.skipif(not hasattr(os, "mkfifo") or not os.path.exists("/dev/null"),
+                    reason="needs FIFOs and /dev/null")
+def test_a_device_or_fifo_as_the_scene_is_named_as_such_not_missing(tmp_path, capsys):
+    fifo = tmp_path / "pipe"
+    os.mkfifo(fifo)
+    for target, what in (("/dev/null", "a character device"), (fifo, "a FIFO (named pipe)")):
+        line = _one_line(capsys, main(["run", str(target), "--out", str(tmp_path / "o")]))
+        assert line == f"{target}: is {what}, not a scene file", line  # was: file not found
+        with pytest.raises(InputError, match="not a scene file"):
+            find_scene(target)
+    assert not (tmp_path / "o").exists()
+
+
+# ------------------------------------------------------------------ --out inside a file
+@pytest.mark.parametrize("command", [["run", "hanging", "--frames", "1", "--no-preview"],
+                                     ["export", "hanging", "--frames", "1"],
+                                     ["accuracy", "hanging", "--quick"],
+                                     ["conformance"]])
+def test_an_out_folder_below_a_file_is_bad_input_naming_the_file(tmp_path, capsys, command):
+    afile = tmp_path / "notes.txt"
+    afile.write_text("mine\n")
+    out = afile / "sub" / "deeper"
+    line = _one_line(capsys, main(command + ["--out", str(out)]))  # was: exit 1, Not a directory
+    assert line == f"{out}: cannot be a folder: {afile} is a file, not a folder"
+    assert afile.read_text() == "mine\n"
+
+
+# ------------------------------------------------------------------ --resume of another scene
+@pytest.fixture(scope="module")
+def hanging_run(tmp_path_factory):
+    out = tmp_path_factory.mktemp("run") / "hanging"
+    assert main(["run", "hanging", "--frames", "2", "--no-preview", "--out", str(out)]) == 0
+    return out
+
+
+@pytest.mark.parametrize("change, differs", [
+    (["drop-on-square"], "scene.name: 'hanging' there, 'drop-on-square' now"),
+    (["hanging", "--set", "cloth.mass=2"], "cloth.mass: 1.0 there, 2.0 now"),
+    (["hanging", "--set", "solver.iterations=11"], "solver.iterations: 10 there, 11 now"),
+    (["hanging", "--set", "effects[0].acceleration=[0, -9.8, 0]"],
+     "effects[0].acceleration[1]: -9.81 there, -9.8 now"),
+])
+def test_resume_of_another_scene_names_the_key_that_differs(hanging_run, capsys, change,
+                                                            differs):
+    before = {p.name: p.stat().st_mtime_ns for p in hanging_run.iterdir()}
+    code = main(["run", *change, "--frames", "4", "--no-preview", "--resume",
+                 "--out", str(hanging_run)])
+    line = _one_line(capsys, code)
+    assert line == (f"{hanging_run}: cannot resume: it holds a run of a different scene "
+                    f"({differs}); run without --resume to start afresh, or choose another "
+                    "--out"), line  # was: two scene hashes, nothing a user can act on
+    assert {p.name: p.stat().st_mtime_ns for p in hanging_run.iterdir()} == before
+    # more frames and another output setting are the same scene: it resumes
+    assert main(["run", "hanging", "--frames", "3", "--no-preview", "--resume",
+                 "--set", "output.frame_compression=none", "--out", str(hanging_run)]) == 0
