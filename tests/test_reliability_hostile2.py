@@ -9,8 +9,10 @@ from __future__ import annotations
 
 import os
 
+import numpy as np
 import pytest
 
+import clothsim as cs
 from clothsim.cli import main
 from clothsim.errors import InputError
 from clothsim.scene import find_scene
@@ -84,3 +86,64 @@ def test_resume_of_another_scene_names_the_key_that_differs(hanging_run, capsys,
     # more frames and another output setting are the same scene: it resumes
     assert main(["run", "hanging", "--frames", "3", "--no-preview", "--resume",
                  "--set", "output.frame_compression=none", "--out", str(hanging_run)]) == 0
+
+
+# ------------------------------------------------------------------ the Python API
+def _api_cases():
+    mesh = cs.grid(4, 4)
+    model = cs.Model.build(mesh, cs.grid_springs(mesh, structural=100.0), total_mass=1.0)
+    f64, i64 = np.float64, np.int64
+    return {
+        # numpy scalars (numpy >= 2 shows them as np.float64(…)) are shown as numbers
+        "box": (lambda: cs.Box(min=(0, 0, 0), max=(f64(0), 1, 1)),
+                "box.min[0]: must be less than box.max[0], got 0.0 >= 0.0"),
+        "sphere": (lambda: cs.Sphere(center=(0, 0, 0), radius=f64(-1)),
+                   "sphere.radius: must be one positive number, got -1.0"),
+        "impulse radius": (lambda: cs.Impulse(force=(0, 1, 0), center=(0, 0, 0),
+                                              radius=f64(-1)),
+                           "impulse.radius: must be one positive number, got -1.0"),
+        "impulse start": (lambda: cs.Impulse(force=(0, 1, 0), center=(0, 0, 0), radius=0.1,
+                                             start=f64(-1)),
+                          "impulse.start: must be one non-negative number, got -1.0"),
+        "impulse duration": (lambda: cs.Impulse(force=(0, 1, 0), center=(0, 0, 0),
+                                                radius=0.1, duration=f64(-1)),
+                             "impulse.duration: must be positive (inf allowed), got -1.0"),
+        "grid size": (lambda: cs.grid(3, 3, size=(f64(-1), 1)),
+                      "size: both extents must be positive, got [-1.0, 1.0]"),
+        "grid count": (lambda: cs.grid(i64(1), 3),
+                       "resolution: nx must be an integer >= 2, got 1"),
+        "iterations": (lambda: cs.Simulation(model, h=0.1, iterations=i64(0)),
+                       "solver.iterations: must be an integer >= 1, got 0"),
+        # values that raised ValueError, TypeError or OverflowError from inside numpy/Python
+        "grid nan": (lambda: cs.grid(float("nan"), 3),
+                     "resolution: nx must be an integer >= 2, got nan"),
+        "grid inf": (lambda: cs.grid(3, float("inf")),
+                     "resolution: ny must be an integer >= 2, got inf"),
+        "grid text": (lambda: cs.grid("four", 3), "resolution: nx must be an integer >= 2, "
+                                                  "got 'four'"),
+        "grid None": (lambda: cs.grid(None, 3),
+                      "resolution: nx must be an integer >= 2, got None"),
+        "total_mass array": (lambda: cs.Model.build(mesh, cs.grid_springs(mesh),
+                                                    total_mass=[1.0, 2.0]),
+                             "total_mass: must be one number [kg], got shape (2,) "
+                             "(vertex_mass= takes one mass per vertex)"),
+        "pin text": (lambda: cs.Pin(["a"]), "pin.vertices: must be integer vertex indices"),
+        "method=": (lambda: cs.Simulation(model, h=0.1, method="newton"),
+                    "method: Simulation takes the method as solver=, e.g. solver='newton'"),
+        "one effect": (lambda: cs.Simulation(model, h=0.1, effects=cs.Gravity((0, -9.81, 0))),
+                       "effects: expected a list of effects, got Gravity "
+                       "(write effects=[...])"),
+    }
+
+
+@pytest.mark.parametrize("case", list(_api_cases()))
+def test_hostile_api_arguments_are_one_line_input_errors_with_plain_numbers(case):
+    make, message = _api_cases()[case]
+    with pytest.raises(InputError) as info:
+        make()
+    assert str(info.value) == message
+
+
+def test_whole_numbers_of_any_type_still_make_grids():
+    for nx in (3, 3.0, np.int32(3), np.float64(3.0), np.uint8(3)):
+        assert len(cs.grid(nx, 2).vertices) == 6
