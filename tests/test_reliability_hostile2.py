@@ -7,6 +7,7 @@ input) and nothing written, or a correct result.
 
 from __future__ import annotations
 
+import errno
 import os
 
 import numpy as np
@@ -147,3 +148,39 @@ def test_hostile_api_arguments_are_one_line_input_errors_with_plain_numbers(case
 def test_whole_numbers_of_any_type_still_make_grids():
     for nx in (3, 3.0, np.int32(3), np.float64(3.0), np.uint8(3)):
         assert len(cs.grid(nx, 2).vertices) == 6
+
+
+# ------------------------------------------------------------------ a full disk at the start
+def test_a_full_disk_at_the_lock_leaves_no_lock_file_and_no_new_folder(tmp_path, capsys,
+                                                                        monkeypatch):
+    """The disk filled before the run's first file: writing the holder's pid into the lock
+    file failed, and the lock file (and the folder made for it) stayed behind."""
+    import clothsim.io.lock as lock
+
+    def full(fd, data, offset):
+        raise OSError(errno.ENOSPC, os.strerror(errno.ENOSPC))
+
+    monkeypatch.setattr(lock.os, "pwrite", full)
+    new = tmp_path / "new" / "run"
+    mine = tmp_path / "mine"
+    mine.mkdir()
+    for out in (new, mine):
+        code = main(["run", "hanging", "--frames", "2", "--no-preview", "--out", str(out)])
+        assert _one_line(capsys, code, 1) == f"{out}: No space left on device; nothing was " \
+                                              "written"
+    assert not (tmp_path / "new").exists()             # made by the run: removed again
+    assert mine.is_dir() and not any(mine.iterdir())   # the user's: kept, and empty
+    monkeypatch.undo()
+    assert main(["run", "hanging", "--frames", "2", "--no-preview", "--out", str(mine)]) == 0
+
+
+def test_a_run_the_disk_cannot_hold_leaves_no_new_folder(tmp_path, capsys, monkeypatch):
+    import clothsim.io.diskspace as diskspace
+
+    monkeypatch.setattr(diskspace, "free_bytes", lambda path: 300_000)
+    out = tmp_path / "a" / "b"
+    code = main(["run", "hanging", "--frames", "30", "--no-preview", "--out", str(out)])
+    line = _one_line(capsys, code)
+    assert line.startswith(f"{out}: the run needs about ")
+    assert line.endswith("are free on its disk; choose another --out on a larger disk"), line
+    assert not (tmp_path / "a").exists()  # was: an empty folder a/b left behind
