@@ -9,6 +9,7 @@ from __future__ import annotations
 
 import errno
 import os
+import shutil
 
 import numpy as np
 import pytest
@@ -184,3 +185,36 @@ def test_a_run_the_disk_cannot_hold_leaves_no_new_folder(tmp_path, capsys, monke
     assert line.startswith(f"{out}: the run needs about ")
     assert line.endswith("are free on its disk; choose another --out on a larger disk"), line
     assert not (tmp_path / "a").exists()  # was: an empty folder a/b left behind
+
+
+# ------------------------------------------------------------------ the folder vanishes
+@pytest.mark.parametrize("how", ["removed", "moved"])
+def test_a_run_folder_that_vanishes_mid_run_is_not_called_nothing_written(tmp_path, capsys,
+                                                                          monkeypatch, how):
+    """rm -rf or mv of the folder while the run writes: the line said 'nothing was written'
+    (run.json was not where it looked), though frames had been written; a moved folder is
+    resumable where it went."""
+    import clothsim.cli as cli
+
+    out, moved = tmp_path / "r", tmp_path / "moved"
+
+    class Vanish:  # the CLI's progress lines (stderr is no terminal here), at frame 3
+        def __init__(self, name):
+            pass
+
+        def __call__(self, k, total):
+            if k == 3 and out.exists():
+                shutil.rmtree(out) if how == "removed" else out.rename(moved)
+
+    monkeypatch.setattr(cli, "ProgressLines", Vanish)
+    code = main(["run", "hanging", "--frames", "8", "--no-preview", "--out", str(out)])
+    line = _one_line(capsys, code, 1)
+    assert line.startswith(f"{out}: No such file or directory"), line
+    assert line.endswith("; the folder was removed or moved while the run wrote into it "
+                         "(moved: --resume continues it where it went)"), line
+    assert not out.exists()
+    if how == "moved":
+        monkeypatch.undo()
+        assert main(["run", "hanging", "--frames", "8", "--no-preview", "--resume",
+                     "--out", str(moved)]) == 0
+        assert len(list(moved.glob("frame_*.vtu"))) == 9
