@@ -218,3 +218,19 @@ def test_a_run_folder_that_vanishes_mid_run_is_not_called_nothing_written(tmp_pa
         assert main(["run", "hanging", "--frames", "8", "--no-preview", "--resume",
                      "--out", str(moved)]) == 0
         assert len(list(moved.glob("frame_*.vtu"))) == 9
+
+
+# ------------------------------------------------------------------ colour fields overflow
+def test_colour_fields_beyond_float32_are_inf_without_a_cryptic_warning(tmp_path, capsys):
+    """A sphere of radius 1e30 around the cloth pushes it 1e30 m out: the frame's float32
+    colour fields (area ratio ~1e60) overflowed and the run ended with 'WARNING:
+    RuntimeWarning (3 times): overflow encountered in cast', naming nothing."""
+    out = tmp_path / "r"
+    assert main(["run", "drape-sphere", "--frames", "1", "--no-preview", "--out", str(out),
+                 "--set", "effects[1].radius=1e30"]) == 0
+    err = capsys.readouterr().err
+    assert "overflow" not in err and "RuntimeWarning" not in err, err
+    from clothsim.io.frames import read_frame
+
+    x, v = read_frame(out / "frame_000001.vtu")  # the state itself is float64: finite
+    assert np.isfinite(x).all() and np.isfinite(v).all() and np.abs(x).max() > 1e29
