@@ -234,3 +234,24 @@ def test_colour_fields_beyond_float32_are_inf_without_a_cryptic_warning(tmp_path
 
     x, v = read_frame(out / "frame_000001.vtu")  # the state itself is float64: finite
     assert np.isfinite(x).all() and np.isfinite(v).all() and np.abs(x).max() > 1e29
+
+
+# ------------------------------------------------------------------ compare a blown-up port
+def test_compare_names_where_a_trajectory_stops_being_finite(tmp_path, capsys):
+    """A port that blew up writes NaN: compare said only 'max error inf m', which hides
+    that the port's own numbers are NaN (not far off) and from where."""
+    x = np.zeros((4, 9, 3)) + np.linspace(0, 1, 9)[None, :, None]
+    np.savez(tmp_path / "ref.npz", positions=x)
+    y = x.copy()
+    y[2:, 7] = np.nan
+    np.savez(tmp_path / "port.npz", positions=y)
+    assert main(["compare", str(tmp_path / "port.npz"), str(tmp_path / "ref.npz")]) == 1
+    out = capsys.readouterr().out
+    assert ("note: the trajectory's positions are not finite (NaN or inf) at 2 of 36 "
+            "(frame, vertex) pairs, first at frame 2 vertex 7; the error counts as inf there"
+            ) in out, out
+    assert "first failing frame 2 vertex 7" in out
+    assert main(["compare", str(tmp_path / "ref.npz"), str(tmp_path / "port.npz")]) == 1
+    assert "note: the reference's positions are not finite" in capsys.readouterr().out
+    assert main(["compare", str(tmp_path / "ref.npz"), str(tmp_path / "ref.npz")]) == 0
+    assert "not finite" not in capsys.readouterr().out
