@@ -255,3 +255,26 @@ def test_compare_names_where_a_trajectory_stops_being_finite(tmp_path, capsys):
     assert "note: the reference's positions are not finite" in capsys.readouterr().out
     assert main(["compare", str(tmp_path / "ref.npz"), str(tmp_path / "ref.npz")]) == 0
     assert "not finite" not in capsys.readouterr().out
+
+
+# ------------------------------------------------------------------ a cloth's file key
+@pytest.mark.parametrize("shape, key, hint", [
+    ("mesh", "file", "; a mesh cloth reads its file from cloth.mesh"),
+    ("jacobson", "mesh", "; a jacobson cloth reads its file from cloth.file"),
+    ("grid", "mesh", ""),  # a grid reads no file: nothing to point at
+])
+def test_the_file_key_of_another_shape_points_at_this_shapes_key(tmp_path, capsys, shape,
+                                                                 key, hint):
+    p = tmp_path / "s.toml"
+    p.write_text(f'[cloth]\nshape = "{shape}"\n{key} = "cloth.obj"\n')
+    line = _one_line(capsys, main(["validate", str(p)]))
+    assert line.startswith(f"{p}: cloth.{key}: not used with cloth.shape = '{shape}'"), line
+    assert line.endswith(")" + hint), line
+
+
+def test_a_bad_vertex_in_a_mesh_file_names_the_key_the_user_wrote(tmp_path, capsys):
+    (tmp_path / "m.obj").write_text("v 0 0 0\nv 1 0 0\nv 0 1 0\nv nan 0 0\nf 1 2 3\n")
+    p = tmp_path / "s.toml"
+    p.write_text('[cloth]\nshape = "mesh"\nmesh = "m.obj"\n[springs]\nstructural = 10.0\n')
+    line = _one_line(capsys, main(["validate", str(p)]))
+    assert line == f"{p}: cloth.mesh: vertices[3, 0]: must be a finite number, got nan", line
