@@ -253,12 +253,15 @@ def grid(
         ``i * nx + j``; ``2 (nx - 1)(ny - 1)`` triangles.
     """
     for name, val in (("nx", nx), ("ny", ny)):
-        if int(val) != val or val < 2:
-            raise InputError(f"resolution: {name} must be an integer >= 2, got {val!r}")
+        shown = val.item() if isinstance(val, np.generic) else val
+        whole = (isinstance(shown, int) and not isinstance(shown, bool)
+                 or isinstance(shown, float) and shown.is_integer())  # not NaN, inf, "3"
+        if not whole or shown < 2:
+            raise InputError(f"resolution: {name} must be an integer >= 2, got {shown!r}")
     nx, ny = int(nx), int(ny)
     sx, sy = check_finite("size", size).reshape(2)
     if sx <= 0 or sy <= 0:
-        raise InputError(f"size: both extents must be positive, got {[sx, sy]}")
+        raise InputError(f"size: both extents must be positive, got {[float(sx), float(sy)]}")
     jj, ii = np.meshgrid(np.arange(nx), np.arange(ny))
     u = (jj.ravel() / (nx - 1) - 0.5) * sx
     v = (ii.ravel() / (ny - 1) - 0.5) * sy

@@ -98,7 +98,11 @@ class Model:
                                                      allow_zero=True))
         if total_mass is None:
             total_mass = 1.0
-        total = float(check_positive("mass", total_mass))
+        total = check_positive("mass", total_mass)
+        if total.ndim:
+            raise InputError(f"total_mass: must be one number [kg], got shape {total.shape} "
+                             "(vertex_mass= takes one mass per vertex)")
+        total = float(total)
         n = mesh.vertex_count
         if mass_lumping == "uniform":
             m = np.full(n, total / n)

@@ -186,7 +186,8 @@ def _run_in(folder: RunFolder, scene, model, sim, frames: int, progress, resume:
     fps, substeps, n = scene.fps, scene.substeps, model.vertex_count
     shash = scene_hash(scene, model)
     inputs = input_hashes(scene)  # every file the scene reads, by content
-    start = folder.resume_point(shash, frames, inputs) if resume else None
+    start = (folder.resume_point(shash, frames, inputs, scene=scene.to_dict()) if resume
+             else None)
     previous = folder.previous
     resuming = start is not None
     if resume and not resuming:

@@ -73,6 +73,13 @@ class Simulation:
         if isinstance(iterations, bool) or not isinstance(iterations, int | np.integer):
             raise InputError(f"solver.iterations: must be an integer, got "
                              f"{type(iterations).__name__}")
+        iterations = int(iterations)
+        if "method" in solver_options:  # the scene's key is solver.method; here: solver=
+            raise InputError(f"method: Simulation takes the method as solver=, e.g. "
+                             f"solver={solver_options['method']!r}")
+        if isinstance(effects, Effect) or not hasattr(effects, "__iter__"):
+            raise InputError(f"effects: expected a list of effects, got "
+                             f"{type(effects).__name__} (write effects=[...])")
         if tolerance is not None:
             check_finite("solver.tolerance", tolerance)
         if isinstance(solver, Solver):

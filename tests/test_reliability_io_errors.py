@@ -112,10 +112,11 @@ def test_export_into_a_file_path_is_one_line(tiny, tmp_path, capsys):
 
 def test_a_folder_that_cannot_take_the_lock_says_nothing_was_written(tiny, tmp_path, capsys):
     """An --out under a file (and, for a user who is not root, a read-only folder) fails
-    before anything is written: the line must not promise frames or a --resume."""
+    before anything is written: the line must not promise frames or a --resume. Under a
+    file it is bad input, refused by name (exit 2: tests/test_reliability_hostile2.py)."""
     (tmp_path / "a-file").write_text("")
     out = tmp_path / "a-file" / "out"
-    assert main(["run", tiny, "--out", str(out), "--no-preview"]) == 1
+    assert main(["run", tiny, "--out", str(out), "--no-preview"]) == 2
     line = capsys.readouterr().err.strip()
     assert len(line.splitlines()) == 1 and str(out) in line, line
-    assert line.endswith("nothing was written") and "--resume" not in line, line
+    assert line.endswith("a-file is a file, not a folder") and "--resume" not in line, line

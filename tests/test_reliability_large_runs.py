@@ -50,7 +50,7 @@ def test_a_run_the_disk_cannot_hold_is_refused_before_writing(scene, tmp_path, c
     assert "frame_compression" in err
     fits = re.search(r"--frames (\d+) fits", err)
     assert fits and 0 < int(fits.group(1)) < 6, err
-    assert list(out.iterdir()) == []  # nothing written, not even the lock file
+    assert not out.exists()  # nothing written, not even the lock file or the folder
     assert main(["run", scene, "--out", str(out), *raw, "--frames", fits.group(1)]) == 0
     assert main(["run", scene, "--out", str(tmp_path / "new"), *raw, "--frames",
                  str(int(fits.group(1)) + 1)]) == 2  # the number that fits is the largest

@@ -41,6 +41,7 @@ refused (exit 2) naming ``--frames`` and how many frames fit.
 from __future__ import annotations
 
 import argparse
+import errno
 import os
 import signal
 import sys
@@ -271,6 +272,9 @@ def _cmd_run(args) -> int:
         log.debug("I/O error", exc_info=True)
         written = ("frames written so far stay (run.json says failed when it could be "
                    "written; --resume continues)" if (out / "run.json").is_file()
+                   else "the folder was removed or moved while the run wrote into it (moved: "
+                   "--resume continues it where it went)"
+                   if exc.errno == errno.ENOENT and not out.is_dir()
                    else "nothing was written")       # e.g. the lock file could not be made
         return _fail(f"{os_error_line(exc, out)}; {written}", 1)
     finally:

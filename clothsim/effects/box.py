@@ -45,7 +45,7 @@ class Box(Obstacle):
         if len(bad):
             k = int(bad[0])
             raise InputError(f"box.min[{k}]: must be less than box.max[{k}], got "
-                             f"{lo[k]!r} >= {hi[k]!r}")
+                             f"{float(lo[k])!r} >= {float(hi[k])!r}")
         self.min, self.max = lo, hi
         self.set_margin(self.margin)
 

@@ -55,19 +55,21 @@ class Impulse(Effect):
             raise InputError(f"impulse.center: expected 3 numbers, got shape {c.shape}")
         r = check_finite("impulse.radius", radius)
         if r.ndim != 0 or r <= 0:
-            raise InputError(f"impulse.radius: must be one positive number, got {radius!r}")
+            raise InputError(f"impulse.radius: must be one positive number, got "
+                             f"{np.asarray(radius).tolist()!r}")
         f = check_finite("impulse.force", force)
         if f.shape != (3,):
             raise InputError(f"impulse.force: expected 3 numbers, got shape {f.shape}")
         t0 = check_finite("impulse.start", start)
         if t0.ndim != 0 or t0 < 0:
-            raise InputError(f"impulse.start: must be one non-negative number, got {start!r}")
+            raise InputError(f"impulse.start: must be one non-negative number, "
+                             f"got {np.asarray(start).tolist()!r}")
         try:
             dt = float(duration)
         except (TypeError, ValueError):
             raise InputError(f"impulse.duration: must be a number, got {duration!r}") from None
         if not dt > 0:
-            raise InputError(f"impulse.duration: must be positive (inf allowed), got {duration!r}")
+            raise InputError(f"impulse.duration: must be positive (inf allowed), got {dt!r}")
         self.center, self.radius, self.force = c, float(r), f
         self.start, self.duration = float(t0), dt
         self.vertices = np.zeros(0, np.int64)

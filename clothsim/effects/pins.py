@@ -77,7 +77,7 @@ class Pin(Effect):
             vertices = []
         v = np.asarray(vertices)
         if v.size and not np.issubdtype(v.dtype, np.integer):
-            if not np.all(np.mod(v, 1) == 0):
+            if v.dtype.kind not in "fiu" or not np.all(np.mod(v, 1) == 0):  # text, None
                 raise InputError("pin.vertices: must be integer vertex indices")
         self.vertices = v.astype(np.int64).reshape(-1)
         if method not in PIN_METHODS:

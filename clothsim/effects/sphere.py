@@ -45,7 +45,8 @@ class Sphere(Obstacle):
         self.center = _vector3("sphere.center", center)
         r = check_finite("sphere.radius", radius)
         if r.ndim != 0 or r <= 0:
-            raise InputError(f"sphere.radius: must be one positive number, got {radius!r}")
+            raise InputError(f"sphere.radius: must be one positive number, got "
+                             f"{np.asarray(radius).tolist()!r}")
         if r > MAX_RADIUS:
             raise InputError(f"sphere.radius: must be at most {MAX_RADIUS:g} m (its square "
                              f"must stay far from overflow), got {float(r)!r}")

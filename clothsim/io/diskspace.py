@@ -147,9 +147,10 @@ def check_run_plan(folder: Path, plan: dict, frames: int, reclaim: int = 0,
         fixed = 3 * plan["model"]  # the store, the npz and its rebuilt copy hold ...
         per_frame = frame + 3 * (plan["trajectory"] - plan["model"]) / (frames + 1)  # ... and
         fits = int((free + reclaim - fixed) // per_frame) - 1  # a frame, frames 0..N each
-        options = "; ".join(o for o in (
-            f"fewer frames (--frames {fits} fits)" if 0 < fits < frames else None, less,
-            "or another --out on a larger disk") if o)
+        options = [o for o in (f"fewer frames (--frames {fits} fits)" if 0 < fits < frames
+                               else None, less) if o]
+        options = "; ".join(options + [f"{'or' if options else 'choose'} another --out on a "
+                                       "larger disk"])
         raise InputError(f"{folder}: the run needs about {gigabytes(plan['peak'] - reclaim)} "
                          f"({what}) but {gigabytes(free)} are free on its disk; {options}")
     if plan["end"] > DISK_WARNING:

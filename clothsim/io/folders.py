@@ -138,8 +138,9 @@ def claim_folder(folder, kind: str, *, force: bool = False) -> Path:
     Raises
     ------
     InputError
-        ``folder`` is a file, or holds files and no clothsim record of the same kind: the
-        message names the folder and the first foreign file.
+        ``folder`` (or the nearest existing path above it) is a file, or it holds files
+        and no clothsim record of the same kind: the message names the folder and the first
+        foreign file.
     """
     if kind not in KINDS:
         raise ValueError(f"kind: must be one of {', '.join(KINDS)}, got {kind!r}")
@@ -148,6 +149,9 @@ def claim_folder(folder, kind: str, *, force: bool = False) -> Path:
         raise InputError("--out: empty; name a folder")
     if p.exists() and not p.is_dir():
         raise InputError(f"{p}: is not a folder (--out names a folder)")
+    above = next((a for a in p.parents if a.exists()), None)
+    if above is not None and not above.is_dir():  # --out file.txt/sub
+        raise InputError(f"{p}: cannot be a folder: {above} is a file, not a folder")
     if force or not p.exists():
         return p
     try:

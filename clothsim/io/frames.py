@@ -248,10 +248,11 @@ class FrameWriter:
                 self._fields_of = FrameFields(self.mesh.vertices, self._cells,
                                               self.springs.spring_vertices,
                                               self.springs.spring_rest_length)
-            point_data["stretch"] = self._fields_of.stretch(x).astype(np.float32)
-            if self.mesh.triangle_count:
-                cell_data["area_ratio"] = [a.astype(np.float32)
-                                           for a in self._fields_of.area_ratio(x)]
+            with np.errstate(over="ignore"):  # beyond float32 (a cloth blown to 1e30 m): inf
+                point_data["stretch"] = self._fields_of.stretch(x).astype(np.float32)
+                if self.mesh.triangle_count:
+                    cell_data["area_ratio"] = [a.astype(np.float32)
+                                               for a in self._fields_of.area_ratio(x)]
         return point_data, cell_data
 
     def add_static(self, name: str) -> None:

@@ -78,9 +78,13 @@ class FolderLock:
                                  "writing into this folder; wait for it or choose another "
                                  "--out") from None
             if self._still_named(fd):
-                os.ftruncate(fd, 0)
-                os.pwrite(fd, f"{os.getpid()} {self.kind}\n".encode("ascii"), 0)
                 self._fd = fd
+                try:
+                    os.ftruncate(fd, 0)
+                    os.pwrite(fd, f"{os.getpid()} {self.kind}\n".encode("ascii"), 0)
+                except OSError:  # a full disk: the lock file goes with the error
+                    self.release()
+                    raise
                 return self
             os.close(fd)  # its holder removed it after we opened it: open the new one
         raise InputError(f"{self.path}: removed and created again {_ATTEMPTS} times while "

@@ -102,16 +102,22 @@ class OutputFolder:
         self.guard = guard or nullcontext
         self._lock: FolderLock | None = None
         self._record: dict | None = None
+        self._made: list[Path] = []
 
     def __enter__(self) -> OutputFolder:
         claim_folder(self.path, self.kind, force=self.force)  # before anything is written
+        self._made = [p for p in (self.path, *self.path.parents) if not p.exists()]
         self.path.mkdir(parents=True, exist_ok=True)
-        self._lock = FolderLock(self.path, self.kind).acquire()
-        try:  # again, now that no other clothsim process can write here
+        try:
+            self._lock = FolderLock(self.path, self.kind).acquire()
+            # again, now that no other clothsim process can write here
             claim_folder(self.path, self.kind, force=self.force)
             self.earlier = folder_state(self.path)
         except BaseException:
-            self._lock.release()
+            if self._lock is not None:
+                self._lock.release()
+                self._lock = None
+            self._remove_made()
             raise
         return self
 
@@ -130,6 +136,17 @@ class OutputFolder:
             if self._lock is not None:
                 self._lock.release()
                 self._lock = None
+            if exc is not None and self.status is None:  # refused before its first file
+                self._remove_made()
+
+    def _remove_made(self) -> None:
+        """Remove the folders :meth:`__enter__` created when they are still empty (a refused
+        writer leaves the disk as it found it)."""
+        for p in self._made:
+            try:
+                p.rmdir()
+            except OSError:  # not empty (someone else's file), or gone: leave it
+                return
 
     def end(self, status: str, error: str | None) -> None:
         """Mark the folder's final status (:meth:`mark`); a subclass first completes what

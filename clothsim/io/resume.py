@@ -68,8 +68,51 @@ def changed_input(recorded: dict, now: dict) -> str | None:
     return None
 
 
+def scene_difference(before, now, key: str = "") -> str | None:
+    """The first key at which two resolved scenes (``Scene.to_dict()``) differ, as
+    ``"cloth.mass: 1.0 there, 2.0 now"``, leaving out ``scene.frames`` and ``[output]``
+    (which change no state); None when they agree.
+
+    Parameters
+    ----------
+    before, now : dict
+        The scene a run folder's run.json recorded, and the scene to resume.
+    key : str
+        The key path of ``before`` and ``now`` (for the recursion).
+
+    Returns
+    -------
+    str or None
+    """
+    if isinstance(before, dict) and isinstance(now, dict):
+        names = sorted(set(before) | set(now), key=str)
+        if not key and "scene" in names:  # another scene by name says so first
+            names.remove("scene")
+            names.insert(0, "scene")
+        for name in names:
+            sub = f"{key}.{name}" if key else str(name)
+            if sub in ("scene.frames", "output", "scene.description"):
+                continue
+            found = scene_difference(before.get(name), now.get(name), sub)
+            if found:
+                return found
+        return None
+    if isinstance(before, list) and isinstance(now, list) and len(before) == len(now):
+        for i, (a, b) in enumerate(zip(before, now)):
+            found = scene_difference(a, b, f"{key}[{i}]")
+            if found:
+                return found
+        return None
+    if before == now:
+        return None
+
+    def shown(value):
+        return "missing" if value is None else repr(value)[:60]
+    return f"{key}: {shown(before)} there, {shown(now)} now"
+
+
 def resume_point(out: Path, previous: dict | None, shash: str, frames: int,
-                 inputs: dict | None = None) -> int | None:
+                 inputs: dict | None = None, *, scene: dict | None = None) -> int | None:
     """The last frame k <= ``frames`` such that frames 0..k are on disk and read back, once
     the folder is checked to hold this scene's run.
 
@@ -86,6 +129,9 @@ def resume_point(out: Path, previous: dict | None, shash: str, frames: int,
     inputs : dict, optional
         :func:`clothsim.scene.inputs.input_hashes` of the scene now, compared with those
         run.json recorded at the start.
+    scene : dict, optional
+        The resolved scene now (``Scene.to_dict()``): a refusal names the first key at which
+        it differs from the one run.json recorded.
 
     Returns
     -------
@@ -115,8 +161,11 @@ def resume_point(out: Path, previous: dict | None, shash: str, frames: int,
         raise InputError(f"{out}: its run.json has no scene hash (an older clothsim wrote it), "
                          "so it cannot be checked to be this scene; cannot resume")
     if previous["scene_hash"] != shash:
-        raise InputError(f"{out}: holds a run of a different scene (scene hash "
-                         f"{previous['scene_hash']} here, {shash} now); cannot resume")
+        differs = (scene_difference(previous.get("scene"), scene) if scene is not None
+                   else None) or f"scene hash {previous['scene_hash']} there, {shash} now"
+        raise InputError(f"{out}: cannot resume: it holds a run of a different scene "
+                         f"({differs}); run without --resume to start afresh, or choose "
+                         "another --out")
     k = 0
     while k < min(last, frames):  # the frames must read back; stop before the first bad one
         try:

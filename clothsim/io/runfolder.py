@@ -93,13 +93,14 @@ class RunFolder(OutputFolder):
             if self.store is not None:
                 self.store.close()
 
-    def resume_point(self, shash: str, frames: int, inputs: dict | None = None) -> int | None:
+    def resume_point(self, shash: str, frames: int, inputs: dict | None = None, *,
+                     scene: dict | None = None) -> int | None:
         """The frame ``--resume`` continues from: :func:`clothsim.io.resume.resume_point`
         of this folder and its run.json, cut to the frames run.json holds records of.
 
         Parameters
         ----------
-        shash, frames, inputs
+        shash, frames, inputs, scene
             As for :func:`clothsim.io.resume.resume_point`.
 
         Returns
@@ -107,7 +108,7 @@ class RunFolder(OutputFolder):
         int or None
             None when no frame is on disk.
         """
-        k = resume_point(self.path, self.previous, shash, frames, inputs)
+        k = resume_point(self.path, self.previous, shash, frames, inputs, scene=scene)
         if k is None:
             return None
         log.info("%s: resuming a run whose run.json says %r", self.path, self.earlier.word)

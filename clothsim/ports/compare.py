@@ -259,6 +259,18 @@ def tolerances(reference: np.ndarray, *, precision: str = "float64", rtol: float
     return base
 
 
+def _non_finite(x: np.ndarray, name: str, field: str) -> str | None:
+    """A note naming where ``x`` (frames, n, 3) first holds NaN or inf (a port that blew
+    up): its error there counts as inf, which alone would hide the cause."""
+    bad = ~np.isfinite(x).all(axis=-1)
+    if not bad.any():
+        return None
+    f, v = np.unravel_index(int(np.argmax(bad)), bad.shape)
+    return (f"the {name}'s {field} are not finite (NaN or inf) at {int(bad.sum())} of "
+            f"{bad.size} (frame, vertex) pairs, first at frame {f} vertex {v}; the error "
+            "counts as inf there")
+
+
 def compare_arrays(a, b, *, rtol: float | None = None, atol: float | None = None,
                    precision: str = "float64", kappa: float | None = None,
                    field: str = "positions", match: bool = False) -> Comparison:
@@ -296,7 +308,9 @@ def compare_arrays(a, b, *, rtol: float | None = None, atol: float | None = None
     diff = np.abs(a - b)
     with np.errstate(over="ignore", invalid="ignore"):
         rms = np.sqrt(np.mean(err ** 2, axis=1))
+    notes = [_non_finite(x, name, field) for x, name in ((a, "trajectory"), (b, "reference"))]
     return Comparison(
+        notes=[n for n in notes if n],
         passed=not len(bad), frames=len(a), field=field, size=_scale(b, field),
         max_error=err.max(axis=1), rms_error=rms,
         tolerance=tol, first_frame=first,
@@ -368,7 +382,7 @@ def compare_trajectories(path, reference, *, key: str = "positions", frames: int
         raise InputError("precision: the float32 bound is for positions; compare velocities "
                          "with --rtol/--atol")
     result = compare_arrays(a, b, kappa=kappa, field=key, match=match, **options)
-    result.notes = notes
+    result.notes = notes + result.notes
     if counts is not None:
         result.frame_counts, result.passed = counts, False
     return result

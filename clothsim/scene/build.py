@@ -33,6 +33,9 @@ from .schema import MAX_SUBSTEPS
 from .tables import read_index_list, read_spring_table, read_triangles, read_values, read_vertices
 from .validate import validate, validate_solver
 
+_FILE_KEYS = {"mesh": "cloth.mesh", "jacobson": "cloth.file", "files": "cloth.vertices"}
+"""The key naming the file a cloth of each shape is read from."""
+
 
 @dataclass(frozen=True, eq=False)
 class Scene:
@@ -178,10 +181,13 @@ class Scene:
         except SceneError:
             raise
         except InputError as exc:
-            raise self._error(*locate(exc, "cloth")) from None
+            path, reason = locate(exc, "cloth")
+            key = _FILE_KEYS.get(self.data["cloth"]["shape"])
+            if key and path.startswith("cloth.vertices") and key != "cloth.vertices":
+                path, reason = key, f"{path.removeprefix('cloth.')}: {reason}"  # in the file
+            raise self._error(path, reason) from None
         except (OverflowError, RecursionError) as exc:  # e.g. an OBJ index beyond int64
-            key = {"mesh": "cloth.mesh", "jacobson": "cloth.file", "files": "cloth.vertices"}
-            raise self._error(key.get(self.data["cloth"]["shape"], "cloth"),
+            raise self._error(_FILE_KEYS.get(self.data["cloth"]["shape"], "cloth"),
                               f"a number is out of range: {exc}") from None
 
     def _build_model(self):

@@ -335,18 +335,22 @@ def find_scene(path_or_name) -> Path:
     Raises
     ------
     SceneError
-        A directory, a missing file, or an unknown name (with the closest built-in names).
+        A directory, a FIFO or device, a missing file, or an unknown name (with the
+        closest built-in names).
     """
     name = str(path_or_name)
     try:
         p = Path(path_or_name).expanduser()
-        is_file = p.is_file()
-        if p.is_dir():
-            raise SceneError(shorten(name, 200), "", "is a directory, not a scene file")
+        is_file, is_dir = p.is_file(), p.is_dir()
     except (OSError, ValueError) as exc:
         raise SceneError(shorten(name), "", f"cannot use this path: {exc}") from None
+    if is_dir:
+        raise SceneError(shorten(name, 200), "", "is a directory, not a scene file")
     if is_file:
         return p
+    what = special_file(p)  # /dev/null, a FIFO: there, but not a file a scene is read from
+    if what:
+        raise SceneError(shorten(name, 200), "", f"is {what}, not a scene file")
     builtin = builtin_scene_path(name)
     if "/" not in name and "\\" not in name and builtin.is_file():
         return builtin

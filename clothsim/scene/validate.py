@@ -122,6 +122,10 @@ def _point(v, path) -> list[float]:
     return p
 
 
+_FILE_KEYS = {"mesh": "mesh", "jacobson": "file", "files": "vertices"}
+"""The key naming the file a cloth of each shape is read from."""
+
+
 def _cloth(raw: dict, base_dir: Path) -> tuple[dict, int | None]:
     c = table(raw.get("cloth", {}), "cloth")
     check_keys(c, "cloth", schema.keys("cloth"))
@@ -130,8 +134,11 @@ def _cloth(raw: dict, base_dir: Path) -> tuple[dict, int | None]:
     for key in c:
         if key not in allowed:
             users = schema.spec("cloth", key).shapes
+            own = _FILE_KEYS.get(shape)  # cloth.file on a mesh: say which key reads its file
+            hint = (f"; a {shape} cloth reads its file from cloth.{own}"
+                    if own and key in _FILE_KEYS.values() and own in allowed else "")
             raise Invalid(f"cloth.{key}", f"not used with cloth.shape = '{shape}' (only with "
-                                          f"{' or '.join(repr(u) for u in users)})")
+                                          f"{' or '.join(repr(u) for u in users)}){hint}")
     cloth: dict[str, Any] = {"shape": shape}
     cloth["pin_method"] = string(c.get("pin_method", "penalty"), "cloth.pin_method",
                                  choices=PIN_METHODS)

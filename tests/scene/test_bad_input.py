@@ -44,8 +44,8 @@ SCENE_CASES = [
     ("pin in two pins", GRID_TOML + PIN_0 + '[[effects]]\nkind = "pin"\n'
      'region = { min = [-1, -1, -1], max = [1, 1, 1] }\n', "effects",
      "vertex 0 is pinned by more than one pin"),
-    ("mesh file nan", '[cloth]\nshape = "mesh"\nmesh = "nan.obj"\n', "cloth.vertices[2, 1]",
-     "must be a finite number, got nan"),
+    ("mesh file nan", '[cloth]\nshape = "mesh"\nmesh = "nan.obj"\n', "cloth.mesh",
+     "vertices[2, 1]: must be a finite number, got nan"),  # the key the user wrote
     ("mesh file unreadable", '[cloth]\nshape = "mesh"\nmesh = "broken.ply"\n', "cloth.mesh",
      "cannot read "),
     ("mesh file unknown format", '[cloth]\nshape = "mesh"\nmesh = "cloth.xyz"\n', "cloth.mesh",
