@@ -134,7 +134,7 @@ def marginal_changes(k, held, model, problem, tol, port_planes, x_port, x_cs, ro
                      f"threshold at vertex {v}) taken as the port's: vertex {v} {words}")
 
 
-def variant_verdict(k, held, state, x_port, err, tol) -> StepCheck | None:
+def variant_verdict(k, held, state, x_port, err, tol) -> tuple[StepCheck | None, float]:
     """``contacts differ`` when another contact treatment reproduces the port's step.
 
     Parameters
@@ -152,7 +152,9 @@ def variant_verdict(k, held, state, x_port, err, tol) -> StepCheck | None:
 
     Returns
     -------
-    StepCheck or None
+    (StepCheck or None, float)
+        The verdict, and how far the variant named lands from the port's answer [m]
+        (inf when none is named).
     """
     rows = clothsim_rows(held.planes())
     worst = int(np.argmax(err))
@@ -169,8 +171,8 @@ def variant_verdict(k, held, state, x_port, err, tol) -> StepCheck | None:
             return StepCheck(k, "contacts differ", float(err[worst]), worst, tolerance=tol,
                              note=f"the port's step is clothsim's from the same state when "
                                   f"it {words} ({off:.1e} m from the port's answer); "
-                                  f"clothsim {_held_words(rows, err, variant, held)}")
-    return None
+                                  f"clothsim {_held_words(rows, err, variant, held)}"), off
+    return None, np.inf
 
 
 def _held_words(rows, err, variant, steps) -> str:
