@@ -11,7 +11,7 @@ from __future__ import annotations
 
 import numpy as np
 
-__all__ = ["NEAR", "SHARED", "geometry"]
+__all__ = ["NEAR", "SHARED", "geometry", "shared"]
 
 #: Vertices that must share an obstacle surface for it to be read off them.
 SHARED = 3
@@ -27,8 +27,21 @@ def _fmt(value) -> str:
             else "(" + ", ".join(f"{c + 0.0:.4g}" for c in v) + ") m")
 
 
-def _shared(values, scale):
-    """The value at least SHARED vertices share (to 1e-9 of ``scale``), the most shared."""
+def shared(values, scale):
+    """The value at least :data:`SHARED` vertices share, the most shared.
+
+    Parameters
+    ----------
+    values : array_like, shape (n,)
+        A coordinate of each vertex (a distance, an offset) [m].
+    scale : float
+        Values within 1e-9 of it are the same [m].
+
+    Returns
+    -------
+    float or None
+        Their mean; None when fewer than :data:`SHARED` share one.
+    """
     if not len(values):
         return None
     q = np.round(np.asarray(values) / (1e-9 * scale))
@@ -115,7 +128,7 @@ def geometry(e, x, index: int, tol: float):
     key = f"effects[{index}]"
     if e.kind == "sphere":
         surface = e.radius + e.margin
-        shell = _shared(np.linalg.norm(x - e.center, axis=1), scale)
+        shell = shared(np.linalg.norm(x - e.center, axis=1), scale)
         if shell is not None and abs(shell - surface) > max(tol, 1e-9 * scale):
             yield _sphere_change(e, key, e.center, shell, f"its vertices in contact lie "
                                                           f"{_fmt(shell)} from its centre")
@@ -124,7 +137,7 @@ def geometry(e, x, index: int, tol: float):
             yield _sphere_change(e, key, fit[0], fit[1], f"its vertices in contact lie on "
                                                          f"a sphere of radius {_fmt(fit[1])}")
     elif e.kind == "plane":
-        level = _shared(x @ e.normal, scale)
+        level = shared(x @ e.normal, scale)
         if level is not None:
             shift = level - e.margin - e.point @ e.normal
             if abs(shift) > max(tol, 1e-9 * scale):
@@ -137,7 +150,7 @@ def geometry(e, x, index: int, tol: float):
                 other = [a for a in range(3) if a != axis]
                 over = np.all((x[:, other] >= e.min[other]) & (x[:, other] <= e.max[other]),
                               axis=1)
-                face = _shared(x[over, axis], scale)
+                face = shared(x[over, axis], scale)
                 if face is None:
                     continue
                 d = face - side * e.margin - getattr(e, name)[axis]
