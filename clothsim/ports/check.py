@@ -173,21 +173,23 @@ def check_steps(simulation, positions, velocities=None, *, precision: str = "flo
                              else max(tol_k, 4 * EPS32 * float(np.abs(x_port).max())))
         planes, differing = (None, []) if contacts is None else planes_verdict(
             k, held, contacts, xs[k], problem.fixed_vertices, err, tol)
+        variant, off = ((None, np.inf) if moved is not None or err[worst] <= tol
+                        or not held else variant_verdict(k, held, state, x_port, err, tol))
         if planes is not None:   # and the port's solve, on its own planes?
             adopt(held, differing, contacts.step(k))
             planes.note += "; " + on_port_planes(_step(sim, held, state, x_port)[3], tol)
-        variant, off = ((None, np.inf) if moved is not None or planes is not None
-                        or err[worst] <= tol or not held
-                        else variant_verdict(k, held, state, x_port, err, tol))
         change, why_held = None, ""
-        if (held and moved is None and off > tol and len(held_causes) < MAX_EFFECT
-                and (planes is not None or err[worst] > tol)):   # a setting of the port's?
+        if (held and moved is None and off > tol and err[worst] > tol
+                and len(held_causes) < MAX_EFFECT):   # a setting of the port's?
             held_causes.append(k)
             change, why_held, nearer = explain(held, x_port, x_cs, err, tol)
             if change is not None and nearer < off:
                 variant = None          # the setting reproduces the step better
             elif variant is not None:
                 change, why_held = None, ""
+        if planes is not None and variant is not None:   # the treatment behind the planes
+            planes.note += "; " + variant.note
+            variant = None
         if moved is not None:
             v, dist = moved
             step = StepCheck(k, "pinned vertex moved", float(err[worst]), v, role=pin_role(

@@ -16,8 +16,9 @@ near:
   (that face moved, the box grown by as much on every side, or moved along that axis), a
   sphere's radius (their common distance from the centre) or its centre and radius (the
   sphere they lie on), a plane's offset;
-- its friction coefficient: 0, and the coefficient fitted to the port's answer (the
-  step is nearly linear in μ between the replays at 0 and at the scene's μ);
+- its friction coefficient: 0, twice the scene's, and the coefficient fitted to the port's
+  answer (the step taken as linear in μ between the two replays nearest it: a secant,
+  refined once);
 - its contact rules: static friction ignored (every held vertex slides, under kinetic
   friction), and a held vertex kept after its normal force turned negative (clinging).
 
@@ -39,14 +40,12 @@ from ..effects.holding import Holding
 from ..simulation import State
 from .held_readings import NEAR, geometry
 from .held_steps import _copy
+from .held_verdicts import NEARER
 
 log = logging.getLogger(__name__)
 
 __all__ = ["Change", "changes", "explain", "shadow"]
 
-#: A replay explains the port's step within the tolerance, or this many times nearer
-#: than clothsim's own step (as :data:`clothsim.ports.held_verdicts.NEARER`).
-NEARER = 10.0
 
 
 @dataclass
@@ -177,8 +176,8 @@ def changes(held, x_port, tol) -> list[Change]:
     Returns
     -------
     list of Change
-        Geometry first, then friction (0), then the rules; the fitted friction is tried
-        by :func:`explain` after the replay at 0.
+        Geometry first, then friction (0, twice the scene's), then the rules; the fitted
+        friction is tried by :func:`explain` after those two.
     """
     scale = max(float(np.ptp(x_port, axis=0).max()), 1e-9)
     effects = list(held.sim.effects)
