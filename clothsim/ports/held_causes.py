@@ -78,7 +78,13 @@ class Change:
 
     @contextmanager
     def applied(self):
-        """The obstacle with the change; restored afterwards."""
+        """The obstacle with the change; restored afterwards.
+
+        Returns
+        -------
+        contextmanager
+            Yields None while the obstacle carries the change.
+        """
         e = self.obstacle
         saved = {name: getattr(e, name) for name in self.values}
         try:
@@ -95,7 +101,13 @@ class Change:
             e.__dict__.pop("correct_positions", None)
 
     def before_step(self, x) -> None:
-        """The rule's change of the decision the step starts from (``no-stick``)."""
+        """The rule's change of the decision the step starts from (``no-stick``).
+
+        Parameters
+        ----------
+        x : ndarray, shape (n, 3)
+            The port's x_k [m] (the planes' offsets stay where clothsim put them).
+        """
         if self.rule == "no-stick":
             h = self.obstacle._holding
             c = len(h.vertices)
