@@ -58,7 +58,7 @@ def cause(summary: str) -> str:
     for pattern in (r"clothsim's held steps with (.*?) \(replayed from",
                     r"clothsim's from the same state when it (.*?) \(\d",
                     r"(no single obstacle or contact setting reproduces)",
-                    r"(vertex \d+.*?) \(clothsim's contact force",
+                    r"\((vertex \d+.*?) \(clothsim's contact force",
                     r"(vertex \d+[^;(]*)"):
         found = re.search(pattern, summary)
         if found:
