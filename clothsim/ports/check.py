@@ -24,6 +24,7 @@ from .causes import FITTED, StepData, name_cause
 from .compare import EPS32
 from .contact_planes import PortPlanes
 from .effect_causes import damping_cause, obstacle_cause
+from .held_causes import explain
 from .held_margins import adopt, position_rounding
 from .held_steps import HeldSteps
 from .held_verdicts import (
@@ -139,7 +140,7 @@ def check_steps(simulation, positions, velocities=None, *, precision: str = "flo
     # when the scene has one)
     obstacles = [None] if any(e.kind in ("sphere", "plane", "box") for e in sim.effects) \
         else []
-    dampings = []
+    dampings, held_causes = [], []   # failing held steps a contact setting was sought for
 
     t = sim.state.time  # accumulated as the simulation does (time-dependent effects)
     for k in range(count):
@@ -193,11 +194,23 @@ def check_steps(simulation, positions, velocities=None, *, precision: str = "flo
                              else max(tol_k, 4 * EPS32 * float(np.abs(x_port).max())))
         planes, differing = (None, []) if contacts is None else planes_verdict(
             k, held, contacts, xs[k], problem.fixed_vertices, err, tol)
+        variant, off = ((None, np.inf) if moved is not None or err[worst] <= tol
+                        or not held else variant_verdict(k, held, state, x_port, err, tol))
         if planes is not None:   # and the port's solve, on its own planes?
             adopt(held, differing, contacts.step(k))
             planes.note += "; " + on_port_planes(_step(sim, held, state, x_port)[3], tol)
-        variant = (None if moved is not None or planes is not None or err[worst] <= tol
-                   or not held else variant_verdict(k, held, state, x_port, err, tol))
+        change, why_held = None, ""
+        if (held and moved is None and off > tol and err[worst] > tol
+                and len(held_causes) < MAX_EFFECT):   # a setting of the port's?
+            held_causes.append(k)
+            change, why_held, nearer = explain(held, x_port, x_cs, err, tol)
+            if change is not None and nearer < off:
+                variant = None          # the setting reproduces the step better
+            elif variant is not None:
+                change, why_held = None, ""
+        if planes is not None and variant is not None:   # the treatment behind the planes
+            planes.note += "; " + variant.note
+            variant = None
         if moved is not None:
             v, dist = moved
             step = StepCheck(k, "pinned vertex moved", float(err[worst]), v, role=pin_role(
@@ -205,6 +218,7 @@ def check_steps(simulation, positions, velocities=None, *, precision: str = "flo
                 f"target: its pins are missing or act elsewhere")
         elif planes is not None or variant is not None:
             step = planes or variant
+            step.note += f"; {why_held}" if why_held else ""
         elif err[worst] <= tol:
             step = StepCheck(k, "agrees", float(err[worst]), worst, tolerance=tol)
             if velocities is not None:
@@ -228,6 +242,8 @@ def check_steps(simulation, positions, velocities=None, *, precision: str = "flo
                 why = obstacle_cause(sim, state, x_port, tol)
             if unprojected:   # the minimizer of g knows no obstacle; the port's answer did
                 step.status, step.note = "contacts differ", unprojected   # not reach it
+            elif change is not None:   # an obstacle or contact setting of the port's
+                step.status, step.note = change.status, why_held
             elif why:
                 step.status, step.note = "model differs", why
             elif (step.status in FITTED + ("start-dependent",) and not step.settings
@@ -241,6 +257,8 @@ def check_steps(simulation, positions, velocities=None, *, precision: str = "flo
                     fixed_settings(sim)))
             if precision == "float64" and printed is not None and not step.passed:
                 printed.hint32(step, float(err[worst]), lambda b=bound32, t=tol_k: max(t, b()))
+            if why_held and change is None:
+                step.note += f"; {why_held}"
             off = off_plane_note(held, x_port, tol) if held else ""
             if off:
                 step.note += f"; {off}"

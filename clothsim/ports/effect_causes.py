@@ -16,11 +16,9 @@ from __future__ import annotations
 import numpy as np
 
 from ..simulation import State
+from .held_readings import shared as _shared
 
 __all__ = ["damping_cause", "obstacle_cause"]
-
-#: Vertices that must share the port's obstacle surface for it to be read off them.
-SHARED = 3
 
 
 def _replay_step(sim, state):
@@ -137,16 +135,6 @@ def _set(effect, name, value):
 def _fmt(value) -> str:
     v = np.atleast_1d(value)
     return f"{float(v[0]):.6g} m" if v.size == 1 else "(" + ", ".join(f"{c:.6g}" for c in v) + ") m"
-
-
-def _shared(values, scale):
-    """The value most vertices share (to 1e-9 of ``scale``), if SHARED or more do."""
-    if not len(values):
-        return None
-    q = np.round(np.asarray(values) / (1e-9 * scale))
-    uniq, counts = np.unique(q, return_counts=True)
-    i = int(np.argmax(counts))
-    return float(np.mean(np.asarray(values)[q == uniq[i]])) if counts[i] >= SHARED else None
 
 
 def _readings(effect, x):

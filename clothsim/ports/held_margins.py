@@ -12,6 +12,13 @@ its threshold is **marginal**: either outcome is right, and the port's is adopte
 (:func:`adopt`), the step solved again with it. Every other difference stays a
 ``contacts differ``.
 
+A vertex's first contact step decides its friction state geometrically (the seed's
+response: it sticks when friction stops its tangential step, μ × depth >= |Δ_t|), with no
+force of a step before to weigh: :func:`first_contact_flips` takes the step before again
+from the port's state and hands the obstacle's own ``correct_positions`` the solve's answer
+and the start moved by the rounding towards sliding and towards sticking; a new contact
+whose friction state differs between the two is marginal too.
+
 The port's outcome comes from its planes when it wrote them (``kind`` of
 :func:`clothsim.ports.plane_diff.plane_differences`), otherwise from its answer
 (:func:`inferred`): a marginally held vertex that the port's answer leaves off its plane,
@@ -23,6 +30,7 @@ from __future__ import annotations
 import numpy as np
 
 from ..effects.holding import NOISE_MARGIN, Holding
+from .held_first import first_contact_flips
 from .judge import hessian_diagonal
 from .plane_diff import port_face
 
@@ -91,6 +99,7 @@ class Margins:
         self.entry = mass * rounding / h2
         self.tol = rounding
         self.previous = held.previous_planes()
+        self._first: set | None = None
 
     def _was(self, v):
         """(obstacle, holding, row) of v in the step before, or None."""
@@ -130,7 +139,9 @@ class Margins:
             return any(float(np.linalg.norm(e.closest(x[None])[0][0] - x)) <= self.tol[v]
                        for e in self.held.obstacles)
         if forces is None:         # stick / slide of a new contact: a geometric decision
-            return False
+            if self._first is None:
+                self._first = first_contact_flips(self.held, self.tol)
+            return v in self._first
         e, h, i = was
         if not h.stick[i]:         # a sliding vertex sticks once it stopped: v_t . t <= 0
             along = self._along(v, h.normals[i], h.pull[i])
@@ -141,6 +152,21 @@ class Margins:
         cone = e.friction * fn + NOISE_MARGIN * h.planes.noise
         return abs(ft - cone) <= (1 + e.friction) * F
 
+
+    def first_contact(self, v: int, kind: str) -> bool:
+        """Whether v's decision of the given kind is a first contact's friction state.
+
+        Parameters
+        ----------
+        v : int
+        kind : str
+
+        Returns
+        -------
+        bool
+            True for "stick" / "slide" of a vertex not held in the step before.
+        """
+        return kind in ("stick", "slide") and self._was(v) is None
 
     def _along(self, v: int, n: np.ndarray, pull: np.ndarray) -> float | None:
         """v_t · t̂ of the port's step before at vertex v [m/s], t̂ the direction kinetic

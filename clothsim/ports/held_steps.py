@@ -47,6 +47,10 @@ VARIANTS = {
                 "keeps those the cloth pulls away"),
 }
 
+#: Steps :attr:`HeldSteps.window` keeps at most (the port's states a replay of another
+#: obstacle or contact setting starts from; :mod:`clothsim.ports.held_causes`).
+WINDOW = 12
+
 
 def holding_obstacles(sim) -> list:
     """The simulation's obstacles in ``"hold"`` mode.
@@ -123,6 +127,10 @@ class HeldSteps:
         self._previous: tuple | None = None    # (State, holdings) of the step before
         self._state: State | None = None
         self._x: np.ndarray | None = None
+        #: (State, decision) of the steps since the last one at which clothsim's decision
+        #: held nothing (at most :data:`WINDOW`, the last one the step anchored): where
+        #: replays of another setting start (:mod:`clothsim.ports.held_causes`).
+        self.window: list = []
 
     def __bool__(self) -> bool:
         return bool(self.obstacles)
@@ -158,6 +166,9 @@ class HeldSteps:
         """
         self._state = State(state.positions.copy(), state.velocities.copy(), state.time,
                             state.step)
+        if not any(len(h.vertices) for h, _, _ in self._before):
+            self.window = []
+        self.window = (self.window + [(self._state, self._before)])[-WINDOW:]
 
     def x(self) -> np.ndarray:
         """The port's positions the step was anchored at.
@@ -181,6 +192,16 @@ class HeldSteps:
         if self._previous is None:
             return []
         return [(e, h) for e, (h, _, _) in zip(self.obstacles, self._previous[1], strict=True)]
+
+    def previous_decision(self) -> list | None:
+        """The contact state the step before was anchored at, with its vertices in contact.
+
+        Returns
+        -------
+        list of (Holding, ndarray, ndarray) or None
+            Per obstacle: its holding, contact vertices and normals; None at the first step.
+        """
+        return None if self._previous is None else self._previous[1]
 
     def previous_state(self) -> State | None:
         """The port's state at the start of the step before.
@@ -258,11 +279,15 @@ class HeldSteps:
             sim.step()
             return sim.state.positions.copy()
         finally:
-            for e, (h, cv, cn) in zip(self.obstacles, self._after, strict=True):
-                e.contact = "hold"
-                e.__dict__.pop("correct_positions", None)
-                e._holding, e.contact_vertices, e.contact_normals = h, cv, cn
+            self.restore()
             sim.state = saved
+
+    def restore(self) -> None:
+        """The obstacles as the check's step left them (after a replay changed them)."""
+        for e, (h, cv, cn) in zip(self.obstacles, self._after, strict=True):
+            e.contact = "hold"
+            e.__dict__.pop("correct_positions", None)
+            e._holding, e.contact_vertices, e.contact_normals = h, cv, cn
 
     def _decide_flipped(self) -> None:
         """Take the step before again from the port's state, its contact forces read with
@@ -291,4 +316,4 @@ def _flipped(obstacle):
     return flipped
 
 
-__all__ = ["VARIANTS", "HeldSteps", "face_name", "holding_obstacles"]
+__all__ = ["VARIANTS", "WINDOW", "HeldSteps", "face_name", "holding_obstacles"]

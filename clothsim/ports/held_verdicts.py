@@ -58,11 +58,77 @@ def planes_verdict(k, held, port_planes, x_port_k, fixed, err, tol) -> StepCheck
                               normal_tolerance=port_planes.normal_tolerance, skip=fixed)
     if not diffs:
         return None, []
-    vertex, _, text = diffs[0]
+    vertex, kind, text = diffs[0]
     more = f"; {len(diffs)} vertices' planes differ in this step" if len(diffs) > 1 else ""
     return (StepCheck(k, "contacts differ", float(err.max()), vertex, tolerance=tol,
-                      note=f"{text}{more} (the port's planes: {port_planes.path.name})"),
+                      note=f"{text} ({decision_numbers(held, vertex, kind)}){more} (the "
+                           f"port's planes: {port_planes.path.name})"),
             [(u, kind) for u, kind, _ in diffs])
+
+
+#: Where to look, per kind of plane difference (:func:`plane_differences`).
+LOOK = {
+    "clothsim": "look at how the port catches a vertex (entry into the obstacle grown by its "
+                "thickness) and keeps it (released only when F < 0)",
+    "port": "look at the port's release rule (F < 0 releases) and its obstacle's size",
+    "stick": "look at the port's static friction (sticks while |F_t| <= μ F_n)",
+    "slide": "look at the port's static friction (sticks while |F_t| <= μ F_n)",
+    "plane": "look at the port's contact normal and offset (the obstacle's size, its "
+             "thickness)",
+}
+
+
+#: Where to look, per contact treatment a port uses instead (:data:`VARIANTS`).
+VARIANT_LOOK = {
+    "post-solve": "the port's contact handling: vertices in contact held on their planes in "
+                  "the solve ([contact] mode = \"hold\"), not projected after it",
+    "frictionless": "the port's friction on held vertices (sticking planes, kinetic friction "
+                    "μ F_n against the tangential velocity)",
+    "flipped": "the sign of the port's contact normal where it reads the contact force "
+               "n · grad g / h²",
+}
+
+
+def decision_numbers(held, v: int, kind: str) -> str:
+    """The numbers behind clothsim's decision for vertex v, and where the port should look.
+
+    Parameters
+    ----------
+    held : HeldSteps
+        Anchored at the step.
+    v : int
+    kind : str
+        The plane difference (:func:`clothsim.ports.plane_diff.plane_differences`).
+
+    Returns
+    -------
+    str
+        E.g. "clothsim's contact force 0.0123 N from step 9 -> 10 (a new contact, 1.2e-03 m
+        deep), thickness 0.0326 m; look at …".
+    """
+    parts = []
+    for e, h in held.planes():
+        i = np.flatnonzero(h.vertices == v)
+        if not len(i):
+            continue
+        f = float(h.normal_force[i[0]])
+        new = not any(np.any(p.vertices == v) for _, p in held.previous_planes())
+        mass = float(held.sim.model.vertex_mass[v])
+        depth = (f" (a new contact, {f * held.sim.h ** 2 / mass:.2e} m deep)"
+                 if new and mass > 0 else "")
+        parts.append(f"clothsim's contact force on it {f:.3g} N{depth}, friction μ = "
+                     f"{e.friction:g}, thickness {e.margin:.3g} m")
+        break
+    for e, h in held.previous_planes():
+        i = np.flatnonzero(h.vertices == v)
+        if len(i) and h.planes.forces is not None:
+            R = h.reaction()[i[0]]
+            fn = float(R @ h.normals[i[0]])
+            ft = float(np.linalg.norm(R - fn * h.normals[i[0]]))
+            parts.append(f"in the step before: F_n = {fn:.3g} N, |F_t| = {ft:.3g} N against "
+                         f"μ F_n = {e.friction * fn:.3g} N")
+            break
+    return "; ".join(parts + [LOOK.get(kind, LOOK["plane"])])
 
 
 def on_port_planes(err, tol) -> str:
@@ -129,12 +195,15 @@ def marginal_changes(k, held, model, problem, tol, port_planes, x_port, x_cs, ro
     v, kind = changes[0]
     words = {"clothsim": "released", "port": "held", "stick": "sliding",
              "slide": "sticking"}[kind]
+    where = (f"vertex {v}'s first contact within the rounding of the friction cone's edge, "
+             f"{margins.tol[v]:.1e} m" if margins.first_contact(v, kind) else
+             f"within {margins.force[v]:.2g} N of its threshold at vertex {v}")
     return changes, (f"{len(changes)} contact decision{'s' * (len(changes) != 1)} too close "
-                     f"to call from the port's state (within {margins.force[v]:.2g} N of its "
-                     f"threshold at vertex {v}) taken as the port's: vertex {v} {words}")
+                     f"to call from the port's state ({where}) taken as the port's: vertex "
+                     f"{v} {words}")
 
 
-def variant_verdict(k, held, state, x_port, err, tol) -> StepCheck | None:
+def variant_verdict(k, held, state, x_port, err, tol) -> tuple[StepCheck | None, float]:
     """``contacts differ`` when another contact treatment reproduces the port's step.
 
     Parameters
@@ -152,7 +221,9 @@ def variant_verdict(k, held, state, x_port, err, tol) -> StepCheck | None:
 
     Returns
     -------
-    StepCheck or None
+    (StepCheck or None, float)
+        The verdict, and how far the variant named lands from the port's answer [m]
+        (inf when none is named).
     """
     rows = clothsim_rows(held.planes())
     worst = int(np.argmax(err))
@@ -168,9 +239,11 @@ def variant_verdict(k, held, state, x_port, err, tol) -> StepCheck | None:
         if off <= tol or off * NEARER <= err[worst]:
             return StepCheck(k, "contacts differ", float(err[worst]), worst, tolerance=tol,
                              note=f"the port's step is clothsim's from the same state when "
-                                  f"it {words} ({off:.1e} m from the port's answer); "
-                                  f"clothsim {_held_words(rows, err, variant, held)}")
-    return None
+                                  f"it {words} ({off:.1e} m from the port's answer, against "
+                                  f"{err[worst]:.1e} m for clothsim's step); clothsim "
+                                  f"{_held_words(rows, err, variant, held)}; look at "
+                                  f"{VARIANT_LOOK[variant]}"), off
+    return None, np.inf
 
 
 def _held_words(rows, err, variant, steps) -> str:

@@ -16,7 +16,15 @@ tests/ports/test_check_held.py asserts what the check names.
   sticking, no kinetic friction on held vertices);
 - ``"flipped"``: the port's contact normal has the wrong sign where it reads the contact
   force (n · ∇g): it releases the vertices the obstacle pushes and keeps those the cloth
-  pulls away, and its contacts file carries −n (and −offset: the same planes).
+  pulls away, and its contacts file carries −n (and −offset: the same planes);
+- ``"no-stick"``: the port ignores static friction: every held vertex slides under
+  kinetic friction μ F_n, none is held in all three directions;
+- ``"clinging"``: the port keeps a held vertex after the cloth pulls it away (it never
+  releases on a negative normal force).
+
+``--set KEY=VALUE`` (as ``clothsim run --set``) changes the port's scene: a port whose
+box, sphere or friction coefficient differs from the scene it is checked against, e.g.
+``--set 'effects[1].radius=0.31'`` on drape-sphere.
 """
 
 from __future__ import annotations
@@ -32,7 +40,7 @@ from clothsim.effects.holding import Holding
 from clothsim.ports.held_steps import holding_obstacles
 from clothsim.scene import Scene, builtin_scene_text, load_scene
 
-FAULTS = ("none", "post-solve", "frictionless", "flipped")
+FAULTS = ("none", "post-solve", "frictionless", "flipped", "no-stick", "clinging")
 
 
 def builtin(name: str = "drop-on-square", resolution: int = 25, solver: dict | None = None,
@@ -58,14 +66,19 @@ def run_port(scene: Scene, fault: str, frames: int):
             e.contact = "post-solve"          # the same obstacles (thickness), projected
     if fault == "flipped":
         sim._contact_forces = _flipped(sim)
+    if fault == "clinging":
+        sim._contact_forces = _clinging(sim)
     xs, vs, rows = [sim.state.positions.copy()], [sim.state.velocities.copy()], []
     for k in range(frames):
         for e in obstacles:
             h = e._holding
+            c = len(h.vertices)
             if fault == "frictionless":
-                c = len(h.vertices)
                 h = e._holding = Holding(sim.state.positions, h.vertices, h.normals,
                                          np.zeros(c, bool), np.zeros(c), np.zeros((c, 3)))
+            if fault == "no-stick":
+                h = e._holding = Holding(sim.state.positions, h.vertices, h.normals,
+                                         np.zeros(c, bool), h.normal_force, h.pull)
             p = h.planes
             if fault == "post-solve" or not len(p):
                 continue
@@ -91,6 +104,22 @@ def _flipped(sim):
     return flipped
 
 
+def _clinging(sim):
+    """The simulation's contact forces with no pull: a held vertex's normal force below 0
+    is read as 0, so the obstacle never releases it."""
+    forces = sim._contact_forces
+
+    def clinging(problem, x, t):
+        forces(problem, x, t)
+        for e in holding_obstacles(sim):
+            h = e._holding
+            if h.planes.forces is not None:
+                c = len(h.vertices)
+                h.planes.forces[:c] = np.maximum(h.planes.forces[:c], 0.0)
+
+    return clinging
+
+
 def write_port(folder, positions, velocities, rows=None, fmt: str = "%.17g") -> None:
     """The port's output folder: positions.txt, velocities.txt (and contacts.txt)."""
     folder = Path(folder)
@@ -110,10 +139,12 @@ def main(argv=None) -> int:
     parser.add_argument("--frames", type=int, default=15)
     parser.add_argument("--out", required=True, help="output folder")
     parser.add_argument("--format", default="%.17g", help="printf format of the numbers")
+    parser.add_argument("--set", action="append", default=[], metavar="KEY=VALUE",
+                        help="change the port's scene (a port of another obstacle or friction)")
     parser.add_argument("--no-contacts", action="store_true",
                         help="write no contacts.txt (a port that does not write its planes)")
     args = parser.parse_args(argv)
-    x, v, rows = run_port(load_scene(args.scene), args.fault, args.frames)
+    x, v, rows = run_port(load_scene(args.scene, args.set), args.fault, args.frames)
     write_port(Path(args.out), x, v, None if args.no_contacts else rows, fmt=args.format)
     print(f"{args.fault}: {args.frames} steps written to {args.out}")
     return 0
