@@ -23,6 +23,7 @@ from .causes import FITTED, StepData, name_cause
 from .compare import EPS32
 from .contact_planes import PortPlanes
 from .effect_causes import damping_cause, obstacle_cause
+from .frame_order import repeated_frame, start_mismatch, velocity_cause
 from .held_margins import adopt, position_rounding
 from .held_steps import HeldSteps
 from .held_verdicts import (
@@ -54,14 +55,6 @@ MAX_SEARCHES = 3
 
 __all__ = ["PASSING", "CheckReport", "StepCheck", "as_simulation", "check_steps",
            "float32_report", "step_tolerance", "system_condition_number"]
-
-
-
-
-
-
-
-
 
 
 def check_steps(simulation, positions, velocities=None, *, precision: str = "float64",
@@ -111,6 +104,10 @@ def check_steps(simulation, positions, velocities=None, *, precision: str = "flo
                       tol64) if tolerance is None else None
     if printed is not None and printed.note:
         notes.append(printed.note)
+    tol0 = tol64 if printed is None else float(printed.tolerances[0])
+    start = start_mismatch(sim, xs[0], tol0 if precision == "float64" else
+                           max(tol0, 4 * EPS32 * float(np.abs(xs[0]).max())),
+                           None if sim is simulation else lambda: as_simulation(simulation))
     projected = [e.kind for e in sim.effects if overrides(e, "correct_positions")]
     iterations = sim.solver.iterations
     iterated = sim.solver.name != "newton"   # a converged method: the converged floor only
@@ -129,6 +126,7 @@ def check_steps(simulation, positions, velocities=None, *, precision: str = "flo
     obstacles = [None] if any(e.kind in ("sphere", "plane", "box") for e in sim.effects) \
         else []
     dampings = []
+    gravity = next((e.acceleration for e in sim.effects if e.kind == "gravity"), None)
 
     t = sim.state.time  # accumulated as the simulation does (time-dependent effects)
     for k in range(count):
@@ -184,6 +182,12 @@ def check_steps(simulation, positions, velocities=None, *, precision: str = "flo
                 f"target: its pins are missing or act elsewhere")
         elif planes is not None or variant is not None:
             step = planes or variant
+        elif printed is not None and (coarse := printed.too_coarse(k, float(err[worst]))):
+            step = StepCheck(k, "too coarse", float(err[worst]), worst, tolerance=tol,
+                             note=coarse)
+        elif (again := repeated_frame(xs, vs, k, x_cs, err, tol, h)):
+            step = StepCheck(k, "frame repeated", float(err[worst]), worst, tolerance=tol,
+                             note=again)
         elif err[worst] <= tol:
             step = StepCheck(k, "agrees", float(err[worst]), worst, tolerance=tol)
             if velocities is not None:
@@ -193,8 +197,9 @@ def check_steps(simulation, positions, velocities=None, *, precision: str = "flo
                                      int(np.argmax(verr)), tolerance=tol,
                                      note=f"|v_clothsim - v_port| = {verr.max():.3e} m/s")
                     dampings.append(k)
-                    why = ("" if held or len(dampings) > MAX_EFFECT else
-                           damping_cause(sim, state, vs[k + 1], 10 * tol / h))
+                    why = velocity_cause(xs, vs, k, h, x_cs, v_cs, 10 * tol / h) or (
+                        "" if held or len(dampings) > MAX_EFFECT else
+                        damping_cause(sim, state, vs[k + 1], 10 * tol / h))
                     step.note += f"; {why}" if why else ""
         else:
             step = judge(sim, model, problem, k, x_cs, x_port, err, tol, optimality, precision,
@@ -217,7 +222,7 @@ def check_steps(simulation, positions, velocities=None, *, precision: str = "flo
                     k, model, problem, x_port, g0, opt, step.gradient_clothsim,
                     float(err[worst]), tol, _replayer(sim, state),
                     step.status == "not converged",
-                    fixed_settings(sim)))
+                    fixed_settings(sim), gravity=gravity))
             if precision == "float64" and printed is not None and not step.passed:
                 printed.hint32(step, float(err[worst]), lambda b=bound32, t=tol_k: max(t, b()))
             off = off_plane_note(held, x_port, tol) if held else ""
@@ -236,7 +241,7 @@ def check_steps(simulation, positions, velocities=None, *, precision: str = "flo
     if printed is not None:   # the steps the printed state cannot place say so
         printed.annotate(out)
     return CheckReport(out, float(tol64), precision, notes, expected_steps=expected_steps,
-                       printed=printed.text if printed is not None else "")
+                       printed=printed.text if printed is not None else "", start=start)
 
 
 
