@@ -70,6 +70,9 @@ class StepData:
     gravity : ndarray, shape (3,), optional
         The scene's gravity [m/s²], when it has one: with other external forces beside it
         (wind), the ``gravity`` hypothesis changes it alone.
+    derived : bool
+        The port wrote no velocities: v_k = (x_k − x_{k−1}) / h, so another h leaves the
+        inertial target y = 2 x_k − x_{k−1} where it is.
     """
 
     k: int
@@ -86,6 +89,7 @@ class StepData:
     settings: str = ""
     cache: dict = dataclasses.field(default_factory=dict, repr=False)
     gravity: object = None
+    derived: bool = False
 
 
 

@@ -55,8 +55,8 @@ def variant(step: StepData, hypothesis: str, theta) -> tuple:
         f = np.zeros_like(step.x_port) if p.f_ext is None else p.f_ext
         p = dataclasses.replace(p, f_ext=f * scale[:, None])
     elif hypothesis == "time step":   # θ: h' / h − 1; the inertial target y moves with h
-        h = max(one, 1e-6) * p.h
-        p = dataclasses.replace(p, h=h, y=p.x + (h / p.h) * (p.y - p.x))
+        h = max(one, 1e-6) * p.h       # (not with velocities derived as Δx / h: y = 2 x_k − x_k−1)
+        p = dataclasses.replace(p, h=h, y=p.y if step.derived else p.x + (h / p.h) * (p.y - p.x))
     elif hypothesis == "pins":
         p = dataclasses.replace(p, anchor_stiffness=max(one, 0.0) * p.anchor_stiffness)
     else:

@@ -8,12 +8,11 @@ force (-1e-15, …)"; velocities of the frame before, or over 2h, "velocities di
 cause; gravity 9.8 for 9.81 "(0, -0.0681, 0) N per vertex instead of (0, -0.0681, 0) N per
 vertex"; masses × 2 "stiffness × 0.5" alone; the rest lengths of one spring family and a
 doubled h on a stiff cloth "no single model change"; a right port printed with 4 digits
-"FAIL … not a minimizer".
+"FAIL … not a minimizer"; the flag's flipped gravity in its wind UNDECIDED.
 """
 
 from __future__ import annotations
 
-import numpy as np
 import pytest
 
 import clothsim as cs
@@ -23,11 +22,13 @@ from benchmarks.referee_matrix import (
     _no_first_frame,
     _previous_velocities,
     _reversed,
+    _scene_file,
     _transposed,
     edited,
     keys,
     printed,
     rest_lengths,
+    run,
     scene_text,
 )
 from clothsim.ports.check import check_steps
@@ -87,18 +88,10 @@ def test_a_port_starting_from_its_own_state_is_judged_from_it(tmp_path):
     """A frame 0 that is neither reordered nor a later frame is the port's own start."""
     path = scene(tmp_path)
 
-    def moved(p):
-        s = cs.load_scene(p)
-        sim = s.build_simulation()
-        sim.state.positions[:] += [0.0, 0.0, 0.01]   # the whole cloth 1 cm forward
-        xs, vs = [sim.state.positions.copy()], [sim.state.velocities.copy()]
-        for _ in range(s.frames):
-            sim.step()
-            xs.append(sim.state.positions.copy())
-            vs.append(sim.state.velocities.copy())
-        return np.stack(xs), np.stack(vs)
+    def forward(state):   # the whole cloth 1 cm forward
+        state.positions[:] += [0.0, 0.0, 0.01]
 
-    report, summary = checked(path, moved)
+    report, summary = checked(path, lambda p: run(cs.load_scene(p), start=forward))
     assert not report.start and "frame 0" not in summary, summary
 
 
@@ -191,3 +184,37 @@ def test_a_float32_port_accumulating_its_positions_passes_at_float32(tmp_path):
                               precision="float32")
     assert report.passed, summary
 
+
+
+@pytest.mark.parametrize("fault, named", [
+    ("effects[0].acceleration=[0.0, 9.81, 0.0]",
+     "gravity (0, +9.81, 0) m/s² instead of (0, -9.81, 0) m/s² (the scene's other external "
+     "forces kept)"),
+    ("effects[2].velocity=[0.0, 0.0, 0.0]",
+     "(gravity alone: the scene's other external forces, e.g. a wind, left out)"),
+])
+def test_gravity_and_wind_of_the_flag_are_told_apart(tmp_path, fault, named):
+    """The built-in flag (a wind beside gravity): its flipped gravity was UNDECIDED (no
+    replaced force fits gravity and wind at once), its wind left out an unnamed force."""
+    path = _scene_file(tmp_path, {"builtin": "flag", "frames": 2})
+    _, summary = checked(path, keys(fault))
+    assert summary.startswith("FAIL at step 0 -> 1: model differs"), summary
+    assert named in summary, summary
+
+
+def test_a_flipped_gravity_printed_with_g_is_named_not_an_inertia(tmp_path):
+    """At 6 digits the gradient criterion would take clothsim's own 10-iteration answer for
+    a minimizer: it named 'the inertia term × -3.709'; the replays name the gravity."""
+    _, summary = checked(scene(tmp_path), keys("effects[0].acceleration=[0.0, 9.81, 0.0]"),
+                         printed("%g"))
+    assert "the acceleration (0, +9.81, 0) m/s² instead of (0, -9.81, 0) m/s²" in summary, \
+        summary
+    assert "inertia" not in summary, summary
+
+
+def test_a_halved_h_without_velocities_is_named(tmp_path):
+    """Velocities derived as Δx / h: another h does not move y = 2 x_k − x_{k−1}."""
+    _, summary = checked(scene(tmp_path), keys("scene.fps=60"),
+                         printed("%.17g", velocities=False))
+    assert summary.startswith("FAIL at step 0 -> 1: model differs"), summary
+    assert "h = 0.01667 s instead of 0.03333 s" in summary, summary
