@@ -15,8 +15,9 @@ BENCHMARKS = ("stiffness", "stability_figures", "performance", "factor_modes", "
 #: page's two study reports (minutes)
 LONG = ("memory", "scale_ladder", "accuracy_full", "accuracy_docs", "contact", "held_factor",
         "contact_thickness", "fuzz_scenes", "cpp_side_by_side",
-        "replay_spread")  # fuzz_scenes: the fuzz behind docs/data/fuzz.md (a minute);
-# cpp_side_by_side: downloads and compiles a C++ port; replay_spread: docs/data/replay-spread.md
+        "replay_spread", "referee_matrix")  # fuzz_scenes: the fuzz behind docs/data/fuzz.md
+# (a minute); cpp_side_by_side: downloads and compiles a C++ port; replay_spread:
+# docs/data/replay-spread.md; referee_matrix: docs/data/referee-matrix.md (a few minutes)
 
 
 def main(argv: list[str]) -> int:

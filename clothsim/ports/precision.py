@@ -345,7 +345,21 @@ class Printed:
         return tol
 
     def too_coarse(self, k: int, error: float) -> str:
-        """The note of a step the coarse printing alone could move by ``error``, else ""."""
+        """The note of a step the coarse printing alone could move by ``error``, else "".
+
+        Parameters
+        ----------
+        k : int
+            The step k → k + 1.
+        error : float
+            The step's largest distance from clothsim's answer [m].
+
+        Returns
+        -------
+        str
+            Why the step is ``too coarse`` to judge, or "" (fine printing, or an error
+            beyond the printing's rounding of the step: judged as any other).
+        """
         if self.coarse is None or error > self.coarse[k]:
             return ""
         return (f"the output is {describe(self.digits)}, which rounds this step by up to "
