@@ -19,6 +19,7 @@ printing and fault hold all the words, and writes nothing.
 
 from __future__ import annotations
 
+import importlib.util
 import re
 import sys
 import tempfile
@@ -150,6 +151,13 @@ def _no_first_frame(xs, vs, scene):   # the output starts at frame 1
     return xs[1:], vs[1:]
 
 
+def _frames(count):
+    """The output cut after ``count`` frames (a run stopped early)."""
+    def cut(xs, vs, scene):
+        return xs[:count], vs[:count]
+    return cut
+
+
 def _previous_velocities(xs, vs, scene):
     return xs, np.concatenate([vs[:1], vs[:-1]])
 
@@ -273,6 +281,9 @@ def _rows():
             ("frame repeated", "frame 0 printed as 1")),
         Row("hanging 12²", "%.17g", "starts at frame 1", edited(_no_first_frame), False,
             ("the output starts at frame 1",)),
+        *(Row("hanging 12²", "%.17g", f"only {c} frames written", edited(_frames(c)), False,
+              (f"the port's output has {c} frames", "the scene asks for 4 steps"))
+          for c in (2, 3, 4)),
         Row("hanging 12²", "%.17g", "velocities of the frame before",
             edited(_previous_velocities), False,
             ("its velocities are those of the frame before",)),
@@ -337,6 +348,14 @@ def _rows():
         Row("coursework net (1e10 N/m pins)", "%.17g", "force × 2", keys(
             "effects[0].per_vertex=[0.0, -19.6, 0.0]"), False, ("(0, -19.6, 0) N per vertex",),
             scene_kw=net),
+        Row("coursework net (1e10 N/m pins)", "mass_springs.py", "none", example(), True,
+            scene_kw=net),
+        Row("coursework net (1e10 N/m pins)", "mass_springs.py", "gravity sign",
+            example("gravity-sign"), False, ("(0, +9.8, 0) N per vertex",), scene_kw=net),
+        Row("coursework net (1e10 N/m pins)", "mass_springs.py", "pins left out",
+            example("unpinned"), False, ("the penalty pins missing",), scene_kw=net),
+        Row("coursework net (1e10 N/m pins)", "mass_springs.py", "rest lengths × 0.9",
+            example("rest-length"), False, ("rest lengths × 0.900",), scene_kw=net),
         Row("coursework net (1e10 N/m pins)", "%.17g", "vertices reversed",
             edited(_reversed_all), False, ("another vertex order",), scene_kw=net),
     ]
@@ -381,6 +400,20 @@ def exported(*overrides):
         scene = cs.load_scene(path, list(overrides))
         export_port(scene, folder / "export", frames=scene.frames, iterate_steps=0)
         return folder / "export"
+    port.exported = True
+    return port
+
+
+def example(fault=None):
+    """examples/ports/mass_springs.py (the project's Python solution of the coursework) on
+    the case beside the scene, with one of its ``--fault`` mistakes."""
+    def port(path, folder):
+        spec = importlib.util.spec_from_file_location(
+            "mass_springs", ROOT / "examples" / "ports" / "mass_springs.py")
+        module = importlib.util.module_from_spec(spec)
+        spec.loader.exec_module(module)
+        return module.run(path.parent, folder / "run", fault=fault,
+                          frames=cs.load_scene(path).frames)
     port.exported = True
     return port
 

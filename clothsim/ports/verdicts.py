@@ -124,6 +124,11 @@ class StepCheck:
         return text + (f" ({self.note})" if self.note else "")
 
 
+def _count(n: int, noun: str) -> str:
+    """"1 step", "2 steps"."""
+    return f"{n} {noun}" if n == 1 else f"{n} {noun}s"
+
+
 def _steps_text(steps, limit=5) -> str:
     more = f" and {len(steps) - limit} more" if len(steps) > limit else ""
     return ", ".join(f"{s.k} -> {s.k + 1}" for s in steps[:limit]) + more
@@ -213,14 +218,16 @@ class CheckReport:
         failing = [s for s in self.steps if not s.passed]
         head = ""
         if self.short:
-            head = (f"FAIL: the port's output has {n + 1} frames ({n} steps), the scene "
-                    f"asks for {self.expected_steps} steps ({self.expected_steps + 1} frames; "
-                    f"--steps N checks only the first N); of the {n} steps written, ")
+            written = "the 1 step written" if n == 1 else f"the {n} steps written"
+            head = (f"FAIL: the port's output has {n + 1} frames ({_count(n, 'step')}), the "
+                    f"scene asks for {self.expected_steps} steps ({self.expected_steps + 1} "
+                    f"frames; --steps N checks only the first N); of {written}, ")
         if self.start:
             head = f"FAIL: {self.start}; " + (head[len("FAIL: "):] if head else
                                               "of the steps as written, ")
         if not failing:
-            return (f"{head or 'PASS: '}{n} steps agree within {tol:.3e} m ({self.precision}), "
+            agree = "1 step agrees" if n == 1 else f"{n} steps agree"
+            return (f"{head or 'PASS: '}{agree} within {tol:.3e} m ({self.precision}), "
                     f"max error {worst:.3e} m{extra}")
         counts = Counter(s.status for s in failing)
         tally = ", ".join(f"{c} {status}" for status, c in counts.most_common())

@@ -225,3 +225,11 @@ def test_no_step_of_a_doubled_h_printed_with_7_digits_passes_as_non_unique(tmp_p
     for a minimizer too: step 3 -> 4 passed as 'non-unique' (two certified minima)."""
     report, summary = checked(scene(tmp_path), keys("scene.fps=15"), printed("%.6e"))
     assert [s.status for s in report.steps] == ["model differs"] * 4, summary
+
+
+def test_an_output_of_two_frames_fails_in_plain_words(tmp_path):
+    """Was 'has 2 frames (1 steps), the scene asks for 4 (…); of the 1 steps written'."""
+    report, summary = checked(scene(tmp_path), edited(lambda xs, vs, s: (xs[:2], vs[:2])))
+    assert summary.startswith("FAIL: the port's output has 2 frames (1 step), the scene asks "
+                              "for 4 steps (5 frames;"), summary
+    assert "of the 1 step written, 1 step agrees within" in summary, summary
