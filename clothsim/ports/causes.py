@@ -188,11 +188,10 @@ def infer_cause(steps: list[StepData]) -> Cause | None:
 
 def _minimizes(step, r: float) -> bool:
     """A relative gradient ``r`` that counts as a minimizer of the fitted g: within the
-    step's optimality, unless that criterion would take clothsim's own stopped-short answer
-    (a fixed iteration count) for a minimizer too, as a coarse printing's can: it then
-    tells nothing, and the replays decide."""
-    return r <= step.optimality and (not step.settings
-                                     or step.optimality < step.gradient_clothsim)
+    step's optimality, unless that criterion is :attr:`StepData.blind` (it would take
+    clothsim's own stopped-short answer for a minimizer too, as a coarse printing's can): it
+    then tells nothing, and the replays decide."""
+    return r <= step.optimality and not step.blind
 
 
 def _replayable(fitted, hyp, theta) -> bool:

@@ -222,7 +222,8 @@ def check_steps(simulation, positions, velocities=None, *, precision: str = "flo
                     k, model, problem, x_port, g0, opt, step.gradient_clothsim,
                     float(err[worst]), tol, _replayer(sim, state),
                     step.status == "not converged",
-                    fixed_settings(sim), gravity=gravity, derived=velocities is None))
+                    fixed_settings(sim), gravity=gravity, derived=velocities is None,
+                    blind=optimality < step.gradient_clothsim <= opt))
             if precision == "float64" and printed is not None and not step.passed:
                 printed.hint32(step, float(err[worst]), lambda b=bound32, t=tol_k: max(t, b()))
             off = off_plane_note(held, x_port, tol) if held else ""

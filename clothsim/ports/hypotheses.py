@@ -73,6 +73,10 @@ class StepData:
     derived : bool
         The port wrote no velocities: v_k = (x_k − x_{k−1}) / h, so another h leaves the
         inertial target y = 2 x_k − x_{k−1} where it is.
+    blind : bool
+        The optimality (raised to the printing's rounding of ∇g) takes clothsim's own
+        answer for a minimizer although the stated criterion does not (a fixed iteration
+        count stopped short): no answer is then said to minimize a fitted g.
     """
 
     k: int
@@ -90,6 +94,7 @@ class StepData:
     cache: dict = dataclasses.field(default_factory=dict, repr=False)
     gravity: object = None
     derived: bool = False
+    blind: bool = False
 
 
 
