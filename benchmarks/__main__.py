@@ -15,10 +15,11 @@ BENCHMARKS = ("stiffness", "stability_figures", "performance", "factor_modes", "
 #: page's two study reports (minutes)
 LONG = ("memory", "scale_ladder", "accuracy_full", "accuracy_docs", "contact", "held_factor",
         "contact_thickness", "fuzz_scenes", "cpp_side_by_side", "replay_spread",
-        "port_check_matrix", "first_contact_margins")  # fuzz_scenes: the fuzz behind
-# docs/data/fuzz.md (a minute); first_contact_margins: the margins behind held_first;
-# cpp_side_by_side: downloads and compiles a C++ port; replay_spread: docs/data/replay-spread.md;
-# port_check_matrix: docs/data/port-check-matrix.md (minutes)
+        "port_check_matrix", "first_contact_margins", "referee_matrix")  # fuzz_scenes: the
+# fuzz behind docs/data/fuzz.md (a minute); first_contact_margins: the margins behind
+# held_first; cpp_side_by_side: downloads and compiles a C++ port; replay_spread:
+# docs/data/replay-spread.md; port_check_matrix: docs/data/port-check-matrix.md (minutes);
+# referee_matrix: docs/data/referee-matrix.md (a few minutes)
 
 
 def main(argv: list[str]) -> int:

@@ -124,14 +124,33 @@ def listing(items, limit=6) -> str:
     return ", ".join(items[:limit]) + (f", … {len(items)} in all" if len(items) > limit else "")
 
 
-def _vector(v) -> str:
+def _vector(v, digits: int = 3) -> str:
     """(+0.1, -9.8, 0): three digits; a component below 1e-6 of the largest is fit noise."""
     big = max(float(np.abs(v).max()), 1e-300)
-    return "(" + ", ".join("0" if abs(c) < 1e-6 * big else f"{c:+.3g}" for c in v) + ")"
+    return "(" + ", ".join("0" if abs(c) < 1e-6 * big else f"{c:+.{digits}g}" for c in v) + ")"
+
+
+def _vectors(a, b) -> tuple[str, str]:
+    """Two vectors with the fewest digits (at least 3) that tell them apart: a port's
+    gravity of 9.8 beside the scene's 9.81 is not printed as the same (-9.8) twice."""
+    for digits in range(3, 10):
+        ta, tb = _vector(a, digits), _vector(b, digits)
+        if ta != tb:
+            break
+    return ta, tb
 
 
 def _force_text(steps, hyp, theta) -> str:
     """The fitted force (θ replaces the scene's) beside the scene's, in the same form."""
+    text = _force_words(steps, hyp, theta)
+    g = steps[0].gravity
+    if hyp == "force per unit mass" and g is not None and np.any(g) and \
+            np.linalg.norm(np.asarray(theta) - g) <= 1e-3 * np.linalg.norm(g):
+        text += " (gravity alone: the scene's other external forces, e.g. a wind, left out)"
+    return text
+
+
+def _force_words(steps, hyp, theta) -> str:
     s = steps[0]
     f = np.zeros_like(s.x_port) if s.problem.f_ext is None else s.problem.f_ext
     m = s.model.vertex_mass
@@ -139,12 +158,19 @@ def _force_text(steps, hyp, theta) -> str:
     if not np.any(f):
         return f"an external force {_vector(theta)} {unit} the scene does not have"
     if np.allclose(f, f[0]):
-        return f"the external force {_vector(theta)} {unit} instead of {_vector(f[0])} N per vertex"
+        port, scene = _vectors(theta, f[0])
+        text = f"the external force {port} {unit} instead of {scene} N per vertex"
+        if hyp == "force per vertex" and np.all(m > 0) and np.allclose(m, m[0]) \
+                and not np.isclose(m[0], 1.0):   # equal masses: m·g fits as well; say g
+            port, scene = _vectors(np.asarray(theta) / m[0], f[0] / m[0])
+            text += (f" (the vertices' masses are equal, {m[0]:.3g} kg: the acceleration "
+                     f"{port} m/s² instead of {scene} m/s²)")
+        return text
     with np.errstate(divide="ignore", invalid="ignore"):
         g = f / m[:, None]
     if np.all(m > 0) and np.allclose(g, g[0]):
-        return (f"the external force {_vector(theta)} {unit} instead of {_vector(g[0])} "
-                f"m/s² × m")
+        port, scene = _vectors(theta, g[0])
+        return f"the external force {port} {unit} instead of {scene} m/s² × m"
     return f"the external force {_vector(theta)} {unit} instead of the scene's"
 
 
@@ -167,6 +193,21 @@ def _scale_text(what: str, value: float, none: str, springs: str, hint: str = ""
     return f"{what} × {value:.3f} ({springs})"
 
 
+def _mass_scale(s, one: float) -> str:
+    """All stiffnesses × c make the same steps as all masses × 1 / c when the external
+    force is m·g (divide g's gradient by c): the two cannot be told apart, so both are said."""
+    if one < 5e-3 or abs(one - 1) < 5e-3:
+        return ""
+    m = s.model.vertex_mass
+    f = np.zeros_like(s.x_port) if s.problem.f_ext is None else s.problem.f_ext
+    with np.errstate(divide="ignore", invalid="ignore"):
+        g = f / m[:, None]
+    if not (np.all(m > 0) and np.allclose(g, g[0])):
+        return ""
+    return (f", or, the same steps, every vertex mass × {1 / one:.3f} (the external force "
+            f"m·g scaled with it)")
+
+
 def describe(steps, hyp, theta) -> str:
     """The fitted model in words.
 
@@ -187,6 +228,7 @@ def describe(steps, hyp, theta) -> str:
     if hyp == "stiffness":
         what = _scale_text("stiffness", one, "springs that exert no force", "all springs",
                            "; e.g. a local step that does not normalize d to the rest length")
+        what += _mass_scale(s, one)
     elif hyp == "rest lengths":
         what = _scale_text("rest lengths", one, "zero-length springs", "all springs")
         what = what[:-1] + NEGATIVE + ")" if one < 0 else what
@@ -201,6 +243,13 @@ def describe(steps, hyp, theta) -> str:
         family = hyp.split()[1]
         what = _scale_text("stiffness", one, "springs that exert no force",
                            f"the {family} springs only")
+    elif hyp == "gravity":
+        port, scene = _vectors(np.asarray(s.gravity) + theta, s.gravity)
+        what = (f"gravity {port} m/s² instead of {scene} m/s² (the scene's other external "
+                f"forces kept)")
+    elif hyp.startswith("rest lengths "):
+        what = _scale_text("rest lengths", one, "zero-length springs",
+                           f"the {hyp.split()[-1]} springs only")
     elif hyp == "pins":
         w = s.problem.anchor_stiffness
         same = bool(np.allclose(w, w[0]))

@@ -137,7 +137,7 @@ def _explains(step, hyp, theta, gradients, evidence, replays=None, fitted=None) 
     gradients[step.k] = r
     if r > (STRONG if step.approaching else GAIN) * relative(step, [], ()):
         return False                        # a cause must explain most of the gradient
-    if r <= step.optimality:
+    if _minimizes(step, r):
         evidence[step.k] = ("minimizes", r)
         return True
     d = replay(step, hyp, theta)   # one step's solve, as the check itself takes
@@ -186,10 +186,18 @@ def infer_cause(steps: list[StepData]) -> Cause | None:
     return _vertex_force_cause(steps[0]) or _vertex_mass_cause(steps[0])
 
 
+def _minimizes(step, r: float) -> bool:
+    """A relative gradient ``r`` that counts as a minimizer of the fitted g: within the
+    step's optimality, unless that criterion is :attr:`StepData.blind` (it would take
+    clothsim's own stopped-short answer for a minimizer too, as a coarse printing's can): it
+    then tells nothing, and the replays decide."""
+    return r <= step.optimality and not step.blind
+
+
 def _replayable(fitted, hyp, theta) -> bool:
     """True when the fit lowers every step's gradient enough, yet not to a minimizer."""
     r = [relative(s, columns(s, hyp), theta, hyp) for s in fitted]
-    return (any(ri > s.optimality for ri, s in zip(r, fitted))
+    return (any(not _minimizes(s, ri) for ri, s in zip(r, fitted))
             and all(ri <= GAIN * relative(s, [], ()) for ri, s in zip(r, fitted)))
 
 

@@ -24,6 +24,7 @@ from .causes import FITTED, StepData, name_cause
 from .compare import EPS32
 from .contact_planes import PortPlanes
 from .effect_causes import damping_cause, obstacle_cause
+from .frame_order import repeated_frame, start_mismatch, velocity_cause
 from .held_causes import explain
 from .held_margins import adopt, position_rounding
 from .held_steps import HeldSteps
@@ -57,14 +58,6 @@ MAX_SEARCHES = 3
 
 __all__ = ["PASSING", "CheckReport", "StepCheck", "as_simulation", "check_steps",
            "float32_report", "step_tolerance", "system_condition_number"]
-
-
-
-
-
-
-
-
 
 
 def check_steps(simulation, positions, velocities=None, *, precision: str = "float64",
@@ -123,6 +116,10 @@ def check_steps(simulation, positions, velocities=None, *, precision: str = "flo
         vs = post.derived_velocities(xs, vs, max(tol64, float(position_rounding(
             xs[0], printed.digits if printed else 17, bool(printed and printed.float32),
             tol64).max())))
+    tol0 = tol64 if printed is None else float(printed.tolerances[0])
+    start = start_mismatch(sim, xs[0], tol0 if precision == "float64" else
+                           max(tol0, 4 * EPS32 * float(np.abs(xs[0]).max())),
+                           None if sim is simulation else lambda: as_simulation(simulation))
     projected = [e.kind for e in sim.effects if overrides(e, "correct_positions")]
     iterations = sim.solver.iterations
     iterated = sim.solver.name != "newton"   # a converged method: the converged floor only
@@ -141,6 +138,7 @@ def check_steps(simulation, positions, velocities=None, *, precision: str = "flo
     obstacles = [None] if any(e.kind in ("sphere", "plane", "box") for e in sim.effects) \
         else []
     dampings, held_causes = [], []   # failing held steps a contact setting was sought for
+    gravity = next((e.acceleration for e in sim.effects if e.kind == "gravity"), None)
 
     t = sim.state.time  # accumulated as the simulation does (time-dependent effects)
     for k in range(count):
@@ -219,6 +217,12 @@ def check_steps(simulation, positions, velocities=None, *, precision: str = "flo
         elif planes is not None or variant is not None:
             step = planes or variant
             step.note += f"; {why_held}" if why_held else ""
+        elif printed is not None and (coarse := printed.too_coarse(k, float(err[worst]))):
+            step = StepCheck(k, "too coarse", float(err[worst]), worst, tolerance=tol,
+                             note=coarse)
+        elif (again := repeated_frame(xs, vs, k, x_cs, err, tol, h)):
+            step = StepCheck(k, "frame repeated", float(err[worst]), worst, tolerance=tol,
+                             note=again)
         elif err[worst] <= tol:
             step = StepCheck(k, "agrees", float(err[worst]), worst, tolerance=tol)
             if velocities is not None:
@@ -228,8 +232,9 @@ def check_steps(simulation, positions, velocities=None, *, precision: str = "flo
                                      int(np.argmax(verr)), tolerance=tol,
                                      note=f"|v_clothsim - v_port| = {verr.max():.3e} m/s")
                     dampings.append(k)
-                    why = ("" if held or len(dampings) > MAX_EFFECT else
-                           damping_cause(sim, state, vs[k + 1], 10 * tol / h))
+                    why = velocity_cause(xs, vs, k, h, x_cs, v_cs, 10 * tol / h) or (
+                        "" if held or len(dampings) > MAX_EFFECT else
+                        damping_cause(sim, state, vs[k + 1], 10 * tol / h))
                     step.note += f"; {why}" if why else ""
         else:
             step = judge(sim, model, problem, k, x_cs, x_port, err, tol, optimality, precision,
@@ -254,7 +259,8 @@ def check_steps(simulation, positions, velocities=None, *, precision: str = "flo
                     k, model, problem, x_port, g0, opt, step.gradient_clothsim,
                     float(err[worst]), tol, _replayer(sim, state),
                     step.status == "not converged",
-                    fixed_settings(sim)))
+                    fixed_settings(sim), gravity=gravity, derived=velocities is None,
+                    blind=optimality < step.gradient_clothsim <= opt))
             if precision == "float64" and printed is not None and not step.passed:
                 printed.hint32(step, float(err[worst]), lambda b=bound32, t=tol_k: max(t, b()))
             if why_held and change is None:
@@ -276,7 +282,7 @@ def check_steps(simulation, positions, velocities=None, *, precision: str = "flo
     if printed is not None:   # the steps the printed state cannot place say so
         printed.annotate(out)
     return CheckReport(out, float(tol64), precision, notes, expected_steps=expected_steps,
-                       printed=printed.text if printed is not None else "")
+                       printed=printed.text if printed is not None else "", start=start)
 
 
 

@@ -13,7 +13,10 @@ with it, are in :mod:`clothsim.ports.replays`.
 
 The hypotheses (:func:`applicable`): ``stiffness``, ``rest lengths``, ``inertia``, ``pins``
 (one parameter each), ``force per vertex``, ``force per unit mass`` (three),
-``stiffness and rest lengths`` (two), ``family F`` (the stiffness of one spring family),
+``stiffness and rest lengths`` (two), ``gravity`` (three: a change of the scene's gravity,
+its other external forces kept; only beside such forces), ``family F`` (the stiffness of one
+spring family),
+``rest lengths F`` (the rest lengths of one family),
 and the per-vertex scales fitted one vertex at a time by :func:`fit_vertex_scale`:
 ``vertex force`` (a scale of the force per vertex) and ``vertex mass`` (a scale of the
 mass per vertex, in the inertia term and in the force, which gravity makes m g: another
@@ -64,6 +67,16 @@ class StepData:
         The scene's fixed iteration count and start in words ("10 local/global iterations
         from y"), or "" when its steps converge: only then are hypotheses tested by replay
         alone (:mod:`clothsim.ports.replayed`).
+    gravity : ndarray, shape (3,), optional
+        The scene's gravity [m/s²], when it has one: with other external forces beside it
+        (wind), the ``gravity`` hypothesis changes it alone.
+    derived : bool
+        The port wrote no velocities: v_k = (x_k − x_{k−1}) / h, so another h leaves the
+        inertial target y = 2 x_k − x_{k−1} where it is.
+    blind : bool
+        The optimality (raised to the printing's rounding of ∇g) takes clothsim's own
+        answer for a minimizer although the stated criterion does not (a fixed iteration
+        count stopped short): no answer is then said to minimize a fitted g.
     """
 
     k: int
@@ -79,6 +92,9 @@ class StepData:
     approaching: bool = False
     settings: str = ""
     cache: dict = dataclasses.field(default_factory=dict, repr=False)
+    gravity: object = None
+    derived: bool = False
+    blind: bool = False
 
 
 
@@ -125,6 +141,9 @@ def terms(step: StepData, mask=None) -> dict:
 
 #: Hypotheses that replace the scene's external force (their θ is the new force).
 REPLACING = ("force per vertex", "force per unit mass")
+#: Hypotheses whose θ is added to the scene's force (θ: the change of gravity [m/s²]); like
+#: :data:`REPLACING`, θ is no scale.
+ADDING = ("gravity",)
 
 
 def residual(step: StepData, hypothesis: str | None = None) -> np.ndarray:
@@ -162,11 +181,11 @@ def columns(step: StepData, hypothesis: str) -> list[np.ndarray]:
         One per parameter (``vertex force``, ``vertex mass``: one, scaled per vertex by θ_v).
     """
     h2 = step.problem.h ** 2
-    if hypothesis.startswith("family "):
-        family = FAMILIES.index(hypothesis.split()[1])
+    if hypothesis.startswith(("family ", "rest lengths ")):
+        family = FAMILIES.index(hypothesis.split()[-1])
         mask = step.model.springs.spring_family == family
         t = terms(step, mask)
-        return [h2 * (t["kp"] + t["kr"])]
+        return [h2 * (t["kr"] if hypothesis.startswith("rest") else t["kp"] + t["kr"])]
     t = terms(step)
     n = len(step.x_port)
     if hypothesis == "stiffness":
@@ -179,7 +198,7 @@ def columns(step: StepData, hypothesis: str) -> list[np.ndarray]:
         return [h2 * t["pins"]]
     if hypothesis == "inertia":
         return [t["inertia"]]
-    if hypothesis in ("force per vertex", "force per unit mass"):
+    if hypothesis in REPLACING + ADDING:
         weight = np.ones(n) if hypothesis == "force per vertex" else t["mass"]
         out = []
         for c in range(3):
@@ -294,15 +313,22 @@ def applicable(steps) -> list[str]:
     Returns
     -------
     list of str
-        Global ones first; ``pins`` only with penalty pins; ``family F`` per spring family
-        when there are several.
+        Global ones first; ``pins`` only with penalty pins; ``family F`` (stiffness) and
+        ``rest lengths F`` per spring family when there are several.
     """
     s = steps[0]
     out = ["stiffness", "rest lengths", "inertia"]
     if len(s.problem.anchors):
         out.append("pins")
     out += ["force per vertex", "force per unit mass", "stiffness and rest lengths"]
+    if s.gravity is not None and s.problem.f_ext is not None:   # other forces beside it?
+        m = s.model.vertex_mass
+        with np.errstate(divide="ignore", invalid="ignore"):
+            other = s.problem.f_ext / m[:, None] - np.asarray(s.gravity)[None, :]
+        if np.all(m > 0) and np.abs(other).max() > 1e-9 * np.abs(s.gravity).max():
+            out.append("gravity")
     families = np.unique(s.model.springs.spring_family)
     if len(families) > 1:
         out += [f"family {FAMILIES[f]}" for f in families]
+        out += [f"rest lengths {FAMILIES[f]}" for f in families]
     return out

@@ -227,6 +227,10 @@ class Printed:
         size.
     unplaced : dict
         Step k → the note of a replay beyond :attr:`limit` (:meth:`annotate`).
+    coarse : ndarray, shape (frames − 1,), or None
+        When the printing is too coarse to judge a step: per step, the distance by which
+        printing alone moves a correct answer [m]; a step within it is ``too coarse`` to
+        judge (undecided), one beyond it still fails.
     note : str
         Why the tolerance was not widened when the printing is too coarse to judge a step
         (below :data:`COARSEST` digits, or a tolerance above :data:`COARSE` of the cloth's
@@ -242,14 +246,17 @@ class Printed:
         self.text, self.unit, self.note, self.units = "", None, "", None
         self.limit = COARSE * cloth_size(np.asarray(positions)[0])
         self.unplaced: dict[int, str] = {}
+        self.coarse = None
         coarse = (f"the output is {describe(self.digits)}: too coarse to judge a step; "
                   f"print 17 digits (float64) or 9 (float32)")
-        if self.digits < COARSEST:
-            self.note = coarse
-        elif self.digits < FULL:
+        if self.digits < FULL:
             printed = printed_tolerances(positions, velocities, h, xd, vd)
+        if self.digits < COARSEST:
+            self.note, self.coarse = coarse, printed
+        elif self.digits < FULL:
             size = cloth_size(np.asarray(positions)[0])
             if printed.max() > COARSE * size:
+                self.coarse = printed
                 self.note = coarse.replace(": too coarse", f": rounding by up to "
                                            f"{printed.max():.1e} m on a {size:.3g} m cloth, "
                                            f"too coarse")
@@ -351,6 +358,28 @@ class Printed:
                             f"(float32)")
         return tol
 
+    def too_coarse(self, k: int, error: float) -> str:
+        """The note of a step the coarse printing alone could move by ``error``, else "".
+
+        Parameters
+        ----------
+        k : int
+            The step k → k + 1.
+        error : float
+            The step's largest distance from clothsim's answer [m].
+
+        Returns
+        -------
+        str
+            Why the step is ``too coarse`` to judge, or "" (fine printing, or an error
+            beyond the printing's rounding of the step: judged as any other).
+        """
+        if self.coarse is None or error > self.coarse[k]:
+            return ""
+        return (f"the output is {describe(self.digits)}, which rounds this step by up to "
+                f"{self.coarse[k]:.3e} m: the error may be the printing's alone; print 17 "
+                f"digits (float64) or 9 (float32) to judge it")
+
     def annotate(self, steps) -> None:
         """Add to each failing step the printed state cannot place the note saying so.
 
@@ -360,5 +389,9 @@ class Printed:
             The checked steps, changed in place (after their causes are named).
         """
         for step in steps:
+            if self.coarse is not None and not step.passed and step.status != "too coarse":
+                step.note = "; ".join(filter(None, (step.note, (
+                    f"the output is {describe(self.digits)}: beyond what that rounding "
+                    f"explains, but too coarse for a replay to name the cause"))))
             if step.k in self.unplaced and not step.passed:
                 step.note = "; ".join(filter(None, (step.note, self.unplaced[step.k])))

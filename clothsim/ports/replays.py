@@ -15,7 +15,7 @@ import numpy as np
 from ..errors import ClothsimError
 from ..model import Model
 from ..springs import FAMILIES, Springs
-from .hypotheses import REPLACING, StepData
+from .hypotheses import ADDING, REPLACING, StepData
 
 
 def variant(step: StepData, hypothesis: str, theta) -> tuple:
@@ -44,6 +44,9 @@ def variant(step: StepData, hypothesis: str, theta) -> tuple:
     elif hypothesis.startswith("family "):
         mask = sp.spring_family == FAMILIES.index(hypothesis.split()[1])
         k = np.where(mask, max(one, 0.0) * k, k)
+    elif hypothesis.startswith("rest lengths "):
+        mask = sp.spring_family == FAMILIES.index(hypothesis.split()[-1])
+        r = np.where(mask, max(one, 0.0) * r, r)
     elif hypothesis == "inertia":
         mass = max(one, 0.0) * mass
     elif hypothesis == "vertex mass":   # θ per vertex: its mass and its (gravity) force
@@ -52,14 +55,16 @@ def variant(step: StepData, hypothesis: str, theta) -> tuple:
         f = np.zeros_like(step.x_port) if p.f_ext is None else p.f_ext
         p = dataclasses.replace(p, f_ext=f * scale[:, None])
     elif hypothesis == "time step":   # θ: h' / h − 1; the inertial target y moves with h
-        h = max(one, 1e-6) * p.h
-        p = dataclasses.replace(p, h=h, y=p.x + (h / p.h) * (p.y - p.x))
+        h = max(one, 1e-6) * p.h       # (not with velocities derived as Δx / h: y = 2 x_k − x_k−1)
+        p = dataclasses.replace(p, h=h, y=p.y if step.derived else p.x + (h / p.h) * (p.y - p.x))
     elif hypothesis == "pins":
         p = dataclasses.replace(p, anchor_stiffness=max(one, 0.0) * p.anchor_stiffness)
     else:
         f = np.zeros_like(step.x_port) if p.f_ext is None else p.f_ext
         if hypothesis == "vertex force":
             f = f * (1.0 + np.asarray(theta))[:, None]
+        elif hypothesis in ADDING:   # θ: the change of gravity [m/s²]
+            f = f + mass[:, None] * np.asarray(theta)[None, :]
         else:   # REPLACING: θ is the force per vertex or per unit mass
             weight = np.ones(len(f)) if hypothesis == "force per vertex" else mass
             f = weight[:, None] * np.asarray(theta)[None, :]
@@ -177,7 +182,7 @@ def refine(fitted, hyp, theta, iterations: int):
                 return theta
             columns_.append((rj - r) / delta[j])
         change, *_ = np.linalg.lstsq(np.stack(columns_, 1), -r, rcond=None)
-        if hyp not in REPLACING:          # a scale stays >= 0 (the replay clamps it there)
+        if hyp not in REPLACING + ADDING:   # a scale stays >= 0 (the replay clamps it)
             change = np.maximum(theta + change, -1.0) - theta
         trial = misfit(theta + change)
         if trial is None or np.linalg.norm(trial) >= np.linalg.norm(r):

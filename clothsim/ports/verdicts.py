@@ -23,6 +23,11 @@ Verdicts that fail:
     from the minimizer: g is too flat there for the criterion to place it
     (:mod:`clothsim.ports.flat` gives the evidence and what would decide).
     Undecided, like ``start-dependent``.
+``too coarse``
+    The output is printed with too few digits to judge the step (fewer than 5, or a
+    rounding above 1e-3 of the cloth's size), and the error is within what that printing
+    alone moves a right answer by: undecided, like ``start-dependent``
+    (:mod:`clothsim.ports.precision`). An error beyond it is judged as any other.
 ``not converged``
     The port's answer is heading for clothsim's minimizer but is not there yet.
 ``not a minimizer``
@@ -33,6 +38,9 @@ Verdicts that fail:
     answer is far from it nearly everywhere (``clothsim diff-model``).
 ``float32 rounding``
     Checked as float64, but the difference is within what float32 arithmetic gives.
+``frame repeated``
+    The port's x_{k+1} is its x_k where clothsim's step moves the cloth: a frame written
+    twice (frame k printed as k + 1; :mod:`clothsim.ports.frame_order`).
 ``velocities differ``
     Positions agree but v_{k+1} does not (a damping or velocity update that differs; a
     damping left out or of another coefficient is named, :mod:`clothsim.ports.effect_causes`).
@@ -55,7 +63,7 @@ import numpy as np
 PASSING = ("agrees", "non-unique")
 #: Failing verdicts that are not the port's error: a check whose failing steps all have one
 #: of these is UNDECIDED, not FAIL.
-UNDECIDED = ("start-dependent", "ill-conditioned")
+UNDECIDED = ("start-dependent", "ill-conditioned", "too coarse")
 
 
 @dataclass
@@ -116,6 +124,11 @@ class StepCheck:
         return text + (f" ({self.note})" if self.note else "")
 
 
+def _count(n: int, noun: str) -> str:
+    """"1 step", "2 steps"."""
+    return f"{n} {noun}" if n == 1 else f"{n} {noun}s"
+
+
 def _steps_text(steps, limit=5) -> str:
     more = f" and {len(steps) - limit} more" if len(steps) > limit else ""
     return ", ".join(f"{s.k} -> {s.k + 1}" for s in steps[:limit]) + more
@@ -141,6 +154,10 @@ class CheckReport:
     printed : str
         How the port's numbers are printed, when that widened the tolerance (e.g. "printed
         with 6 significant digits"), else "".
+    start : str
+        Why the port's frame 0 is not the scene's start (its vertices in another order,
+        the output starting at a later frame; :mod:`clothsim.ports.frame_order`), else "".
+        The check then fails, naming it first.
     """
 
     steps: list[StepCheck]
@@ -149,6 +166,7 @@ class CheckReport:
     notes: list[str] = field(default_factory=list)
     expected_steps: int | None = None
     printed: str = ""
+    start: str = ""
 
     @property
     def short(self) -> bool:
@@ -157,7 +175,7 @@ class CheckReport:
 
     @property
     def passed(self) -> bool:
-        return all(s.passed for s in self.steps) and not self.short
+        return all(s.passed for s in self.steps) and not self.short and not self.start
 
     @property
     def first_failure(self) -> StepCheck | None:
@@ -172,7 +190,8 @@ class CheckReport:
 
         A PASS whose largest error is above the tolerance says which steps passed by
         optimality and why. UNDECIDED: every failing step is start-dependent (the settings
-        differ) or ill-conditioned (g too flat for the criterion): not the port's error.
+        differ), ill-conditioned (g too flat for the criterion) or too coarsely printed to
+        judge: not the port's error.
 
         Returns
         -------
@@ -199,11 +218,16 @@ class CheckReport:
         failing = [s for s in self.steps if not s.passed]
         head = ""
         if self.short:
-            head = (f"FAIL: the port's output has {n + 1} frames ({n} steps), the scene "
-                    f"asks for {self.expected_steps} (--steps N checks only the first N); "
-                    f"of the {n} steps written, ")
+            written = "the 1 step written" if n == 1 else f"the {n} steps written"
+            head = (f"FAIL: the port's output has {n + 1} frames ({_count(n, 'step')}), the "
+                    f"scene asks for {self.expected_steps} steps ({self.expected_steps + 1} "
+                    f"frames; --steps N checks only the first N); of {written}, ")
+        if self.start:
+            head = f"FAIL: {self.start}; " + (head[len("FAIL: "):] if head else
+                                              "of the steps as written, ")
         if not failing:
-            return (f"{head or 'PASS: '}{n} steps agree within {tol:.3e} m ({self.precision}), "
+            agree = "1 step agrees" if n == 1 else f"{n} steps agree"
+            return (f"{head or 'PASS: '}{agree} within {tol:.3e} m ({self.precision}), "
                     f"max error {worst:.3e} m{extra}")
         counts = Counter(s.status for s in failing)
         tally = ", ".join(f"{c} {status}" for status, c in counts.most_common())

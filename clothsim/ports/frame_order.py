@@ -1,0 +1,193 @@
+"""Is the port's output laid out as the scene's frames? Vertex order, first frame, repeats.
+
+``check`` restarts clothsim from each of the port's states, so a port that writes its
+vertices in another order, or starts its output at another frame, still has each step
+judged, and the verdicts then name a symptom (a pinned vertex "moved" by a metre, every
+step agreeing from a start that is not the scene's). These tests name the layout instead:
+
+- :func:`start_mismatch`: the port's frame 0 against the scene's initial positions: the
+  same positions in another vertex order (a transposed or mirrored grid is named), or
+  clothsim's frame j of the scene (the output starts at frame j);
+- :func:`repeated_frame`: a step whose answer is its start, x_{k+1} = x_k, where clothsim's
+  step moves the cloth, and whose next frame is clothsim's step (a frame written twice:
+  frame k printed as k + 1);
+- :func:`velocity_cause`: velocities of the frame before, or of another h.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+from scipy.spatial import cKDTree
+
+#: Frames of the scene's own run a port's first frame is compared with.
+MAX_START_FRAMES = 3
+
+
+def _grid_orders(sim):
+    """Named vertex orders of a grid scene: {description: order (port i = scene order[i])}."""
+    shape = _grid_shape(sim)
+    if shape is None:
+        return {}
+    nx, ny = shape
+    grid = np.arange(nx * ny).reshape(ny, nx)
+    orders = {"rows in reverse order": grid[::-1].ravel(),
+              "columns in reverse order": grid[:, ::-1].ravel(),
+              "both reversed (the grid turned by 180°)": grid[::-1, ::-1].ravel()}
+    if nx == ny:
+        orders["the grid transposed: vertex (row i, column j) written at (j, i)"] = \
+            grid.T.ravel()
+    else:
+        orders["column by column instead of row by row"] = grid.T.ravel()
+    return orders
+
+
+def _grid_shape(sim):
+    """(nx, ny) of a grid cloth, from the vertices' positions (a regular lattice whose
+    first row is nx vertices along one axis), or None."""
+    x = sim.model.mesh.vertices
+    n = len(x)
+    if n < 4:
+        return None
+    step = x[1] - x[0]
+    nx = 1
+    while nx < n and np.allclose(x[nx] - x[nx - 1], step, atol=1e-9 * (1 + np.abs(x).max())):
+        nx += 1
+    return (nx, n // nx) if nx > 1 and n % nx == 0 and n // nx > 1 else None
+
+
+def _scene_frames(sim, count):
+    """Positions of clothsim's own run of the scene, frames 1 .. count."""
+    frames = []
+    for _ in range(count):
+        sim.step()
+        frames.append(sim.state.positions.copy())
+    return frames
+
+
+def start_mismatch(sim, x0, tol: float, fresh=None) -> str:
+    """Why the port's first frame is not the scene's start, or "" when it is.
+
+    Parameters
+    ----------
+    sim : Simulation
+        The scene's simulation at its initial state (not stepped).
+    x0 : ndarray, shape (n, 3)
+        The port's frame 0 [m].
+    tol : float
+        Per-vertex distance within which two positions are the same [m] (the printed
+        rounding included).
+    fresh : callable, optional
+        Returns a new simulation of the scene, run to compare the later frames with (a
+        Simulation handed to ``check`` cannot be copied: without it, only the vertex order
+        is tested).
+
+    Returns
+    -------
+    str
+        "" when frame 0 is the scene's start within ``tol``, or when it matches neither
+        another vertex order nor a later frame (a port may start from its own state:
+        the steps are judged from it); else the cause, one clause.
+    """
+    start = sim.state.positions
+    err = np.linalg.norm(x0 - start, axis=1)
+    if not np.isfinite(err).all() or err.max() <= tol:
+        return ""
+    dist, order = cKDTree(start).query(x0)
+    if dist.max() <= tol and len(np.unique(order)) == len(order):
+        named = next((what for what, o in _grid_orders(sim).items()
+                      if np.array_equal(o, order)), "")
+        moved = np.flatnonzero(order != np.arange(len(order)))
+        i = int(moved[0])
+        return (f"the port's frame 0 holds the scene's initial positions in another vertex "
+                f"order{f' ({named})' if named else ''}: port vertex {i} is the scene's "
+                f"vertex {int(order[i])}, {len(moved)} of {len(order)} vertices are "
+                f"elsewhere; write the vertices in the scene's order (its steps are "
+                f"judged as written, so its pins appear to move)")
+    later = _scene_frames(fresh(), MAX_START_FRAMES) if fresh is not None else []
+    for j, xj in enumerate(later, start=1):
+        if np.linalg.norm(x0 - xj, axis=1).max() <= tol:
+            return (f"the port's frame 0 is clothsim's frame {j} of the scene, not its "
+                    f"initial state: the output starts at frame {j}; write the initial "
+                    f"state (frame 0) first")
+    return ""
+
+
+def repeated_frame(xs, vs, k: int, x_cs, err, tol: float, h: float) -> str:
+    """The note of a step whose answer is its start while clothsim's step moves the cloth,
+    and whose next frame is clothsim's step: a frame written twice, else "".
+
+    A cloth at rest on the port's own floor also stays where it is (x_{k+1} = x_k); what
+    tells a repeated frame is the frame after it: from the same state (x_{k+1}, v_{k+1}) =
+    (x_k, v_k) the port then takes clothsim's step, x_{k+2} = clothsim's x_{k+1}.
+
+    Parameters
+    ----------
+    xs, vs : ndarray, shape (frames, n, 3)
+        The port's positions [m] and velocities [m/s].
+    k : int
+        The step k → k + 1.
+    x_cs : ndarray, shape (n, 3)
+        clothsim's x_{k+1} from the port's state k.
+    err : ndarray, shape (n,)
+        Per-vertex distance of clothsim's x_{k+1} from the port's [m].
+    tol : float
+        The step's tolerance [m] (velocities: 10 tol / h, as ``check`` compares them).
+    h : float
+        The scene's time step [s].
+
+    Returns
+    -------
+    str
+    """
+    def apart(a, b):
+        return float(np.linalg.norm(a - b, axis=1).max())
+
+    if err.max() <= tol or k + 2 >= len(xs) or apart(xs[k + 1], xs[k]) > tol \
+            or apart(vs[k + 1], vs[k]) > 10 * tol / h or apart(xs[k + 2], x_cs) > tol:
+        return ""
+    return (f"the port's frame {k + 1} is its frame {k} again, and its frame {k + 2} is "
+            f"clothsim's step from that state ({apart(xs[k + 2], x_cs):.1e} m off): a frame "
+            f"written twice (frame {k} printed as {k + 1}, the frames after it shifted by "
+            f"one)")
+
+
+def velocity_cause(xs, vs, k: int, h: float, x_cs, v_cs, tol_v: float) -> str:
+    """Why the port's v_{k+1} differs from clothsim's where the positions agree, when the
+    layout or the velocity update explains it, else "".
+
+    Parameters
+    ----------
+    xs, vs : ndarray, shape (frames, n, 3)
+        The port's positions [m] and velocities [m/s].
+    k : int
+        The step k → k + 1.
+    h : float
+        The scene's time step [s].
+    x_cs, v_cs : ndarray, shape (n, 3)
+        clothsim's x_{k+1} and v_{k+1} from the port's state k.
+    tol_v : float
+        Per-vertex velocity tolerance [m/s].
+
+    Returns
+    -------
+    str
+        The port's v_{k+1} is its v_k (written a frame late, or not updated), or it is
+        (x_{k+1} − x_k) / h' with another h' (clothsim's own v is (x_{k+1} − x_k) / h:
+        no effect changes velocities in this step); else "".
+    """
+    v = vs[k + 1]
+    off = float(np.linalg.norm(v_cs - v, axis=1).max())
+    if off <= tol_v:
+        return ""
+    if float(np.linalg.norm(v - vs[k], axis=1).max()) <= tol_v:
+        return (f"the port's v_{k + 1} is its v_{k}: its velocities are those of the frame "
+                f"before (written a frame late, or not updated in the step)")
+    dx = xs[k + 1] - xs[k]
+    if float(np.linalg.norm(v_cs - (x_cs - xs[k]) / h, axis=1).max()) > tol_v \
+            or not np.any(dx):
+        return ""
+    c = float(np.vdot(v, dx) / np.vdot(dx, dx))   # v = c dx: dx / h' with h' = 1 / c
+    if c <= 0 or float(np.linalg.norm(v - c * dx, axis=1).max()) > tol_v:
+        return ""
+    return (f"the port's v_{k + 1} is (x_{k + 1} - x_{k}) / {1 / c:.4g} s, not / h = "
+            f"{h:.4g} s: another time step in its velocity update")
