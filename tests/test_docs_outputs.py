@@ -104,9 +104,27 @@ def _workspace(tmp_path: Path) -> Path:
 
 
 OUTPUT_BLOCKS = [b for b in ALL if with_output(b)]
+# Pages a benchmark prints whose commands are a whole study (about 40 and 16 s of CPU, over
+# a tenth of make test): CI checks them with -m slow. What their commands show stays in the
+# fast run: the hold-mode check of each planted fault, with and without the port's planes
+# (tests/ports/test_check_held.py::test_planted_contact_faults_are_named), the causes named
+# for each fault of mass_springs.py (tests/ports/test_causes.py), and every other page's
+# output here.
+SLOW_PAGES = ("docs/data/held-port-check.md", "docs/data/port-causes.md")
 
 
-@pytest.mark.parametrize("block", [pytest.param(b, id=b.name) for b in OUTPUT_BLOCKS])
+def _param(block: Block):
+    slow = block.name.startswith(SLOW_PAGES)
+    return pytest.param(block, id=block.name, marks=[pytest.mark.slow] if slow else [])
+
+
+def test_the_slow_pages_are_pages_with_output():
+    """A renamed or emptied page cannot leave SLOW_PAGES naming nothing."""
+    for page in SLOW_PAGES:
+        assert any(b.name.startswith(page + ":") for b in OUTPUT_BLOCKS), page
+
+
+@pytest.mark.parametrize("block", [_param(b) for b in OUTPUT_BLOCKS])
 def test_shown_output_is_printed(block, tmp_path):
     if block.not_run:
         pytest.skip(block.not_run)

@@ -29,6 +29,15 @@ def study(tmp_path, **kw):
         return run_accuracy(Scene.from_dict(TINY), tmp_path, **args)
 
 
+@pytest.fixture(scope="module")
+def saved(tmp_path_factory):
+    """One study of TINY with the default arguments, for the tests that only read its folder
+    (its problems.npz and accuracy.csv)."""
+    folder = tmp_path_factory.mktemp("study")
+    study(folder)
+    return folder
+
+
 def read(path):
     with open(path, newline="") as fh:
         return list(csv.DictReader(fh))
@@ -125,17 +134,16 @@ def test_no_solver_or_no_frame_is_refused_by_name(tmp_path):
     assert not (tmp_path / "a").exists() and not (tmp_path / "b").exists()
 
 
-def test_saved_steps_are_re_measured_exactly(tmp_path):
-    study(tmp_path / "a")
-    study(tmp_path / "b", steps_file=tmp_path / "a" / "problems.npz", problems=1)
-    a, b = load_problems(tmp_path / "a" / "problems.npz"), load_problems(
+def test_saved_steps_are_re_measured_exactly(saved, tmp_path):
+    study(tmp_path / "b", steps_file=saved / "problems.npz", problems=1)
+    a, b = load_problems(saved / "problems.npz"), load_problems(
         tmp_path / "b" / "problems.npz")
     assert [s.index for s in a] == [s.index for s in b] and len(a) == 3
     for s, t in zip(a, b):
         for name in ("x", "v", "y", "f_ext", "fixed_vertices", "anchor_stiffness"):
             u, w = getattr(s.problem, name), getattr(t.problem, name)
             assert (u is None and w is None) or np.array_equal(u, w), name
-    ra, rb = read(tmp_path / "a" / "accuracy.csv"), read(tmp_path / "b" / "accuracy.csv")
+    ra, rb = read(saved / "accuracy.csv"), read(tmp_path / "b" / "accuracy.csv")
     cols = ("solver_error_median", "solver_error_max", "iterations_max", "steps_measured")
     assert [[r[c] for c in cols] for r in ra] == [[r[c] for c in cols] for r in rb]
     with pytest.raises(InputError, match="accuracy.steps"):
@@ -152,9 +160,8 @@ def with_changes(**changes):
     return data
 
 
-def test_saved_steps_of_another_cloth_or_h_are_refused_by_name(tmp_path):
-    study(tmp_path / "a")
-    saved = tmp_path / "a" / "problems.npz"
+def test_saved_steps_of_another_cloth_or_h_are_refused_by_name(saved, tmp_path):
+    saved = saved / "problems.npz"
 
     def again(data, name):
         with warnings.catch_warnings():
@@ -176,12 +183,11 @@ def test_saved_steps_of_another_cloth_or_h_are_refused_by_name(tmp_path):
     assert (tmp_path / "same" / "accuracy.csv").exists()
 
 
-def test_saved_steps_without_a_model_digest_still_load(tmp_path):
+def test_saved_steps_without_a_model_digest_still_load(saved, tmp_path):
     from clothsim.accuracy.command import scene_factory
 
-    study(tmp_path / "a")
     _, model, _ = scene_factory(Scene.from_dict(TINY))
-    recorded = load_problems(tmp_path / "a" / "problems.npz", model, 1 / 30)
+    recorded = load_problems(saved / "problems.npz", model, 1 / 30)
     old = save_problems(recorded, tmp_path / "old.npz")   # as earlier versions wrote it
     with np.load(old) as z:
         assert "model_digest" not in z.files
