@@ -128,6 +128,18 @@ def test_a_float32_frictionless_port_still_fails_at_float32(ports, box):
     assert report.first_failure.status == "contacts differ", report.summary()
 
 
+def _printed_sphere_check(folder, solver: dict, rigid: float, frames: int):
+    """drape-sphere with this [solver] and rigid damping: its right port printed with %g
+    into ``folder``, checked without its planes."""
+    doc = tomllib.loads(builtin_scene_text("drape-sphere"))
+    doc["solver"] = solver
+    doc["effects"][3]["coefficient"] = rigid
+    sphere = Scene.from_dict(doc, source="drape-sphere.toml")
+    X, V, rows = run_port(sphere, "none", frames)
+    write_port(folder, X, V, rows, fmt="%g")
+    return check_steps(sphere, read_trajectory(folder), read_velocities(folder))
+
+
 def test_on_the_sphere_a_printed_port_passes_and_faults_are_named(tmp_path):
     # the scene's declared Anderson 50 and rigid damping 0.2: step 12 -> 13 of the 6-digit
     # port errs by 6.8e-4 m, over the cheap printed-precision bound, and passes on its
@@ -144,13 +156,8 @@ def test_on_the_sphere_a_printed_port_passes_and_faults_are_named(tmp_path):
     # a decision too close to call at 6 digits (a vertex touching the sphere) is the port's:
     # it arises on the paper's 10 local/global iterations' trajectory with rigid damping 0.1
     # (the scene's before 0.2; with 0.2 no vertex comes within 6 digits in 14 steps)
-    doc = tomllib.loads(builtin_scene_text("drape-sphere"))
-    doc["solver"] = {"method": "local-global", "iterations": 10}
-    doc["effects"][3]["coefficient"] = 0.1
-    paper = Scene.from_dict(doc, source="drape-sphere.toml")
-    X, V, rows = run_port(paper, "none", 14)
-    write_port(tmp_path, X, V, rows, fmt="%g")
-    report = check_steps(paper, read_trajectory(tmp_path), read_velocities(tmp_path))
+    report = _printed_sphere_check(tmp_path, {"method": "local-global", "iterations": 10},
+                                   0.1, 14)
     assert report.passed, report.summary()
     assert any("too close to call" in s.note for s in report.steps)
     X, V, rows = run_port(sphere, "flipped", 8)
@@ -170,13 +177,7 @@ def test_a_contact_entry_within_printed_precision_is_too_close_to_call(tmp_path)
     # outside the contact sphere (R + thickness) at -0.24 m/s along its normal, not in
     # contact; replayed from the port's 6-digit state it enters, so its inward velocity is
     # removed and the velocities differ by 0.134 m/s while its position agrees (9.8e-6 m)
-    doc = tomllib.loads(builtin_scene_text("drape-sphere"))
-    doc["solver"] = {"method": "anderson", "iterations": 40}
-    doc["effects"][3]["coefficient"] = 0.2
-    sphere = Scene.from_dict(doc, source="drape-sphere.toml")
-    X, V, rows = run_port(sphere, "none", 12)
-    write_port(tmp_path, X, V, rows, fmt="%g")
-    report = check_steps(sphere, read_trajectory(tmp_path), read_velocities(tmp_path))
+    report = _printed_sphere_check(tmp_path, {"method": "anderson", "iterations": 40}, 0.2, 12)
     assert report.passed, report.summary()
 
 
