@@ -35,6 +35,7 @@ PAGE = ROOT / "docs" / "data" / "contact-rest.md"
 SECONDS = 4
 SIZES = (25, 49)
 RIGID = {0.1: {"model": "rigid", "coefficient": 0.1},
+         0.2: {"model": "rigid", "coefficient": 0.2},
          0.3: {"model": "rigid", "coefficient": 0.3}}
 NEWTON = {"method": "newton", "iterations": 50, "tolerance": 1e-6}
 #: The settings table's rows: (label, ``[solver]``, damping ``[[effects]]`` table, sizes
@@ -53,6 +54,7 @@ SETTINGS = (
     ("anderson 20, rigid 0.1", {"method": "anderson", "iterations": 20}, RIGID[0.1], None),
     ("anderson 30, rigid 0.1", {"method": "anderson", "iterations": 30}, RIGID[0.1], None),
     ("anderson 30, rigid 0.3", {"method": "anderson", "iterations": 30}, RIGID[0.3], None),
+    ("anderson 50, rigid 0.2", {"method": "anderson", "iterations": 50}, RIGID[0.2], None),
     ("newton to 1e-6, rigid 0.1", NEWTON, RIGID[0.1], (25,)),
     ("newton to 1e-6, rigid 0.3", NEWTON, RIGID[0.3], (25,)),
 )
@@ -89,10 +91,12 @@ def by_second(scene: str, resolution: int, seconds: int, damping=None,
 
 
 def _mark(label: str, solver: dict, damping: dict) -> str:
-    same = all(declared(s) == ({"method": "local-global", **solver}
-                               if "method" not in solver else solver, damping)
-               for s in SCENES)
-    return f"**{label} (declared)**" if same else label
+    """The row's label, bold and naming the scenes that declare its settings, if any."""
+    row = ({"method": "local-global", **solver} if "method" not in solver else solver, damping)
+    scenes = [s for s in SCENES if declared(s) == row]
+    if len(scenes) == len(SCENES):
+        return f"**{label} (declared)**"
+    return f"**{label} (declared by {', '.join(scenes)})**" if scenes else label
 
 
 def settings_table(resolution: int) -> list[str]:
@@ -136,25 +140,28 @@ def _speed(v: float) -> str:
 
 def rest_page(sizes=SIZES) -> str:
     """The page: the settings tables at ``sizes``, then the damping table at 25²."""
-    solver, _ = declared(SCENES[0])
+    solvers = ", ".join(f"{s} {declared(s)[0]['method']} {declared(s)[0]['iterations']}"
+                        for s in SCENES)
     out = [f"Printed by `.venv/bin/python -m benchmarks.contact --rest`, commit {commit()}.",
            "",
            f"The largest speed of any vertex [m/s] in the third and the fourth second of a "
            f"{SECONDS} s run of each scene in \"hold\" mode with the row's solver and damping "
            f"(in italics: not at rest, {REST_SPEED} m/s or faster), and the CPU seconds per "
-           f"frame (drop-on-square, drape-sphere). The scenes declare the bold row and end "
+           f"frame (drop-on-square, drape-sphere). The scenes declare the bold rows and end "
            f"after {_frames()} frames.", ""]
     for n in sizes:
         out += settings_table(n) + [""]
-    out += [f"The damping models at 25² with the scenes' declared solver ({solver['method']}, "
-            f"{solver['iterations']} iterations): the largest speed in each second of a 5 s "
-            f"run, and in brackets the frames of that second whose contact set changed.", ""]
+    out += [f"The damping models at 25² with each scene's declared solver ({solvers} "
+            f"iterations): the largest speed in each second of a 5 s run, and in brackets the "
+            f"frames of that second whose contact set changed.", ""]
     out += damping_table()
     return "\n".join(out)
 
 
-def _frames() -> int:
-    return int(tomllib.loads(builtin_scene_text(SCENES[0]))["scene"]["frames"])
+def _frames() -> str:
+    """Each scene's declared number of frames ("120 and 150")."""
+    return " and ".join(str(tomllib.loads(builtin_scene_text(s))["scene"]["frames"])
+                        for s in SCENES)
 
 
 def write_rest_page(sizes=None) -> None:

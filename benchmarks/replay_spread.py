@@ -1,8 +1,9 @@
 """How far a printed start moves an accelerated step: the replayed printed-precision bound.
 
 Runs the right port of examples/ports/held_port.py (clothsim's own step, printed with
-``%g``) on the contact scenes with their declared solver (Anderson, 30 iterations) and on
-``hanging`` with Anderson, L-BFGS and Chebyshev at 30 iterations, 20 steps each, and checks
+``%g``) on the contact scenes with their declared solver (Anderson: 30 iterations on the
+box, 50 on the sphere) and on ``hanging`` with Anderson, L-BFGS and Chebyshev at 30
+iterations, 20 steps each, and checks
 it. For every step that fails the contraction bound and is replayed
 (:func:`clothsim.ports.printed_replay.replayed_tolerance`, along the port's branch of the
 solver's discrete choices, :mod:`clothsim.ports.solver_branches`), it prints the port's

@@ -4,6 +4,7 @@ and the faults of a port's contact handling named (step k, vertex v, because X).
 from __future__ import annotations
 
 import importlib.util
+import tomllib
 
 import numpy as np
 import pytest
@@ -14,6 +15,7 @@ from clothsim.ports.check import check_steps
 from clothsim.ports.contact_planes import PortPlanes
 from clothsim.ports.export import export_port
 from clothsim.ports.formats import read_trajectory, read_velocities
+from clothsim.scene import Scene, builtin_scene_text
 
 from .conftest import REPO
 
@@ -128,9 +130,22 @@ def test_a_float32_frictionless_port_still_fails_at_float32(ports, box):
     assert report.first_failure.status == "contacts differ", report.summary()
 
 
+def _printed_sphere_check(folder, solver: dict, rigid: float, frames: int):
+    """drape-sphere with this [solver] and rigid damping: its right port printed with %g
+    into ``folder``, checked without its planes."""
+    doc = tomllib.loads(builtin_scene_text("drape-sphere"))
+    doc["solver"] = solver
+    doc["effects"][3]["coefficient"] = rigid
+    sphere = Scene.from_dict(doc, source="drape-sphere.toml")
+    X, V, rows = run_port(sphere, "none", frames)
+    write_port(folder, X, V, rows, fmt="%g")
+    return check_steps(sphere, read_trajectory(folder), read_velocities(folder))
+
+
 def test_on_the_sphere_a_printed_port_passes_and_faults_are_named(tmp_path):
-    # the scene's declared Anderson 30: step 13 -> 14 of the 6-digit port errs by 2.9e-5 m,
-    # over the cheap printed-precision bound, and passes on its replayed bound
+    # the scene's declared Anderson 50 and rigid damping 0.2: step 12 -> 13 of the 6-digit
+    # port errs by 6.8e-4 m, over the cheap printed-precision bound, and passes on its
+    # replayed bound
     sphere = builtin("drape-sphere")
     assert sphere.build_simulation().solver.name == "anderson"
     X, V, rows = run_port(sphere, "none", 14)
@@ -139,13 +154,12 @@ def test_on_the_sphere_a_printed_port_passes_and_faults_are_named(tmp_path):
         report = check_steps(sphere, read_trajectory(tmp_path), read_velocities(tmp_path),
                              contacts=planes)
         assert report.passed, report.summary()
-    assert report.steps[13].error > 2e-5    # beyond the cheap bound (2.9e-5 m), replayed
+    assert max(s.error for s in report.steps) > 1e-4    # beyond the cheap bound, replayed
     # a decision too close to call at 6 digits (a vertex touching the sphere) is the port's:
-    # it arises on the paper's 10 local/global iterations' trajectory
-    paper = builtin("drape-sphere", solver={"method": "local-global", "iterations": 10})
-    X, V, rows = run_port(paper, "none", 14)
-    write_port(tmp_path, X, V, rows, fmt="%g")
-    report = check_steps(paper, read_trajectory(tmp_path), read_velocities(tmp_path))
+    # it arises on the paper's 10 local/global iterations' trajectory with rigid damping 0.1
+    # (the scene's before 0.2; with 0.2 no vertex comes within 6 digits in 14 steps)
+    report = _printed_sphere_check(tmp_path, {"method": "local-global", "iterations": 10},
+                                   0.1, 14)
     assert report.passed, report.summary()
     assert any("too close to call" in s.note for s in report.steps)
     X, V, rows = run_port(sphere, "flipped", 8)
@@ -154,6 +168,19 @@ def test_on_the_sphere_a_printed_port_passes_and_faults_are_named(tmp_path):
     write_port(tmp_path, X, V, rows)
     first = check_steps(sphere, X, V, contacts=tmp_path / "contacts.txt").first_failure
     assert "the port's contact normal on the sphere is" in first.note, first.line()
+
+
+@pytest.mark.slow
+@pytest.mark.xfail(strict=True, raises=AssertionError,
+                   reason="a contact entry within the printed precision is judged "
+                          "'velocities differ', not too close to call (clothsim/ports/held_*)")
+def test_a_contact_entry_within_printed_precision_is_too_close_to_call(tmp_path):
+    # drape-sphere with Anderson 40 (rigid 0.2): in step 10 -> 11 vertex 385 ends 7.9e-7 m
+    # outside the contact sphere (R + thickness) at -0.24 m/s along its normal, not in
+    # contact; replayed from the port's 6-digit state it enters, so its inward velocity is
+    # removed and the velocities differ by 0.134 m/s while its position agrees (9.8e-6 m)
+    report = _printed_sphere_check(tmp_path, {"method": "anderson", "iterations": 40}, 0.2, 12)
+    assert report.passed, report.summary()
 
 
 def test_a_post_solve_scene_checks_as_before_and_ignores_planes(tmp_path, capsys):
