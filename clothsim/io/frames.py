@@ -153,6 +153,7 @@ class FrameWriter:
         self._static: list[str] = []
         self._cells = cell_blocks(mesh, None if springs is None else springs.spring_vertices)
         self._fields_of = None   # FrameFields, prepared by the first write (its thread)
+        self.process = None      # a FrameProcess writing the files (io.frameproc), if any
 
     def filename(self, index: int) -> str:
         """File name of frame ``index``, e.g. ``frame_000012.vtu``.
@@ -224,25 +225,32 @@ class FrameWriter:
             self._started = True
             if index > 0:
                 self._entries = {i: t for i, t in self._read_pvd().items() if i < index}
-        meshio = load_meshio()
         path = self.out_dir / self.filename(index)
-        point_data, cell_data = self._fields(x, v, float(time))
-        with atomic_path(path) as tmp:
-            meshio.write(tmp, meshio.Mesh(x, self._cells, point_data=point_data,
-                                          cell_data=cell_data), file_format="vtu",
-                         compression=None if self.compression == "none" else "zlib")
+        mask = None if self.pinned is None else np.asarray(
+            self.pinned(time) if callable(self.pinned) else self.pinned, dtype=bool)
+        with atomic_path(path) as tmp:   # by the frame process when there is one
+            if self.process is None or not self.process.write(tmp, x, v, mask):
+                self.write_file(tmp, x, v, mask)
         self._entries[index] = float(time)
         self._write_pvd()
         logger.debug("wrote %s (t = %g s)", path, time)
         return path
 
-    def _fields(self, x: np.ndarray, v: np.ndarray, time: float) -> tuple[dict, dict]:
-        """Point and cell data of one frame (see the class's description)."""
-        point_data = {"velocity": v}
-        cell_data = {}
-        if self.pinned is not None:
-            mask = self.pinned(time) if callable(self.pinned) else self.pinned
-            point_data["pinned"] = np.asarray(mask, dtype=bool).astype(np.uint8)
+    def write_file(self, path, x: np.ndarray, v: np.ndarray, mask: np.ndarray | None) -> None:
+        """Write one frame's ``.vtu`` file at ``path`` (no temporary name, no collection);
+        :meth:`write` calls it, or the frame process does (:mod:`clothsim.io.frameproc`).
+
+        Parameters
+        ----------
+        path : path-like
+        x, v : ndarray, shape (n, 3), float64
+            Positions [m] and velocities [m/s].
+        mask : ndarray of bool, shape (n,), or None
+            The pinned vertices (None: no ``pinned`` field)."""
+        meshio = load_meshio()
+        point_data, cell_data = {"velocity": v}, {}
+        if mask is not None:
+            point_data["pinned"] = mask.astype(np.uint8)
         if self.springs is not None:  # for colouring: float32 keeps the files small
             if self._fields_of is None:
                 self._fields_of = FrameFields(self.mesh.vertices, self._cells,
@@ -252,7 +260,9 @@ class FrameWriter:
             if self.mesh.triangle_count:
                 cell_data["area_ratio"] = [a.astype(np.float32)
                                            for a in self._fields_of.area_ratio(x)]
-        return point_data, cell_data
+        meshio.write(path, meshio.Mesh(x, self._cells, point_data=point_data,
+                                       cell_data=cell_data), file_format="vtu",
+                     compression=None if self.compression == "none" else "zlib")
 
     def add_static(self, name: str) -> None:
         """List the file ``name`` (in the output folder, e.g. ``obstacles.vtu``) beside every

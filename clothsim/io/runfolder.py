@@ -21,6 +21,7 @@ from pathlib import Path
 import numpy as np
 
 from ..errors import InputError
+from . import frameproc
 from .background import BackgroundJob
 from .diskspace import check_run_plan, file_bytes, run_plan
 from .effectstate import planned_state_bytes, state_files, write_state
@@ -90,6 +91,8 @@ class RunFolder(OutputFolder):
             super().__exit__(exc_type, exc, tb)
         finally:
             self._job.join()           # never leave a frame half-handled behind the lock
+            if (process := getattr(self.writer, "process", None)) is not None:
+                process.close()              # the frame process (io.frameproc), if any
             if self.store is not None:
                 self.store.close()
 
@@ -170,6 +173,8 @@ class RunFolder(OutputFolder):
         self.writer = FrameWriter(self.path, model.mesh, springs=model.springs,
                                   pinned=pinned, compression=compression)
         self.info["frame_compression"] = self.writer.compression_reason
+        if frameproc.wanted(model.vertex_count) and (frames is None or frames > (start or 0)):
+            self.writer.process = frameproc.FrameProcess(self.writer)   # io.frameproc
         if frames is not None:
             self._plan(frames, start)  # before an earlier run goes: it may be refused
         if start is None:
