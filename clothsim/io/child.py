@@ -41,7 +41,7 @@ def cores() -> int:
         return os.cpu_count() or 1
 
 
-def start_child(module: str) -> subprocess.Popen:
+def start_child(module: str, pass_fds: tuple[int, ...] = ()) -> subprocess.Popen:
     """Start ``module.serve()`` (e.g. ``"clothsim.pictures"``) in a new process of this
     Python and this clothsim, in a session of its own, its input and output piped.
 
@@ -49,6 +49,8 @@ def start_child(module: str) -> subprocess.Popen:
     ----------
     module : str
         The module whose ``serve()`` runs.
+    pass_fds : tuple of int
+        File descriptors the process inherits (with the same numbers).
 
     Returns
     -------
@@ -62,7 +64,7 @@ def start_child(module: str) -> subprocess.Popen:
     package = str(Path(__file__).resolve().parents[1])
     return subprocess.Popen([sys.executable, "-c", _BOOT, package, module],
                             stdin=subprocess.PIPE, stdout=subprocess.PIPE,
-                            start_new_session=True)
+                            start_new_session=True, pass_fds=pass_fds)
 
 
 def answer_stream():

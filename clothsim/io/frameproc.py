@@ -5,7 +5,8 @@ A run writes each frame on a background thread while the next frame is computed
 encoding hold the GIL, and so do CHOLMOD's solves (scikit-sparse 0.4): at 513² the thread
 took about half a second of the GIL per frame from the solves, one after the other on one
 core. :class:`FrameProcess` does that work in a process of its own: the background thread
-hands it the frame (a pipe) and waits for its answer without the GIL.
+hands it the frame (through shared memory, :class:`SharedFrame`) and waits for its answer
+(a pipe) without the GIL.
 
 What is on disk stays true at every instant, as with the thread: the process writes the
 frame's ``.vtu`` file under its temporary name (:func:`clothsim.io.common.atomic_path`),
@@ -23,11 +24,15 @@ more (smaller frames take a few milliseconds: a pipe's round trip would cost as 
 from __future__ import annotations
 
 import logging
+import mmap
 import os
 import pickle
 import sys
+import tempfile
 from pathlib import Path
 from types import SimpleNamespace
+
+import numpy as np
 
 from .child import answer_stream, cores, end_child, start_child
 
@@ -48,17 +53,20 @@ class FrameProcess:
     """
 
     def __init__(self, writer):
-        self._proc = None
+        self._proc = self._shared = None
+        n = writer.mesh.vertex_count
         springs = None if writer.springs is None else SimpleNamespace(
             spring_vertices=writer.springs.spring_vertices,
             spring_rest_length=writer.springs.spring_rest_length)
         try:
-            self._proc = start_child("clothsim.io.frameproc")
+            self._shared = SharedFrame(n)
+            self._proc = start_child("clothsim.io.frameproc", (self._shared.fd,))
             pickle.dump(dict(out_dir=str(writer.out_dir), mesh=writer.mesh, springs=springs,
-                             compression=writer.compression, parent=os.getpid()),
-                        self._proc.stdin, protocol=pickle.HIGHEST_PROTOCOL)
+                             compression=writer.compression, parent=os.getpid(),
+                             fd=self._shared.fd), self._proc.stdin,
+                        protocol=pickle.HIGHEST_PROTOCOL)
             self._proc.stdin.flush()
-        except (OSError, pickle.PicklingError) as exc:
+        except (OSError, ValueError, pickle.PicklingError) as exc:
             log.info("frames written in this process (no second one: %s)", exc)
             self.close()
 
@@ -92,8 +100,9 @@ class FrameProcess:
         """
         if self._proc is None:
             return False
+        self._shared.put(x, v, mask)   # the arrays through shared memory, the rest a pipe
         try:
-            pickle.dump((str(path), x, v, mask), self._proc.stdin,
+            pickle.dump((str(path), mask is not None), self._proc.stdin,
                         protocol=pickle.HIGHEST_PROTOCOL)
             self._proc.stdin.flush()
             answer = pickle.load(self._proc.stdout)
@@ -110,6 +119,74 @@ class FrameProcess:
         """End the process (its input closes, it ends) and wait for it."""
         proc, self._proc = self._proc, None
         end_child(proc)
+        shared, self._shared = self._shared, None
+        if shared is not None:
+            shared.close()
+
+
+class SharedFrame:
+    """One frame's positions, velocities and pinned mask in a memory-mapped file without a
+    name (in ``/dev/shm`` where there is one), which the frame process inherits: a frame
+    crosses in one copy, not through a pipe's 64 KiB at a time (at 513², 200 round trips
+    between the processes, each waiting for a core on a loaded machine).
+
+    Parameters
+    ----------
+    n : int
+        Vertices.
+    fd : int, optional
+        The file, inherited (the frame process's side, read-only); default: a new one.
+
+    Attributes
+    ----------
+    x, v : ndarray, shape (n, 3), float64
+    mask : ndarray, shape (n,), bool
+    fd : int
+    """
+
+    def __init__(self, n: int, fd: int | None = None):
+        size = max(49 * n, 1)
+        if fd is None:
+            self._file = tempfile.TemporaryFile(dir="/dev/shm" if os.path.isdir("/dev/shm")
+                                                else None)
+            fd = self._file.fileno()
+            os.ftruncate(fd, size)
+            self._map = mmap.mmap(fd, size)
+        else:
+            self._file = None
+            self._map = mmap.mmap(fd, size, access=mmap.ACCESS_READ)
+        self.fd = fd
+        self.x = np.frombuffer(self._map, np.float64, 3 * n).reshape(n, 3)
+        self.v = np.frombuffer(self._map, np.float64, 3 * n, 24 * n).reshape(n, 3)
+        self.mask = np.frombuffer(self._map, np.bool_, n, 48 * n)
+
+    def put(self, x, v, mask) -> None:
+        """Copy one frame in (``mask`` None: left as it is).
+
+        Parameters
+        ----------
+        x, v : ndarray, shape (n, 3)
+        mask : ndarray of bool, shape (n,), or None
+        """
+        self.x[...] = x
+        self.v[...] = v
+        if mask is not None:
+            self.mask[...] = mask
+
+    def close(self) -> None:
+        """Unmap and close the file (it has no name: it is gone).
+
+        Returns
+        -------
+        None
+        """
+        self.x = self.v = self.mask = None
+        try:
+            self._map.close()
+        except BufferError:  # pragma: no cover - a view still held somewhere
+            pass
+        if self._file is not None:
+            self._file.close()
 
 
 def serve() -> None:
@@ -130,13 +207,14 @@ def serve() -> None:
         return
     writer = FrameWriter(init["out_dir"], init["mesh"], springs=init["springs"],
                          compression=init["compression"])
+    shared = SharedFrame(init["mesh"].vertex_count, init["fd"])
     while True:
         try:
-            path, x, v, mask = pickle.load(sys.stdin.buffer)
+            path, masked = pickle.load(sys.stdin.buffer)
         except EOFError:
             return
         try:
-            writer.write_file(path, x, v, mask)
+            writer.write_file(path, shared.x, shared.v, shared.mask if masked else None)
             answer = None
         except Exception as exc:  # noqa: BLE001 - handed to the run, raised there
             answer = exc
@@ -165,4 +243,4 @@ def wanted(vertex_count: int) -> bool:
     return vertex_count > PROCESS_FROM and cores() >= 2 and bool(sys.executable)
 
 
-__all__ = ["FrameProcess", "PROCESS_FROM", "serve", "wanted"]
+__all__ = ["FrameProcess", "SharedFrame", "PROCESS_FROM", "serve", "wanted"]
