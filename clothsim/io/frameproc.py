@@ -60,7 +60,7 @@ class FrameProcess:
             spring_rest_length=writer.springs.spring_rest_length)
         try:
             self._shared = SharedFrame(n)
-            self._proc = start_child("clothsim.io.frameproc", (self._shared.fd,))
+            self._proc = start_child("clothsim.io.frameproc", (self._shared.fd,), light=True)
             pickle.dump(dict(out_dir=str(writer.out_dir), mesh=writer.mesh, springs=springs,
                              compression=writer.compression, parent=os.getpid(),
                              fd=self._shared.fd), self._proc.stdin,
