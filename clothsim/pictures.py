@@ -28,7 +28,7 @@ import sys
 
 import numpy as np
 
-from .io.child import answer_stream, end_child, start_child
+from .io.child import answer_stream, end_child, send_answer, start_child
 from .io.child import cores as _cores
 from .plotting import draw_run_pictures
 
@@ -243,12 +243,7 @@ def serve() -> None:
                                    effects=request["effects"], title=request["title"])
     except Exception as exc:  # noqa: BLE001 - handed to the runner, raised there
         answer = exc
-    try:
-        data = pickle.dumps(answer, protocol=pickle.HIGHEST_PROTOCOL)
-    except Exception:  # noqa: BLE001 - an error that does not pickle: its text
-        data = pickle.dumps(RuntimeError(f"{type(answer).__name__}: {answer}"))
-    out.write(data)
-    out.flush()
+    send_answer(out, answer)
 
 
 __all__ = ["PictureProcess", "ShownEffect", "shown_effects", "PROCESS_FROM", "SHOWN", "serve"]

@@ -12,6 +12,7 @@ itself when its input closes, which the end of the run, or of the run's process,
 from __future__ import annotations
 
 import os
+import pickle
 import subprocess
 import sys
 from pathlib import Path
@@ -88,6 +89,24 @@ def answer_stream():
     return out
 
 
+def send_answer(out, answer) -> None:
+    """In a helper process: send ``answer`` (a result, or the error raised) as a pickle;
+    an error that does not pickle is sent as a RuntimeError with its text.
+
+    Parameters
+    ----------
+    out : binary stream
+        :func:`answer_stream`.
+    answer : object
+    """
+    try:
+        data = pickle.dumps(answer, protocol=pickle.HIGHEST_PROTOCOL)
+    except Exception:  # noqa: BLE001 - an error that does not pickle: its text
+        data = pickle.dumps(RuntimeError(f"{type(answer).__name__}: {answer}"))
+    out.write(data)
+    out.flush()
+
+
 def end_child(proc: subprocess.Popen | None) -> None:
     """Close a helper process's pipes (it ends) and wait for it (killed after 5 s).
 
@@ -113,4 +132,4 @@ def end_child(proc: subprocess.Popen | None) -> None:
         proc.wait()
 
 
-__all__ = ["cores", "start_child", "answer_stream", "end_child"]
+__all__ = ["cores", "start_child", "answer_stream", "send_answer", "end_child"]

@@ -34,7 +34,7 @@ from types import SimpleNamespace
 
 import numpy as np
 
-from .child import answer_stream, cores, end_child, start_child
+from .child import answer_stream, cores, end_child, send_answer, start_child
 
 log = logging.getLogger(__name__)
 
@@ -221,12 +221,7 @@ def serve() -> None:
         if os.getppid() != init["parent"]:   # the run is gone: nobody moves the file
             Path(path).unlink(missing_ok=True)
             return
-        try:
-            data = pickle.dumps(answer, protocol=pickle.HIGHEST_PROTOCOL)
-        except Exception:  # noqa: BLE001 - an error that does not pickle: its text
-            data = pickle.dumps(RuntimeError(f"{type(answer).__name__}: {answer}"))
-        out.write(data)
-        out.flush()
+        send_answer(out, answer)
 
 
 def wanted(vertex_count: int) -> bool:
