@@ -150,7 +150,9 @@ class SharedFrame:
             self._file = tempfile.TemporaryFile(dir="/dev/shm" if os.path.isdir("/dev/shm")
                                                 else None)
             fd = self._file.fileno()
-            os.ftruncate(fd, size)
+            # its pages reserved now: a full /dev/shm (or disk) raises OSError here (no
+            # process then), never SIGBUS when a frame is copied in
+            os.posix_fallocate(fd, 0, size)
             self._map = mmap.mmap(fd, size)
         else:
             self._file = None

@@ -162,3 +162,15 @@ def test_a_signal_leaves_a_true_folder_and_resume_finishes_bit_for_bit(tmp_path,
     a, b = np.load(reference.out_dir / "trajectory.npz"), np.load(out / "trajectory.npz")
     for key in a.files:
         assert np.array_equal(a[key], b[key]), key
+
+
+def test_no_room_for_the_shared_frame_leaves_the_frames_to_the_run(tmp_path, monkeypatch, spy):
+    def full(fd, offset, size):
+        raise OSError(28, "No space left on device")
+
+    monkeypatch.setattr(frameproc.os, "posix_fallocate", full)   # never SIGBUS later
+    result = run_scene(cs.load_scene("hanging", SETS), tmp_path / "run", frames=2,
+                       preview=False)
+    assert spy and not any(spy) and result.status == "completed"
+    x, _ = read_frame(tmp_path / "run" / "frame_000002.vtu")
+    np.testing.assert_array_equal(x, np.load(tmp_path / "run" / "trajectory.npz")["positions"][2])
