@@ -94,9 +94,10 @@ def phases(size: int = 513, frames: int = 5, extra: list[str] | None = None,
 
 
 def summary(r: dict) -> list[tuple[str, int, float, float]]:
-    """(phase, calls, wall [s], thread CPU [s]) per phase, in order of first appearance."""
+    """(phase, calls, wall [s], thread CPU [s]) per phase, in the order they first start
+    (a phase before the phases inside it)."""
     rows: dict[str, list] = {"imports": [1, *r["imports"]]}
-    for label, _thread, _at, wall, cpu in r["spans"]:
+    for label, _thread, _at, wall, cpu in sorted(r["spans"], key=lambda s: s[2]):  # by start
         row = rows.setdefault(label, [0, 0.0, 0.0])
         row[0] += 1
         row[1] += wall
