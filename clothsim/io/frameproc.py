@@ -54,21 +54,20 @@ class FrameProcess:
 
     def __init__(self, writer):
         self._proc = self._shared = None
-        n = writer.mesh.vertex_count
         springs = None if writer.springs is None else SimpleNamespace(
             spring_vertices=writer.springs.spring_vertices,
             spring_rest_length=writer.springs.spring_rest_length)
         try:
-            self._shared = SharedFrame(n)
+            self._shared = SharedFrame(writer.mesh.vertex_count)
             self._proc = start_child("clothsim.io.frameproc", (self._shared.fd,), light=True)
-            pickle.dump(dict(out_dir=str(writer.out_dir), mesh=writer.mesh, springs=springs,
-                             compression=writer.compression, parent=os.getpid(),
-                             fd=self._shared.fd), self._proc.stdin,
-                        protocol=pickle.HIGHEST_PROTOCOL)
-            self._proc.stdin.flush()
-        except (OSError, ValueError, pickle.PicklingError) as exc:
+        except (OSError, ValueError) as exc:
             log.info("frames written in this process (no second one: %s)", exc)
             self.close()
+        # sent with the first frame, by the thread writing it: the run's own thread does not
+        # wait for the process to start and read the mesh (tens of MB at 513²)
+        self._init = dict(out_dir=str(writer.out_dir), mesh=writer.mesh, springs=springs,
+                          compression=writer.compression, parent=os.getpid(),
+                          fd=None if self._shared is None else self._shared.fd)
 
     @property
     def running(self) -> bool:
@@ -102,6 +101,9 @@ class FrameProcess:
             return False
         self._shared.put(x, v, mask)   # the arrays through shared memory, the rest a pipe
         try:
+            if self._init is not None:
+                pickle.dump(self._init, self._proc.stdin, protocol=pickle.HIGHEST_PROTOCOL)
+                self._init = None
             pickle.dump((str(path), mask is not None), self._proc.stdin,
                         protocol=pickle.HIGHEST_PROTOCOL)
             self._proc.stdin.flush()
