@@ -207,7 +207,7 @@ def serve() -> None:
     out = answer_stream()
     try:
         init = pickle.load(sys.stdin.buffer)
-    except EOFError:
+    except (EOFError, pickle.UnpicklingError):   # its run ended (mid-message)
         return
     writer = FrameWriter(init["out_dir"], init["mesh"], springs=init["springs"],
                          compression=init["compression"])
@@ -215,7 +215,7 @@ def serve() -> None:
     while True:
         try:
             path, masked = pickle.load(sys.stdin.buffer)
-        except EOFError:
+        except (EOFError, pickle.UnpicklingError):   # its run ended (mid-message)
             return
         try:
             writer.write_file(path, shared.x, shared.v, shared.mask if masked else None)
