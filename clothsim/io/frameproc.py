@@ -196,7 +196,7 @@ class SharedFrame:
 def serve() -> None:
     """The process's side: read the writer's description, then write each frame asked for
     and answer None or the error raised. Ends when its input closes, or when its run is
-    gone (then the file it was writing is removed).
+    gone; the last file it wrote is removed if its run did not move it (killed).
 
     Returns
     -------
@@ -212,10 +212,13 @@ def serve() -> None:
     writer = FrameWriter(init["out_dir"], init["mesh"], springs=init["springs"],
                          compression=init["compression"])
     shared = SharedFrame(init["mesh"].vertex_count, init["fd"])
+    path = None
     while True:
         try:
             path, masked = pickle.load(sys.stdin.buffer)
         except (EOFError, pickle.UnpicklingError):   # its run ended (mid-message)
+            if path is not None:   # killed before moving the last file: it goes
+                Path(path).unlink(missing_ok=True)
             return
         try:
             writer.write_file(path, shared.x, shared.v, shared.mask if masked else None)
