@@ -13,7 +13,8 @@ or more on two, :func:`clothsim.factorization.cholmod_threads`):
 - through ``clothsim run`` (``--run-sizes``, 5 frames): wall and CPU time (user + system:
   on a busy machine the wall time counts the other processes too; the picture process
   of a large cloth, :mod:`clothsim.pictures`, is counted), and the pictures' share
-  (``preview.gif`` + ``final.png``, from a second run with ``--no-preview``).
+  (``preview.gif`` + ``final.png``, from a second run with ``--no-preview``), and the
+  time of each phase of a third run (:mod:`benchmarks.run_phases`).
 
 It prints a Markdown table with the commit and writes it to ``docs/data/scale-ladder.md``,
 which docs/performance.md includes.
@@ -41,6 +42,8 @@ import time
 from pathlib import Path
 
 import numpy as np
+
+from . import run_phases
 
 ROOT = Path(__file__).resolve().parents[1]
 OUT = ROOT / "docs" / "data" / "scale-ladder.md"
@@ -258,6 +261,13 @@ def main(argv: list[str] | None = None) -> None:
                          f"{t['without']:.1f} s | {t['without_cpu']:.1f} s | "
                          f"{max(share, 0.0):.0%} |")
             print(lines[-1], flush=True)
+        for n in runs:   # where the time goes (benchmarks.run_phases, a third run)
+            r = run_phases.phases(n)
+            lines += ["", f"Where a {n}² `clothsim run` of 5 frames spends its time "
+                      "(`python -m benchmarks.run_phases`: wall and the CPU of the thread "
+                      "that ran each phase; the frame files are written by a second process, "
+                      "the pictures by a third, whose CPU overlaps the steps'):", "",
+                      *run_phases.table(r)]
     OUT.write_text("\n".join(lines) + "\n")
     print(f"written to {OUT.relative_to(ROOT)}")
 

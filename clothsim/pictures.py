@@ -23,14 +23,13 @@ of the run's process, does. If it cannot start or dies, the runner draws the pic
 from __future__ import annotations
 
 import logging
-import os
 import pickle
-import subprocess
 import sys
-from pathlib import Path
 
 import numpy as np
 
+from .io.child import answer_stream, end_child, send_answer, start_child
+from .io.child import cores as _cores
 from .plotting import draw_run_pictures
 
 log = logging.getLogger(__name__)
@@ -101,27 +100,6 @@ def shown_effects(effects, times) -> list[ShownEffect]:
             and not (e.kind == "pin" and getattr(e, "model", None) is None)]
 
 
-#: The process's program: the very clothsim package this one imported (whatever the other
-#: process's sys.path would find first), then :func:`serve`.
-_BOOT = (
-    "import importlib.util, os, sys\n"
-    "pkg = sys.argv[1]\n"
-    "spec = importlib.util.spec_from_file_location("
-    "'clothsim', os.path.join(pkg, '__init__.py'), submodule_search_locations=[pkg])\n"
-    "module = sys.modules['clothsim'] = importlib.util.module_from_spec(spec)\n"
-    "spec.loader.exec_module(module)\n"
-    "from clothsim.pictures import serve\n"
-    "serve()\n")
-
-
-def _cores() -> int:
-    """CPUs this process may run on."""
-    try:
-        return len(os.sched_getaffinity(0))
-    except AttributeError:  # pragma: no cover - not on Linux
-        return os.cpu_count() or 1
-
-
 class PictureProcess:
     """A process that draws one run's ``preview.gif`` and ``final.png`` (see the module
     docstring); use it as a context manager, or call :meth:`close`.
@@ -157,9 +135,7 @@ class PictureProcess:
         if not self.wanted or self._proc is not None:
             return
         try:
-            self._proc = subprocess.Popen(
-                [sys.executable, "-c", _BOOT, str(Path(__file__).resolve().parent)],
-                stdin=subprocess.PIPE, stdout=subprocess.PIPE, start_new_session=True)
+            self._proc = start_child("clothsim.pictures")
         except OSError as exc:
             log.info("pictures drawn in this process (no second one: %s)", exc)
 
@@ -232,18 +208,7 @@ class PictureProcess:
         None
         """
         proc, self._proc = self._proc, None
-        if proc is None:
-            return
-        for stream in (proc.stdin, proc.stdout):
-            try:
-                stream.close()
-            except OSError:   # pragma: no cover - a broken pipe on close
-                pass
-        try:
-            proc.wait(timeout=5)
-        except subprocess.TimeoutExpired:  # pragma: no cover - a hung process
-            proc.kill()
-            proc.wait()
+        end_child(proc)
 
     def __enter__(self) -> PictureProcess:
         return self
@@ -260,8 +225,7 @@ def serve() -> None:
     -------
     None
     """
-    out = os.fdopen(os.dup(1), "wb")
-    os.dup2(2, 1)              # anything printed goes to stderr, never into the answer
+    out = answer_stream()      # anything printed goes to stderr, never into the answer
     from PIL import Image  # noqa: F401 - imported while the run computes
 
     from .plotting import _matplotlib
@@ -279,12 +243,7 @@ def serve() -> None:
                                    effects=request["effects"], title=request["title"])
     except Exception as exc:  # noqa: BLE001 - handed to the runner, raised there
         answer = exc
-    try:
-        data = pickle.dumps(answer, protocol=pickle.HIGHEST_PROTOCOL)
-    except Exception:  # noqa: BLE001 - an error that does not pickle: its text
-        data = pickle.dumps(RuntimeError(f"{type(answer).__name__}: {answer}"))
-    out.write(data)
-    out.flush()
+    send_answer(out, answer)
 
 
 __all__ = ["PictureProcess", "ShownEffect", "shown_effects", "PROCESS_FROM", "SHOWN", "serve"]

@@ -11,6 +11,8 @@ module                  what it reads or writes
 ``io.cells``            a mesh as the cell blocks mesh files store
 ``io.frames``           one ``.vtu`` per frame and ``trajectory.pvd``
                         (:class:`FrameWriter`, :func:`read_frame`, :func:`read_pvd`)
+``io.frameproc``        a large run's frame files written by a second process
+``io.child``            starting and ending such helper processes (frames, pictures)
 ``io.runfolder``        a run's folder, its one owner (:class:`RunFolder`): frames,
                         trajectory store, run.json, status, resume point
 ``io.outfolder``        any output folder from claim to final status (:class:`OutputFolder`)

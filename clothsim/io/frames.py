@@ -6,8 +6,8 @@ Frames are binary VTU, zlib-compressed or not (:func:`choose_frame_compression`,
 scene's ``[output] frame_compression``); meshio, ParaView and :func:`read_frame` read both.
 
 :class:`FrameWriter` writes them (each file to a temporary name, then :func:`os.replace`,
-so an interrupted run leaves only complete files); :func:`read_frame` reads a frame back bit
-for bit; :func:`read_pvd` lists a collection.
+so an interrupted run leaves only complete files); :mod:`clothsim.io.frame_reading` reads
+them back (:func:`read_frame` bit for bit, :func:`read_pvd` lists a collection).
 """
 
 from __future__ import annotations
@@ -22,7 +22,8 @@ import numpy as np
 from ..errors import InputError
 from ..mesh import Mesh
 from .cells import FrameFields, cell_blocks
-from .common import MeshioFailure, atomic_path, load_meshio, one_line, quietly
+from .common import atomic_path, load_meshio
+from .frame_reading import read_frame, read_pvd  # noqa: F401  (their home before)
 
 logger = logging.getLogger(__name__)
 
@@ -153,6 +154,7 @@ class FrameWriter:
         self._static: list[str] = []
         self._cells = cell_blocks(mesh, None if springs is None else springs.spring_vertices)
         self._fields_of = None   # FrameFields, prepared by the first write (its thread)
+        self.process = None      # a FrameProcess writing the files (io.frameproc), if any
 
     def filename(self, index: int) -> str:
         """File name of frame ``index``, e.g. ``frame_000012.vtu``.
@@ -224,25 +226,32 @@ class FrameWriter:
             self._started = True
             if index > 0:
                 self._entries = {i: t for i, t in self._read_pvd().items() if i < index}
-        meshio = load_meshio()
         path = self.out_dir / self.filename(index)
-        point_data, cell_data = self._fields(x, v, float(time))
-        with atomic_path(path) as tmp:
-            meshio.write(tmp, meshio.Mesh(x, self._cells, point_data=point_data,
-                                          cell_data=cell_data), file_format="vtu",
-                         compression=None if self.compression == "none" else "zlib")
+        mask = None if self.pinned is None else np.asarray(
+            self.pinned(time) if callable(self.pinned) else self.pinned, dtype=bool)
+        with atomic_path(path) as tmp:   # by the frame process when there is one
+            if self.process is None or not self.process.write(tmp, x, v, mask):
+                self.write_file(tmp, x, v, mask)
         self._entries[index] = float(time)
         self._write_pvd()
         logger.debug("wrote %s (t = %g s)", path, time)
         return path
 
-    def _fields(self, x: np.ndarray, v: np.ndarray, time: float) -> tuple[dict, dict]:
-        """Point and cell data of one frame (see the class's description)."""
-        point_data = {"velocity": v}
-        cell_data = {}
-        if self.pinned is not None:
-            mask = self.pinned(time) if callable(self.pinned) else self.pinned
-            point_data["pinned"] = np.asarray(mask, dtype=bool).astype(np.uint8)
+    def write_file(self, path, x: np.ndarray, v: np.ndarray, mask: np.ndarray | None) -> None:
+        """Write one frame's ``.vtu`` file at ``path`` (no temporary name, no collection);
+        :meth:`write` calls it, or the frame process does (:mod:`clothsim.io.frameproc`).
+
+        Parameters
+        ----------
+        path : path-like
+        x, v : ndarray, shape (n, 3), float64
+            Positions [m] and velocities [m/s].
+        mask : ndarray of bool, shape (n,), or None
+            The pinned vertices (None: no ``pinned`` field)."""
+        meshio = load_meshio()
+        point_data, cell_data = {"velocity": v}, {}
+        if mask is not None:
+            point_data["pinned"] = mask.astype(np.uint8)
         if self.springs is not None:  # for colouring: float32 keeps the files small
             if self._fields_of is None:
                 self._fields_of = FrameFields(self.mesh.vertices, self._cells,
@@ -253,7 +262,9 @@ class FrameWriter:
                 if self.mesh.triangle_count:
                     cell_data["area_ratio"] = [a.astype(np.float32)
                                                for a in self._fields_of.area_ratio(x)]
-        return point_data, cell_data
+        meshio.write(path, meshio.Mesh(x, self._cells, point_data=point_data,
+                                       cell_data=cell_data), file_format="vtu",
+                     compression=None if self.compression == "none" else "zlib")
 
     def add_static(self, name: str) -> None:
         """List the file ``name`` (in the output folder, e.g. ``obstacles.vtu``) beside every
@@ -322,68 +333,3 @@ class FrameWriter:
         ET.indent(root)
         with atomic_path(self.pvd_path) as tmp:
             ET.ElementTree(root).write(tmp, encoding="utf-8", xml_declaration=True)
-
-
-def read_pvd(path) -> list[tuple[float, Path]]:
-    """(time [s], frame path) of each DataSet of the first part in a ParaView collection.
-
-    Parameters
-    ----------
-    path : str or path-like
-        A ``.pvd`` file, e.g. ``trajectory.pvd`` written by :class:`FrameWriter`.
-
-    Returns
-    -------
-    list of (float, pathlib.Path)
-        Time [s] and frame file (relative names resolved against the collection's
-        folder) of each ``DataSet`` whose ``part`` is that of the first one, in file order
-        (the cloth's frames; a run's ``obstacles.vtu``, listed as a further part, is left
-        out).
-
-    Raises
-    ------
-    InputError
-        When the file cannot be read or parsed.
-    """
-    path = Path(path)
-    try:
-        root = ET.parse(path).getroot()
-    except (OSError, ET.ParseError) as exc:
-        raise InputError(f"{path}: cannot read collection ({one_line(exc)})") from None
-    datasets = list(root.iter("DataSet"))
-    first = datasets[0].get("part", "0") if datasets else "0"
-    return [(float(ds.get("timestep")), path.parent / ds.get("file"))
-            for ds in datasets if ds.get("part", "0") == first]
-
-
-def read_frame(path) -> tuple[np.ndarray, np.ndarray]:
-    """Read a frame written by :class:`FrameWriter`.
-
-    Parameters
-    ----------
-    path : str or path-like
-        A ``.vtu`` frame file with point data ``"velocity"``.
-
-    Returns
-    -------
-    positions, velocities : ndarray, shape (n, 3), float64
-        [m] and [m/s], exactly as written.
-
-    Raises
-    ------
-    InputError
-        When the file is missing, unreadable or has no ``"velocity"`` point data.
-    """
-    path = Path(path)
-    if not path.is_file():
-        raise InputError(f"frame: file not found: {path}")
-    meshio = load_meshio()
-    try:
-        m = quietly(meshio.read, path, file_format="vtu")
-    except MeshioFailure as exc:
-        raise InputError(f"{path}: cannot read frame ({exc})") from None
-    if "velocity" not in m.point_data:
-        raise InputError(f"{path}: point data 'velocity' missing")
-    x = np.asarray(m.points, dtype=np.float64)
-    v = np.asarray(m.point_data["velocity"], dtype=np.float64)
-    return x, v

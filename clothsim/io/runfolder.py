@@ -20,21 +20,18 @@ from pathlib import Path
 
 import numpy as np
 
-from ..errors import InputError
+from . import frameproc
 from .background import BackgroundJob
-from .diskspace import check_run_plan, file_bytes, run_plan
-from .effectstate import planned_state_bytes, state_files, write_state
+from .diskspace import check_run_plan, run_plan
+from .earlier import RESULT_FILES, STALE_FILES, earlier_bytes, remove_earlier_run
+from .effectstate import planned_state_bytes, write_state
 from .folders import RUN_RECORD
-from .frames import OBSTACLES_NAME, PVD_NAME, FrameWriter, read_frame
+from .frames import FrameWriter, read_frame
 from .outfolder import OutputFolder
 from .resume import FRAME_PATTERN, changed_input, completed_frames, recorded_through, resume_point
 from .runfiles import TrajectoryStore, model_arrays, read_json
 
 log = logging.getLogger(__name__)
-
-RESULT_FILES = (PVD_NAME, "trajectory.npz", "preview.gif", "final.png", RUN_RECORD)
-#: Files of an earlier run that a fresh run removes (besides its frame files).
-STALE_FILES = RESULT_FILES + (OBSTACLES_NAME,)
 
 
 class RunFolder(OutputFolder):
@@ -90,6 +87,8 @@ class RunFolder(OutputFolder):
             super().__exit__(exc_type, exc, tb)
         finally:
             self._job.join()           # never leave a frame half-handled behind the lock
+            if (process := getattr(self.writer, "process", None)) is not None:
+                process.close()              # the frame process (io.frameproc), if any
             if self.store is not None:
                 self.store.close()
 
@@ -115,26 +114,16 @@ class RunFolder(OutputFolder):
         return recorded_through(self.previous, k)
 
     def clear_earlier_run(self) -> None:
-        """A fresh run replaces an earlier one: remove its frames and result files.
+        """A fresh run replaces an earlier one: remove its frames and result files
+        (:func:`clothsim.io.earlier.remove_earlier_run`).
 
         Raises
         ------
         InputError
             Frame files without a clothsim run.json beside them (and not ``force``).
         """
-        out = self.path
-        ours = self.force or (self.previous is not None and "clothsim_run" in self.previous)
-        frames = [p for p in out.glob("frame_*.vtu") if FRAME_PATTERN.fullmatch(p.name)]
-        if frames and not ours:
-            raise InputError(f"{out}: holds {len(frames)} frame files and no clothsim "
-                             "run.json; refusing to delete files clothsim did not write "
-                             "(choose another --out or remove them)")
-        stale = frames + [out / name for name in STALE_FILES if (out / name).exists()]
-        stale += state_files(out)   # the effects' state per frame (io.effectstate)
-        for p in stale:
-            p.unlink()
-        if stale:
-            log.info("removed %d files of an earlier run in %s", len(stale), out)
+        remove_earlier_run(self.path, self.force or (
+            self.previous is not None and "clothsim_run" in self.previous))
 
     def begin(self, info: dict, model, fps: float, *, frames: int | None = None, pinned=None,
               compression: str = "auto",
@@ -171,6 +160,8 @@ class RunFolder(OutputFolder):
         self.writer = FrameWriter(self.path, model.mesh, springs=model.springs,
                                   pinned=pinned, compression=compression)
         self.info["frame_compression"] = self.writer.compression_reason
+        if frameproc.wanted(model.vertex_count) and (frames is None or frames > (start or 0)):
+            self.writer.process = frameproc.FrameProcess(self.writer)   # io.frameproc
         if frames is not None:
             self._plan(frames, start)  # before an earlier run goes: it may be refused
         if start is None:
@@ -214,13 +205,8 @@ class RunFolder(OutputFolder):
         estimate as ``disk_estimate``."""
         plan = self.plan(frames, start)
         self.info["disk_estimate"] = plan
-        reclaim = self._earlier_bytes() if start is None else 0  # a fresh run removes them
+        reclaim = earlier_bytes(self.path) if start is None else 0  # a fresh run removes them
         check_run_plan(self.path, plan, frames, reclaim, self.writer.compression)
-
-    def _earlier_bytes(self) -> int:
-        """Bytes of an earlier run's files here."""
-        paths = [p for p in self.path.glob("frame_*.vtu") if FRAME_PATTERN.fullmatch(p.name)]
-        return file_bytes(paths + [self.path / name for name in STALE_FILES])
 
     def add_static(self, name: str) -> None:
         """List the file ``name`` (written into the folder) beside every frame of
