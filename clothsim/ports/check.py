@@ -185,6 +185,8 @@ def check_steps(simulation, positions, velocities=None, *, precision: str = "flo
                     with ExitStack() as along:
                         if adopted_branch:
                             along.enter_context(branches.following(branches.path))
+                        if held:   # from the step's anchored decision, as the replays were
+                            held.again()
                         problem, x_cs, v_cs, err, worst = _step(sim, held, state, x_port)
                 if branches and branches.note:
                     adopted = "; ".join(filter(None, (adopted, branches.note)))

@@ -225,6 +225,16 @@ class HeldSteps:
         self._before = [(h, cv, cn) for (_, h), (_, cv, cn) in zip(planes, self._before,
                                                                   strict=True)]
 
+    def again(self) -> None:
+        """Put the obstacles back to the step's anchored decision, as :meth:`replay` does
+        for ``"hold"``, so that clothsim's step can be taken again from the port's state
+        (along another branch of the solver's choices: the step taken before left the
+        obstacles' next decision in their place).
+        """
+        for e, (h, cv, cn) in zip(self.obstacles, self._before, strict=True):
+            e._holding = _copy(h, self._x)
+            e.contact_vertices, e.contact_normals = cv, cn
+
     def stepped(self) -> None:
         """Remember the state the step left (the next step's decision)."""
         self._after = [(e._holding, e.contact_vertices, e.contact_normals)

@@ -227,6 +227,9 @@ class Printed:
         size.
     unplaced : dict
         Step k → the note of a replay beyond :attr:`limit` (:meth:`annotate`).
+    spread : dict
+        Step k → that replay's tolerance [m]: an error within it is the printing's as
+        much as the port's (:meth:`too_coarse`).
     coarse : ndarray, shape (frames − 1,), or None
         When the printing is too coarse to judge a step: per step, the distance by which
         printing alone moves a correct answer [m]; a step within it is ``too coarse`` to
@@ -246,6 +249,7 @@ class Printed:
         self.text, self.unit, self.note, self.units = "", None, "", None
         self.limit = COARSE * cloth_size(np.asarray(positions)[0])
         self.unplaced: dict[int, str] = {}
+        self.spread: dict[int, float] = {}
         self.coarse = None
         coarse = (f"the output is {describe(self.digits)}: too coarse to judge a step; "
                   f"print 17 digits (float64) or 9 (float32)")
@@ -351,6 +355,7 @@ class Printed:
         replayed = spread_tolerance(replay, starts, x_answer, x_port, self.units[0])
         if replayed <= self.limit:
             return max(tol, replayed)
+        self.spread[k] = replayed
         self.unplaced[k] = (f"replayed from the port's start moved by its printed rounding, "
                             f"clothsim's step would need a tolerance of {replayed:.1e} m, "
                             f"over {self.limit:.1e} m (1e-3 of the cloth): the printed state "
@@ -372,8 +377,16 @@ class Printed:
         -------
         str
             Why the step is ``too coarse`` to judge, or "" (fine printing, or an error
-            beyond the printing's rounding of the step: judged as any other).
+            beyond the printing's rounding of the step: judged as any other). A step whose
+            replays from the printed start spread beyond :attr:`limit` (:meth:`replayed`)
+            is too coarse when its error lies within that spread.
         """
+        if k in self.spread and error <= self.spread[k]:
+            return (f"the output is {describe(self.digits)}; replayed from the port's start "
+                    f"moved by that rounding, clothsim's step spreads over "
+                    f"{self.spread[k]:.1e} m (beyond {self.limit:.1e} m, 1e-3 of the cloth) "
+                    f"and the error lies within it: the printing alone may explain it; print "
+                    f"17 digits (float64) or 9 (float32) to judge it")
         if self.coarse is None or error > self.coarse[k]:
             return ""
         return (f"the output is {describe(self.digits)}, which rounds this step by up to "

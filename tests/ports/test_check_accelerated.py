@@ -37,16 +37,33 @@ def contact_port(request, tmp_path_factory):
 
 
 def test_a_right_g_port_with_the_declared_anderson_solver_passes(contact_port):
+    # drop-on-square's Anderson 30 passes every step; drape-sphere's Anderson 50 amplifies
+    # the 6-digit rounding where the cloth lands (step 12 -> 13): replayed from the printed
+    # start moved by its rounding, even along the port's branch of Anderson's safeguard
+    # choices, its answer spreads beyond 1e-3 of the cloth, so that step is "too coarse"
+    # to judge (undecided, print 17 digits), never failed, and every other step agrees
     scene, X, V, folder = contact_port
     assert scene.build_simulation().solver.name == "anderson"
+    sphere = scene.data["scene"]["name"] == "drape-sphere"
     for planes in (None, folder / "contacts.txt"):
         report = check_steps(scene, X, V, contacts=planes)
-        assert report.passed, report.summary()
         assert "printed with 6 significant digits" in report.summary()
-        # within the replayed bound's limit (1e-3 of the cloth, 1.4e-3 m): drape-sphere's
-        # Anderson 50 needs 1.3e-3 m at step 12 -> 13, where the cloth lands on the sphere
-        assert max(s.tolerance for s in report.steps) < 1.4e-3
-        assert not any("cannot place" in s.note for s in report.steps)
+        undecided = [s for s in report.steps if not s.passed]
+        assert report.passed or sphere, report.summary()
+        assert all(s.status == "too coarse" and "print 17 digits" in s.note
+                   for s in undecided), report.summary()
+        assert len(undecided) <= 1 and report.summary().startswith(
+            "UNDECIDED" if undecided else "PASS"), report.summary()
+        assert max(s.tolerance for s in report.steps) < 1.41e-3   # 1e-3 of the cloth
+        assert not any(s.error > s.tolerance for s in report.steps if s.passed)
+
+
+def test_the_sphere_printed_with_17_digits_passes_every_step(tmp_path):
+    sphere = builtin("drape-sphere")
+    X, V, rows = run_port(sphere, "none", FRAMES)
+    write_port(tmp_path, X, V, rows, fmt="%.17g")
+    report = check_steps(sphere, read_trajectory(tmp_path), read_velocities(tmp_path))
+    assert report.passed and max(s.error for s in report.steps) < 1e-9, report.summary()
 
 
 def test_a_planted_1mm_fault_still_fails_under_anderson(contact_port):
@@ -55,12 +72,14 @@ def test_a_planted_1mm_fault_still_fails_under_anderson(contact_port):
     X[14:, 300] += [0.0, 0.0, 1e-3]   # from frame 14 on: step 13 -> 14 is the sphere's
     X = _g(X)                         # a replayed step of the sphere's, printed again
     report = check_steps(scene, X, V, steps=15)
-    first = report.first_failure
+    judged = [s for s in report.steps if s.status != "too coarse"]   # the sphere's landing
+    first = next((s for s in judged if not s.passed), None)
     assert not report.passed and first is not None and first.k == 13, report.summary()
     assert first.error > first.tolerance and first.tolerance < 1e-3
+    assert report.summary().startswith("FAIL"), report.summary()
     if scene.data["scene"]["name"] == "drape-sphere":   # judged on its replayed bound
         assert first.tolerance > 5 * report.steps[11].tolerance
-    assert all(s.passed for s in report.steps[:13])
+    assert all(s.passed for s in judged if s.k < 13)
 
 
 @pytest.mark.slow   # a variant; the suite's fast run keeps the main case

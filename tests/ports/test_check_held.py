@@ -143,18 +143,19 @@ def _printed_sphere_check(folder, solver: dict, rigid: float, frames: int):
 
 
 def test_on_the_sphere_a_printed_port_passes_and_faults_are_named(tmp_path):
-    # the scene's declared Anderson 50 and rigid damping 0.2: step 12 -> 13 of the 6-digit
-    # port errs by 6.8e-4 m, over the cheap printed-precision bound, and passes on its
-    # replayed bound
+    # the scene's declared Anderson 50 and rigid damping 0.2: steps past the landing err
+    # by up to 3.5e-4 m, over the cheap printed-precision bound, and pass on their replayed
+    # bound; the landing (12 -> 13) is too coarse to judge at 6 digits, never failed
     sphere = builtin("drape-sphere")
     assert sphere.build_simulation().solver.name == "anderson"
-    X, V, rows = run_port(sphere, "none", 14)
+    X, V, rows = run_port(sphere, "none", 16)
     write_port(tmp_path, X, V, rows, fmt="%g")
     for planes in (None, tmp_path / "contacts.txt"):
         report = check_steps(sphere, read_trajectory(tmp_path), read_velocities(tmp_path),
                              contacts=planes)
-        assert report.passed, report.summary()
-    assert max(s.error for s in report.steps) > 1e-4    # beyond the cheap bound, replayed
+        assert all(s.passed or s.status == "too coarse" for s in report.steps), \
+            report.summary()
+        assert any(s.passed and s.error > 1e-4 for s in report.steps)   # replayed bound
     # a decision too close to call at 6 digits (a vertex touching the sphere) is the port's:
     # it arises on the paper's 10 local/global iterations' trajectory with rigid damping 0.1
     # (the scene's before 0.2; with 0.2 no vertex comes within 6 digits in 14 steps)
