@@ -15,7 +15,8 @@ import numpy as np
 
 from ..errors import InputError
 from .compare import EPS32
-from .precision import FULL, MARGIN, float32_valued, significant_digits, unit
+from .digits import FULL, float32_valued, significant_digits, unit
+from .precision import MARGIN
 
 #: The names ``check`` looks for in a port's folder.
 CONTACT_FILES = ("contacts.npz", "contacts.txt")
