@@ -155,13 +155,13 @@ def test_damping_left_out_on_a_sphere_in_post_solve_mode_fails(tmp_path):
     assert check_steps(cs.load_scene(path), *port(path)).passed
     report, summary = verdict(path, "effects[3].coefficient=0")
     assert summary.startswith("FAIL") and "velocities differ" in summary, summary
-    assert ('the damping (model "rigid") left out (coefficient 0 instead of 0.1)'
+    assert ('the damping (model "rigid") left out (coefficient 0 instead of 0.2)'
             in summary), summary
 
 
 def test_another_damping_coefficient_is_fitted(tmp_path):
     _, summary = verdict(sphere_scene(tmp_path), "effects[3].coefficient=0.05")
-    assert "of another coefficient (0.05 instead of 0.1)" in summary, summary
+    assert "of another coefficient (0.05 instead of 0.2)" in summary, summary
 
 
 def test_a_smaller_sphere_in_post_solve_mode_is_named(tmp_path):
