@@ -23,6 +23,9 @@ from scipy.spatial import cKDTree
 MAX_START_FRAMES = 3
 
 
+__all__ = ["repeated_frame", "start_mismatch", "velocity_cause"]
+
+
 def _grid_orders(sim):
     """Named vertex orders of a grid scene: {description: order (port i = scene order[i])}."""
     shape = _grid_shape(sim)
