@@ -237,9 +237,9 @@ def _run_in(folder: RunFolder, scene, model, sim, frames: int, progress, resume:
     info["expected_solves"] = getattr(sim.solver, "expected_solves", None)
     info["solver_state"] = get_state()
     if resuming:
-        folder.save_npz(force=True)
+        folder.save_npz()   # frames 0..start: what run.json's trajectory_frames then says
         folder.mark("writing")
-    else:   # frame 0, trajectory.npz and run.json: written while frame 1 is computed
+    else:   # frame 0 and run.json: written while frame 1 is computed
         folder.write_frame(0, x, v, wait=False, state=effect_states(sim.effects))
     first = start + 1 if resuming else 1
     for k in range(first, frames + 1):
@@ -266,7 +266,7 @@ def _run_in(folder: RunFolder, scene, model, sim, frames: int, progress, resume:
                                                          frames, last)
     drawn = _draw_previews(folder, scene, sim, fps, frames, last) if (
         pictures is not None and not drawing) else None
-    folder.wait()
+    folder.wait_last()   # trajectory.npz built meanwhile, moved into place by end
     if progress is not None and frames >= first:
         progress(frames, frames)
     with signals_deferred():

@@ -202,12 +202,15 @@ def test_run_json_is_rewritten_after_every_frame(tiny, tmp_path):
     def progress(k, total):
         run = json.loads((out / "run.json").read_text())
         seen.append((run["status"], run["last_frame"], len(run["frames"]),
-                     np.load(out / "trajectory.npz")["positions"].shape[0]))
+                     run["trajectory_frames"], (out / "trajectory.npz").exists()))
 
     run_scene(tiny, out, progress=progress, preview=False)
-    # the npz is rebuilt at the start and at the end (and every few seconds in between)
-    assert [s[:3] for s in seen] == [("running", k, k) for k in range(1, 5)]
-    assert all(1 <= s[3] <= s[1] + 1 for s in seen)
+    # trajectory.npz is written once, at the end: while the run goes on there is none, and
+    # run.json says so (the frames are the record; a killed run is finished by --resume)
+    assert seen == [("running", k, k, None, False) for k in range(1, 5)]
+    run = json.loads((out / "run.json").read_text())
+    assert (run["status"], run["trajectory_frames"]) == ("completed", 5)
+    assert np.load(out / "trajectory.npz")["positions"].shape[0] == 5
 
 
 def test_fresh_run_removes_every_file_of_an_earlier_run(tiny, tmp_path, monkeypatch):

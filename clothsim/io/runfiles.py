@@ -24,6 +24,8 @@ from .common import atomic_path
 from .folders import LOCK_NAME, FolderLock  # noqa: F401 - re-exported (their old home)
 
 _CHUNK = 1 << 18  # bytes copied at a time when assembling trajectory.npz (256 kB)
+#: A run's trajectory, assembled from its store at the end (:class:`TrajectoryStore`).
+NPZ_NAME = "trajectory.npz"
 
 
 def _json_default(obj):
@@ -160,11 +162,38 @@ class TrajectoryStore:
             Frames to write, ``0 <= count <=`` frames appended.
         extra : dict of str to ndarray
             More arrays, e.g. ``time`` (count,) [s], ``vertex_mass`` (n,) [kg]."""
+        with atomic_path(Path(path)) as tmp:
+            self._write_zip(tmp, count, extra)
+
+    def write_npz_beside(self, path, count: int, extra: dict[str, np.ndarray]) -> Path:
+        """:meth:`write_npz` into a temporary file beside ``path`` (the name
+        :func:`~clothsim.io.common.atomic_path` gives it), which the caller moves onto
+        ``path`` or deletes (:meth:`clothsim.io.runfolder.RunFolder.wait_last`).
+
+        Parameters
+        ----------
+        path, count, extra
+            As for :meth:`write_npz`.
+
+        Returns
+        -------
+        Path
+            The temporary file, complete (deleted again on an error)."""
+        path = Path(path)
+        tmp = path.with_name(f".{path.name}.{os.getpid()}.tmp{path.suffix}")
+        try:
+            tmp.unlink(missing_ok=True)    # a link planted there is removed, never followed
+            self._write_zip(tmp, count, extra)
+        except BaseException:
+            tmp.unlink(missing_ok=True)
+            raise
+        return tmp
+
+    def _write_zip(self, path, count: int, extra: dict[str, np.ndarray]) -> None:
         count = int(count)
         if not 0 <= count <= self.count:
             raise InputError(f"count: must be in 0..{self.count}, got {count}")
-        with atomic_path(Path(path)) as tmp, zipfile.ZipFile(tmp, "w", zipfile.ZIP_STORED,
-                                                             allowZip64=True) as zf:
+        with zipfile.ZipFile(path, "w", zipfile.ZIP_STORED, allowZip64=True) as zf:
             for name in self.NAMES:
                 self._files[name].flush()
                 header = {"descr": np.lib.format.dtype_to_descr(np.dtype("<f8")),
@@ -265,5 +294,5 @@ def model_arrays(model) -> dict[str, np.ndarray]:
                 vertex_mass=np.asarray(model.vertex_mass, np.float64))
 
 
-__all__ = ["TrajectoryStore", "FolderLock", "write_json", "read_json",
+__all__ = ["NPZ_NAME", "TrajectoryStore", "FolderLock", "write_json", "read_json",
            "write_trajectory", "model_arrays", "package_versions", "LOCK_NAME"]

@@ -14,6 +14,7 @@ from __future__ import annotations
 
 import copy
 import logging
+import os
 import time as _time
 from datetime import UTC, datetime
 from pathlib import Path
@@ -29,7 +30,7 @@ from .folders import RUN_RECORD
 from .frames import FrameWriter, read_frame
 from .outfolder import OutputFolder
 from .resume import FRAME_PATTERN, changed_input, completed_frames, recorded_through, resume_point
-from .runfiles import TrajectoryStore, model_arrays, read_json
+from .runfiles import NPZ_NAME, TrajectoryStore, model_arrays, read_json
 
 log = logging.getLogger(__name__)
 
@@ -71,8 +72,7 @@ class RunFolder(OutputFolder):
         self.store: TrajectoryStore | None = None
         self.writer: FrameWriter | None = None
         self._wall = _time.perf_counter()
-        self._npz_at = -np.inf   # perf_counter when trajectory.npz was last written
-        self._npz_cost = 0.0     # seconds that took
+        self._prebuilt: tuple[Path, int] | None = None   # (temporary npz, its frames)
         self._model = None
         self._fps = 1.0
         self._job = BackgroundJob()    # the frame being written in the background, if any
@@ -91,6 +91,8 @@ class RunFolder(OutputFolder):
                 process.close()              # the frame process (io.frameproc), if any
             if self.store is not None:
                 self.store.close()
+            if self._prebuilt is not None:   # end was not reached
+                self._prebuilt[0].unlink(missing_ok=True)
 
     def resume_point(self, shash: str, frames: int, inputs: dict | None = None, *,
                      scene: dict | None = None) -> int | None:
@@ -221,9 +223,8 @@ class RunFolder(OutputFolder):
 
     def write_frame(self, k: int, positions, velocities, record: dict | None = None, *,
                     wait: bool = True, state: dict | None = None) -> None:
-        """Frame k: its ``.vtu`` file, the store, its record (none for frame 0) and run.json
-        with ``last_frame`` = k (trajectory.npz with frame 0, then every few seconds:
-        :meth:`save_npz`).
+        """Frame k: the store (at once), then its ``.vtu`` file, its record (none for frame
+        0) and run.json with ``last_frame`` = k (trajectory.npz is written by :meth:`end`).
 
         Parameters
         ----------
@@ -245,6 +246,7 @@ class RunFolder(OutputFolder):
         x = np.array(positions, dtype=np.float64)
         v = np.array(velocities, dtype=np.float64)
         info = copy.deepcopy(self.info)      # run.json as of now, whatever changes next
+        self.store.append(x, v)   # raw and private: what end's trajectory.npz copies
         if wait:
             self._write_frame(k, x, v, record, info, state)
         else:
@@ -256,11 +258,9 @@ class RunFolder(OutputFolder):
         # first: a frame on disk has its state (compressed as the frames are)
         write_state(self.path, k, state or {}, compress=self.writer.compression == "zlib")
         self.writer.write(k, k / self._fps, x, v)
-        self.store.append(x, v)
         if record is not None:
             self.records.append(record)
         self.done = k
-        self._save_npz(force=k == 0)   # a first trajectory.npz at the start
         self._mark("writing", info=info)
 
     def wait(self) -> None:
@@ -273,32 +273,36 @@ class RunFolder(OutputFolder):
         """
         self._job.wait()
 
-    def save_npz(self, force: bool = False) -> None:
-        """Rebuild trajectory.npz from the store when forced, or when the time since the
-        last rebuild exceeds both 2 s and 20 × its cost (at most ~5 % of the run's time).
-
-        Parameters
-        ----------
-        force : bool
+    def save_npz(self) -> None:
+        """Rebuild trajectory.npz from the store now: frames 0..done (a resumed run's
+        start, before its first new frame).
 
         Returns
         -------
         None
         """
         self.wait()
-        self._save_npz(force)
+        self._save_npz()
 
-    def _save_npz(self, force: bool = False) -> None:
-        now = _time.perf_counter()
-        if not force and now - self._npz_at < max(2.0, 20 * self._npz_cost):
-            return
+    def _save_npz(self) -> None:
         count = self.done + 1
-        self.store.write_npz(self.path / "trajectory.npz", count,
-                             dict(time=np.arange(count) / self._fps,
-                                  **model_arrays(self._model)))
+        self.store.write_npz(self.path / NPZ_NAME, count, self._npz_extra(count))
         self.npz_frames = count
-        self._npz_at = _time.perf_counter()
-        self._npz_cost = self._npz_at - now
+
+    def _npz_extra(self, count: int) -> dict:
+        return dict(time=np.arange(count) / self._fps, **model_arrays(self._model))
+
+    def wait_last(self) -> None:
+        """:meth:`wait` for the last frame handed over, building meanwhile trajectory.npz of
+        every frame handed over (the store holds them) in a temporary file, which
+        :meth:`end` moves into place once they are all on disk: the copy overlaps the last
+        ``.vtu`` file (written by the frame process, :mod:`clothsim.io.frameproc`).
+        """
+        count = self.store.count
+        if count and count != self.npz_frames and self._prebuilt is None:
+            self._prebuilt = (self.store.write_npz_beside(self.path / NPZ_NAME, count,
+                                                          self._npz_extra(count)), count)
+        self.wait()
 
     def mark(self, status: str, record=None, *, error: str | None = None) -> None:
         """Write run.json: info, status, error, wall time [s], frame records.
@@ -349,8 +353,17 @@ class RunFolder(OutputFolder):
                 raise error_in_flight
             log.info("the frame being written when %s stopped failed too: %s", self.path,
                      error_in_flight)
+        tmp, built = self._prebuilt or (None, None)   # by wait_last
+        self._prebuilt = None
+        if tmp is not None:
+            try:   # used when it holds frames 0..done, which are all on disk now
+                if built == self.done + 1 != self.npz_frames:
+                    os.replace(tmp, self.path / NPZ_NAME)
+                    self.npz_frames = built
+            finally:
+                tmp.unlink(missing_ok=True)
         if self.done >= 0 and self.npz_frames != self.done + 1:   # unless it holds them all
-            self._save_npz(force=True)
+            self._save_npz()
         self._mark(status, error=error)
 
     def trajectory(self, name: str = "positions", count: int | None = None) -> np.ndarray:

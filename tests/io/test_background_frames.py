@@ -139,7 +139,7 @@ def test_an_interruption_waits_for_the_frame_in_flight(tmp_path):
 def test_the_end_rebuilds_trajectory_npz_only_when_it_lacks_frames(tmp_path, monkeypatch):
     model = cs.load_scene("hanging").build_model()
     folder = folder_with_frames(tmp_path / "r", model, 2, wait=False)
-    folder.save_npz(force=True)                  # frames 0..2: all of them
+    folder.save_npz()                            # frames 0..2: all of them
     rebuilt = []
     real = folder.store.write_npz
     monkeypatch.setattr(folder.store, "write_npz", lambda *a: (rebuilt.append(a[1]), real(*a)))
