@@ -168,6 +168,8 @@ class RunFolder(OutputFolder):
             self._plan(frames, start)  # before an earlier run goes: it may be refused
         if start is None:
             self.clear_earlier_run()
+        for stale in self.path.glob(f".{NPZ_NAME}.*.tmp.npz"):   # a killed run's (locked:
+            stale.unlink()                                      # no live writer's)
         self.store = TrajectoryStore(self.path, model.vertex_count)
         if start is None:
             self.mark("writing")  # the folder is a run folder before any frame exists
