@@ -4,8 +4,10 @@
 ``clothsim run hanging`` at that resolution in a fresh process (through the command line's
 own ``main``) with the run's phases wrapped in timers, and prints one line per phase: how
 often it ran, its wall time and the CPU time of the thread that ran it (the frame writer
-runs on a background thread, the pictures in a second process: their CPU overlaps the
-steps'), and the process's wall and CPU time in total. On a shared machine the wall time
+runs on a background thread, the frame files in a second process and the pictures in a
+third: their CPU overlaps the steps'; ``trajectory.npz`` is built once, beside the last
+frame, and moved into place by the final files), and the process's wall and CPU time in
+total. On a shared machine the wall time
 counts the other processes too: compare CPU seconds, or two variants interleaved
 (:func:`phases`, used by ``benchmarks.scale_ladder``).
 """
@@ -57,8 +59,10 @@ for owner, name, label in [
         (frames.FrameWriter, "write", "  frame .vtu + .pvd"),
         (frames.FrameWriter, "write_file", "    .vtu file (this process)"),
         (frameproc.FrameProcess, "write", "    .vtu file (frame process, waited for)"),
-        (runfiles.TrajectoryStore, "append", "  trajectory store"),
+        (runfiles.TrajectoryStore, "append", "trajectory store (run's thread)"),
         (runfolder.RunFolder, "_save_npz", "  trajectory.npz"),
+        (runfolder.RunFolder, "wait_last", "last frame: npz built, then waited for"),
+        (runfiles.TrajectoryStore, "write_npz_beside", "  trajectory.npz beside the last frame"),
         (runfolder.RunFolder, "_mark", "  run.json"),
         (pictures.PictureProcess, "start", "pictures: start"),
         (pictures.PictureProcess, "request", "pictures: hand-off"),

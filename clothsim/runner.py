@@ -13,7 +13,9 @@ file                 content
 ``trajectory.npz``   ``positions``, ``velocities`` (frames+1, n, 3), ``time``
                      (frames+1,), ``triangles`` (m, 3), ``springs`` (s, 2),
                      ``strands`` (e, 2), ``vertex_mass`` (n,); float64 / int64;
-                     assembled from a store streamed to disk, never held in memory
+                     assembled from a store streamed to disk, never held in memory,
+                     once: at the end (while the last frame is written) or at an
+                     interruption
 ``preview.gif``      small animation (at most ~60 frames), ``final.png`` last frame,
                      both drawing the obstacles and pins; drawn while the last frame
                      is written (a large cloth's by a second process,

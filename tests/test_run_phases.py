@@ -17,7 +17,11 @@ def test_the_phases_of_a_small_run_are_all_there_and_counted():
     assert rows["  frame .vtu + .pvd"][0] == frames + 1
     assert rows["factorization (CHOLMOD)"][0] == 1
     assert "    .vtu file (frame process, waited for)" not in rows   # 81 vertices: here
-    for name in ("imports", "model build", "final files (npz, run.json)", "  step 1"):
+    assert rows["trajectory store (run's thread)"][0] == frames + 1
+    assert "  trajectory.npz" not in rows            # written once, beside the last frame
+    for name in ("imports", "model build", "final files (npz, run.json)", "  step 1",
+                 "last frame: npz built, then waited for",
+                 "  trajectory.npz beside the last frame"):
         calls, wall, cpu = rows[name]
         assert calls == 1 and wall >= 0 and cpu >= 0, name
     table = run_phases.table(r)
