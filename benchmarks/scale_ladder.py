@@ -266,7 +266,9 @@ def main(argv: list[str] | None = None) -> None:
             lines += ["", f"Where a {n}² `clothsim run` of 5 frames spends its time "
                       "(`python -m benchmarks.run_phases`: wall and the CPU of the thread "
                       "that ran each phase; the frame files are written by a second process, "
-                      "the pictures by a third, whose CPU overlaps the steps'):", "",
+                      "the pictures by a third, whose CPU overlaps the steps'; "
+                      "`trajectory.npz` is built once, while the last frame's file is "
+                      "written):", "",
                       *run_phases.table(r)]
     OUT.write_text("\n".join(lines) + "\n")
     print(f"written to {OUT.relative_to(ROOT)}")
