@@ -10,8 +10,9 @@ process that worked (read from ``/proc/self/task``; Linux), and the thread pools
 threadpoolctl set them. Threads that work under ``single_threaded`` are CHOLMOD's own
 OpenMP team: SuiteSparse 5's CHOLMOD runs loops of its supernodal factorization with
 ``num_threads(CHOLMOD_OMP_NUM_THREADS)``, a size fixed when it was compiled (4 by default),
-which neither threadpoolctl nor ``OMP_NUM_THREADS`` changes (``OMP_THREAD_LIMIT``, read
-when libgomp loads, caps it: run it with that variable set to compare).
+which neither threadpoolctl nor ``OMP_NUM_THREADS`` changes. ``OMP_THREAD_LIMIT``, read
+when libgomp loads, caps it, but is no remedy: set to 2, it made one 513² factorization
+take many times its CPU (run this with it set to see; it takes minutes then).
 """
 
 from __future__ import annotations
