@@ -93,6 +93,13 @@ def held_forces(holding, weight: np.ndarray) -> tuple[np.ndarray, np.ndarray, np
     return holding.vertices, fn / weight[holding.vertices], per_noise
 
 
+def _weights(sim) -> np.ndarray:
+    """m g of every vertex [N] (g: the scene's gravity, 9.81 m/s² without one)."""
+    g = next((np.linalg.norm(e.acceleration) for e in sim.effects if e.kind == "gravity"),
+             9.81)
+    return sim.model.vertex_mass * g
+
+
 def _q(a: np.ndarray, qs=(10, 50, 90)) -> str:
     return "/".join(f"{q:.2g}" for q in np.percentile(a, qs)) if len(a) else "-"
 
@@ -122,9 +129,7 @@ def settle(scene: str = "drape-sphere", size: int = 65, frames: int | None = Non
     spheres = [e for e in obstacles if e.kind == "sphere"]
     model = sim.model
     hem = border_band(model.mesh, HEM_RINGS)
-    gravity = next((np.linalg.norm(e.acceleration) for e in sim.effects
-                    if e.kind == "gravity"), 9.81)
-    weight = model.vertex_mass * gravity
+    weight = _weights(sim)
     sim.expect_steps(frames * sc.substeps)
     before = []
     for f in range(frames):
@@ -182,8 +187,11 @@ def resolve(scene: str, size: int, frame: int, iterations=(50, 200)):
     ------
     str
         The step's iterations and residual, the largest speed of the whole cloth and of
-        its hem (:data:`HEM_RINGS`) after it [m/s], and how far [mm] its positions end
-        from the first count's.
+        its hem (:data:`HEM_RINGS`) after it [m/s], how far [mm] its positions end from
+        the first count's, and for a sphere the vertices held below its equator: the
+        10/50/90th percentiles of their normal force in the step / (m g), how many the
+        step found pulled away (force < 0), and the noise (whether a small force is the
+        solve's truncation: it would change with the iterations).
     """
     sc = _scene(scene, size, "hold")
     sim = sc.build_simulation()
@@ -192,6 +200,7 @@ def resolve(scene: str, size: int, frame: int, iterations=(50, 200)):
         sim.step()
     start, carried = sim.state, effect_states(list(sim.effects))
     hem = border_band(sim.model.mesh, HEM_RINGS)
+    weight = _weights(sim)
     first = None
     for count in iterations:
         again = _scene(scene, size, "hold", solver={"iterations": int(count)})
@@ -199,16 +208,26 @@ def resolve(scene: str, size: int, frame: int, iterations=(50, 200)):
         restore_effect_states(list(other.effects), carried)
         other.state = start
         other.expect_steps(sc.substeps)
+        spheres = [e for e in other.effects if e.kind == "sphere"]
         for _ in range(sc.substeps):
+            before = [s._holding for s in spheres]
             record = other.step()
         x = other.state.positions
         speed = np.linalg.norm(other.state.velocities, axis=1)
         first = x if first is None else first
+        below = ""
+        for s, h in zip(spheres, before):
+            v, per_weight, _ = held_forces(h, weight)
+            under = start.positions[v, 1] < s.center[1]
+            below += (f"; {int(under.sum())} held below the equator, normal force / (m g) "
+                      f"{_q(per_weight[under])}, {int((per_weight[under] < 0).sum())} "
+                      f"pulled away (noise {h.planes.noise / weight.mean():.2g} m g)")
         yield (f"frame {frame} solved with {count} iterations: residual "
                f"{record.residual:.3g}, max |v| {speed.max():.4f} m/s (hem "
                f"{speed[hem].max():.4f}), {int((speed >= REST_SPEED).sum())} vertices at "
                f"{REST_SPEED} m/s or faster; positions "
-               f"{1000 * np.linalg.norm(x - first, axis=1).max():.3f} mm from the first")
+               f"{1000 * np.linalg.norm(x - first, axis=1).max():.3f} mm from the first"
+               + below)
 
 
 def main(argv=None) -> None:

@@ -86,7 +86,9 @@ def test_resolve_solves_one_step_again_from_the_same_state():
         warnings.simplefilter("ignore")
         lines = list(resolve("drape-sphere", 9, 8, (50, 5, 50)))
     pattern = (r"frame 8 solved with (\d+) iterations: residual \S+, max \|v\| ([\d.]+) m/s "
-               r"\(hem ([\d.]+)\), \d+ vertices at 0.02 m/s or faster; positions ([\d.]+) mm")
+               r"\(hem ([\d.]+)\), \d+ vertices at 0.02 m/s or faster; positions ([\d.]+) mm "
+               r"from the first; (\d+) held below the equator, normal force / \(m g\) \S+, "
+               r"(\d+) pulled away \(noise \S+ m g\)")
     got = [re.match(pattern, line) for line in lines]
     assert all(got), lines
     assert [int(m.group(1)) for m in got] == [50, 5, 50]
@@ -94,3 +96,4 @@ def test_resolve_solves_one_step_again_from_the_same_state():
     assert float(got[1].group(4)) > 0.0           # 5 iterations: not the same answer
     assert float(got[2].group(4)) == 0.0          # the same state again: the same step
     assert got[0].group(2) == got[2].group(2)
+    assert all(int(m.group(6)) <= int(m.group(5)) for m in got)
