@@ -25,7 +25,6 @@ is the truncated solve's (it shrinks with more iterations) or the cloth's. Write
 
 from __future__ import annotations
 
-import argparse
 import warnings
 
 import numpy as np
@@ -33,6 +32,7 @@ import numpy as np
 from clothsim.effects.base import effect_states, restore_effect_states
 
 from .contact import REST_SPEED, _scene
+from .contact_chatter import scene_parser
 
 #: Free vertices this many edges or fewer from the cloth's border count as its hem.
 HEM_RINGS = 3
@@ -110,13 +110,9 @@ def settle(scene: str = "drape-sphere", size: int = 65, frames: int | None = Non
 
     Parameters
     ----------
-    scene : {"drape-sphere", "drop-on-square"}
-    size : int
-        Vertices per side.
-    frames : int, optional
-        Frames to run (default: the scene's).
-    last : int
-        How many of the final frames to report.
+    scene, size, frames, last
+        As :func:`benchmarks.contact_chatter.chatter` (the scene as shipped at ``size``²,
+        ``frames`` of it, the last ``last`` reported).
 
     Yields
     ------
@@ -231,12 +227,7 @@ def resolve(scene: str, size: int, frame: int, iterations=(50, 200)):
 
 
 def main(argv=None) -> None:
-    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    parser.add_argument("--scene", default="drape-sphere",
-                        choices=("drape-sphere", "drop-on-square"))
-    parser.add_argument("--size", type=int, default=65)
-    parser.add_argument("--frames", type=int, default=None)
-    parser.add_argument("--last", type=int, default=30)
+    parser = scene_parser(__doc__.splitlines()[0], 30)
     parser.add_argument("--resolve", type=int, metavar="F", default=None,
                         help="solve frame F's step again with each --iterations count")
     parser.add_argument("--iterations", type=int, nargs="+", default=[50, 200])

@@ -97,3 +97,15 @@ def test_resolve_solves_one_step_again_from_the_same_state():
     assert float(got[2].group(4)) == 0.0          # the same state again: the same step
     assert got[0].group(2) == got[2].group(2)
     assert all(int(m.group(6)) <= int(m.group(5)) for m in got)
+
+
+def test_main_prints_the_report_and_the_resolved_step(capsys):
+    from benchmarks.contact_settle import main
+
+    main(["--size", "9", "--frames", "12", "--last", "1"])
+    out = capsys.readouterr().out.splitlines()
+    assert out[0].startswith("frame  11: max |v|") and out[1].startswith("held below")
+    main(["--size", "9", "--resolve", "7", "--iterations", "50", "20"])
+    out = capsys.readouterr().out.splitlines()
+    assert [line.split(" iterations")[0] for line in out] == [
+        "frame 7 solved with 50", "frame 7 solved with 20"]
