@@ -91,14 +91,20 @@ def chatter(scene: str = "drape-sphere", size: int = 65, frames: int | None = No
                    f"speed {_quantiles(speed[held.vertices[s2l | l2s]])} m/s")
 
 
-def main(argv=None) -> None:
-    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+def scene_parser(description: str, last: int) -> argparse.ArgumentParser:
+    """The options of the hold-mode diagnostics: ``--scene``, ``--size``, ``--frames`` and
+    ``--last`` (default ``last``)."""
+    parser = argparse.ArgumentParser(description=description)
     parser.add_argument("--scene", default="drape-sphere",
                         choices=("drape-sphere", "drop-on-square"))
     parser.add_argument("--size", type=int, default=65)
     parser.add_argument("--frames", type=int, default=None)
-    parser.add_argument("--last", type=int, default=6)
-    args = parser.parse_args(argv)
+    parser.add_argument("--last", type=int, default=last)
+    return parser
+
+
+def main(argv=None) -> None:
+    args = scene_parser(__doc__.splitlines()[0], 6).parse_args(argv)
     warnings.simplefilter("ignore")
     for line in chatter(args.scene, args.size, args.frames, args.last):
         print(line, flush=True)
