@@ -18,6 +18,7 @@ from .contacts import ContactSet
 from .effects.base import HOOKS, BoundEffects, Effect, overrides
 from .effects.pins import Pin
 from .errors import InputError, NonFiniteStateError, check_finite
+from .magnitudes import check_step
 from .model import Model
 from .objective import objective_gradient
 from .problem import PinSet, check_initial_guess
@@ -100,6 +101,8 @@ class Simulation:
                                  f"simulation; create one effect per simulation")
         for e in effects:
             e.bind(model, self.h)
+        # no float64 overflow, singular M + h²L or motion lost to rounding (a frozen cloth)
+        check_step(model, self.h, [(f"effects[{i}]", e) for i, e in enumerate(effects)])
         self._effects = BoundEffects(effects)
         self._hooks = {hook: [e for e in effects if overrides(e, hook)] for hook in HOOKS}
         t1 = (0.0 if state is None else float(getattr(state, "time", 0.0))) + self.h
