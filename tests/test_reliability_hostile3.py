@@ -8,6 +8,13 @@ or argument, or a run that stays finite and moves.
 
 from __future__ import annotations
 
+import os
+import shlex
+import shutil
+import subprocess
+import sys
+from pathlib import Path
+
 import numpy as np
 import pytest
 
@@ -147,3 +154,249 @@ def test_an_effect_after_the_cloth_files_pins_is_named_by_its_own_index(tmp_path
                  '[[effects]]\nkind = "gravity"\nacceleration = [0, -1e-30, 0]\n')
     line = _one_line(capsys, main(["validate", str(p)]))
     assert line.startswith(f"{p}: effects[0].acceleration: gravity's largest"), line
+
+
+# ------------------------------------------------------------------ make check with spaces
+CPP = Path(__file__).resolve().parents[1] / "examples" / "ports" / "cpp"
+
+
+def _make(*args: str) -> subprocess.CompletedProcess:
+    if shutil.which("make") is None:
+        pytest.skip("make is not installed")
+    return subprocess.run(["make", "-s", "-C", str(CPP), *args], capture_output=True,
+                          text=True)
+
+
+def _student(root: Path) -> tuple[Path, Path]:
+    """A solution in a folder whose name holds a space and a non-ASCII letter."""
+    src, include = root / "sp ace é" / "src", root / "sp ace é" / "include"
+    src.mkdir(parents=True)
+    include.mkdir()
+    shutil.copy2(CPP / "mass_springs_solution.cpp", src / "my solution.cpp")
+    (include / "own header.h").write_text("#pragma once\n")
+    return src, include
+
+
+def test_make_takes_a_solution_whose_path_holds_spaces(tmp_path):
+    """SOLUTION="$PWD/…/*.cpp" under a folder with a space: make split it into words and
+    said 'SOLUTION: no file /…/sp' (docs/howto/check-a-cpp-solution.md)."""
+    src, include = _student(tmp_path)
+    build = tmp_path / "b ü"
+    done = _make(f"BUILD={build}", f"SOLUTION={src}/*.cpp", f"SOLUTION_INCLUDE={include}",
+                 "driver-path")
+    assert done.returncode == 0, done.stderr
+    driver = Path(done.stdout.strip())
+    assert driver.parent.parent == build and driver.name == "assignment_driver", driver
+    # the same files by their full name: the same build; another file: another build
+    same = _make(f"BUILD={build}", f"SOLUTION={src / 'my solution.cpp'}",
+                 f"SOLUTION_INCLUDE={include}", "driver-path")
+    assert Path(same.stdout.strip()) == driver, same.stderr
+    (src / "my solution.cpp").write_text("// changed\n", encoding="utf-8")
+    other = _make(f"BUILD={build}", f"SOLUTION={src}/*.cpp", f"SOLUTION_INCLUDE={include}",
+                  "driver-path")
+    assert other.returncode == 0 and Path(other.stdout.strip()) != driver
+    # several files separated by spaces still work, and a missing one is named whole
+    a, b = tmp_path / "a.cpp", tmp_path / "b.cpp"
+    a.write_text("\n")
+    b.write_text("\n")
+    assert _make(f"BUILD={build}", f"SOLUTION={a} {b}", "driver-path").returncode == 0
+    missing = _make(f"BUILD={build}", f"SOLUTION={src}/nope file.cpp", "driver-path")
+    assert missing.returncode != 0
+    assert f"SOLUTION: no file {src}/nope file.cpp (relative paths" in missing.stderr, \
+        missing.stderr
+    nofolder = _make(f"BUILD={build}", f"SOLUTION={a}", f"SOLUTION_INCLUDE={tmp_path}/no pe",
+                     "driver-path")
+    assert f"SOLUTION_INCLUDE: no folder {tmp_path}/no pe" in nofolder.stderr
+
+
+@pytest.mark.slow
+def test_make_check_runs_the_howto_line_in_folders_with_spaces(tmp_path):
+    """The howto's two lines, in a folder with a space and a non-ASCII letter: the driver
+    built with the student's file, run on the coursework case and checked: PASS."""
+    if shutil.which("g++") is None or not Path("/usr/include/eigen3/Eigen/Sparse").is_file():
+        pytest.skip("g++ or Eigen is not installed")
+    src, include = _student(tmp_path)
+    work = src.parent
+    clothsim = f"{shlex.quote(sys.executable)} -m clothsim"
+    env = dict(os.environ, PYTHONPATH=str(CPP.parents[2]))
+    conf = subprocess.run([sys.executable, "-m", "clothsim", "conformance", "--profile",
+                           "coursework", "--out", str(work / "out" / "coursework")],
+                          capture_output=True, text=True, env=env)
+    assert conf.returncode == 0, conf.stderr
+    net = work / "out" / "coursework" / "net"
+    done = subprocess.run(["make", "check", "-C", str(CPP), f"BUILD={work / 'b ü'}",
+                           "PROGRAM=assignment_driver", f"SOLUTION={src}/*.cpp",
+                           f"SOLUTION_INCLUDE={include}", f"MODEL={net}",
+                           f"SCENE={net / 'scene.toml'}", f"CLOTHSIM={clothsim}"],
+                          capture_output=True, text=True, env=env)
+    assert done.returncode == 0, (done.stdout[-2000:], done.stderr[-2000:])
+    assert "PASS: 30 steps agree" in done.stdout, done.stdout
+
+
+# ------------------------------------------------------------------ symbolic links
+OUT_COMMANDS = [["run", "hanging", "--frames", "1", "--no-preview"],
+                ["export", "hanging", "--frames", "1"],
+                ["accuracy", "hanging", "--quick"],
+                ["conformance"]]
+
+
+@pytest.mark.parametrize("command", OUT_COMMANDS)
+def test_a_dangling_link_as_out_is_bad_input_naming_the_link(tmp_path, capsys, command):
+    """--out (or a folder above it) a link to nowhere: was exit 1, 'File exists; nothing
+    was written'. clothsim makes no folder through it (its target stays absent)."""
+    link, target = tmp_path / "out", tmp_path / "nowhere"
+    link.symlink_to(target)
+    line = _one_line(capsys, main(command + ["--out", str(link)]))
+    assert line == (f"{link}: is a symbolic link to {target}, which does not exist; clothsim "
+                    f"makes no folder through a dangling link (create its target, or choose "
+                    f"another --out)"), line
+    line = _one_line(capsys, main(command + ["--out", str(link / "sub")]))
+    assert line.startswith(f"{link / 'sub'}: {link} is a symbolic link to {target}"), line
+    assert not target.exists() and not os.path.lexists(target)
+
+
+def _mine(folder: Path, names) -> dict[Path, bytes]:
+    folder.mkdir(exist_ok=True)
+    for name in names:
+        (folder / name).write_bytes(b"mine\n")
+    return {p: p.read_bytes() for p in folder.iterdir()}
+
+
+def test_a_linked_folder_inside_a_run_folder_is_refused_and_its_target_untouched(tmp_path,
+                                                                               capsys):
+    """A run's state/ linked to a user's folder: a fresh run deleted the user's
+    frame_*.npz there and wrote its own state files in their place."""
+    out = tmp_path / "r"
+    args = ["run", "drop-on-square", "--frames", "2", "--no-preview", "--out", str(out)]
+    assert main(args) == 0
+    assert (out / "state" / "frame_000001.npz").is_file()
+    shutil.rmtree(out / "state")
+    theirs = tmp_path / "theirs"
+    before = _mine(theirs, ["frame_000000.npz", "frame_000001.npz", "notes.txt"])
+    (out / "state").symlink_to(theirs)
+    capsys.readouterr()
+    for extra in ([], ["--force"], ["--resume", "--frames", "3"]):
+        line = _one_line(capsys, main(args + extra))
+        assert line == (f"{out / 'state'}: is a symbolic link to a folder ({theirs}); clothsim "
+                        f"never writes through one (remove it, or choose another --out)"), line
+        assert {p: p.read_bytes() for p in theirs.iterdir()} == before
+
+
+def test_a_linked_case_folder_inside_a_conformance_set_is_refused(tmp_path, capsys):
+    """A conformance case linked to a user's folder: its scene.toml was overwritten."""
+    out = tmp_path / "c"
+    assert main(["conformance", "--out", str(out)]) == 0
+    case = sorted(p for p in out.iterdir() if p.is_dir())[0]
+    shutil.rmtree(case)
+    theirs = tmp_path / "theirs"
+    before = _mine(theirs, ["scene.toml", "README.md"])
+    case.symlink_to(theirs)
+    capsys.readouterr()
+    line = _one_line(capsys, main(["conformance", "--out", str(out)]))
+    assert line.startswith(f"{case}: is a symbolic link to a folder"), line
+    assert {p: p.read_bytes() for p in theirs.iterdir()} == before
+
+
+@pytest.mark.parametrize("name", ["trajectory.npz", "frame_000001.vtu", "trajectory.pvd",
+                                  "preview.gif", "final.png"])
+def test_a_linked_result_file_is_replaced_never_written_through(tmp_path, name):
+    """A link to a file in a run folder is legitimate to replace: the run renames its new
+    file onto the name, which replaces the link; the linked file never changes (fresh run
+    and --resume). A link as the --out folder itself is followed (a folder on another
+    disk)."""
+    user = tmp_path / "user.txt"
+    user.write_text("precious\n")
+    real = tmp_path / "disk"
+    real.mkdir()
+    out = tmp_path / "r"
+    out.symlink_to(real)
+    args = ["run", "hanging", "--frames", "2", "--out", str(out)]
+    assert main(args + (["--no-preview"] if "gif" not in name and "png" not in name else [])) \
+        == 0
+    for extra in ([], ["--resume", "--frames", "3"]):
+        (real / name).unlink()
+        (real / name).symlink_to(user)
+        assert main(args + extra) == 0
+        assert user.read_text() == "precious\n"
+        assert (real / name).is_file() and not (real / name).is_symlink()
+    assert len(list(real.glob("frame_*.vtu"))) == 4
+
+
+@pytest.mark.parametrize("target", ["user.txt", "nowhere"])
+def test_a_linked_lock_file_is_refused_and_never_created_or_written(tmp_path, capsys, target):
+    out = tmp_path / "r"
+    out.mkdir()
+    user = tmp_path / "user.txt"
+    user.write_text("precious\n")
+    (out / ".clothsim.lock").symlink_to(tmp_path / target)
+    line = _one_line(capsys, main(["run", "hanging", "--frames", "1", "--no-preview",
+                                   "--out", str(out)]))
+    assert line.startswith(f"{out / '.clothsim.lock'}: is a symbolic link;"), line
+    assert user.read_text() == "precious\n" and not (tmp_path / "nowhere").exists()
+
+
+# ------------------------------------------------------------------ accuracy --scheduler
+def _refusal_within(address: str, seconds: float = 60) -> str:
+    """check_scheduler(address)'s one-line refusal, run under a timeout (a hang fails)."""
+    pytest.importorskip("dask.distributed", reason="dask.distributed is not installed")
+    import threading
+
+    from clothsim.accuracy.parallel import check_scheduler
+
+    result = {}
+
+    def check():
+        try:
+            check_scheduler(address)
+        except InputError as exc:
+            result["error"] = str(exc)
+
+    thread = threading.Thread(target=check, daemon=True)
+    thread.start()
+    thread.join(seconds)
+    assert not thread.is_alive(), f"check_scheduler({address!r}) hung"
+    text = result["error"]
+    assert "\n" not in text and text.startswith(f"accuracy.scheduler: cannot use {address!r}: ")
+    return text.removeprefix(f"accuracy.scheduler: cannot use {address!r}: ")
+
+
+@pytest.mark.parametrize("address, why", [
+    ("", "empty; give a running scheduler's address, e.g. tcp://10.0.0.5:8786"),
+    (" ", "empty; give a running scheduler's address"),  # was: missing port number in ''
+    ("tcp://127.0.0.1:99999", "port 99999 is out of range (1 to 65535)"),  # was: refused
+    ("tcp://127.0.0.1:0", "port 0 is out of range (1 to 65535)"),
+    ("inproc://x", "an inproc:// address names a scheduler inside this process"),  # was:
+    # 'not enough values to unpack (expected 3, got 1)'
+    ("udp://127.0.0.1:1", "unknown address scheme 'udp'"),
+])
+def test_a_scheduler_address_that_names_no_scheduler_is_one_line_within_seconds(address, why):
+    assert _refusal_within(address).startswith(why)
+
+
+def test_a_listener_that_never_accepts_is_named_within_the_timeout(monkeypatch):
+    """A port whose server listens but never accepts (the kernel completes the connection
+    from its backlog): the probe waits for the handshake, not for ever."""
+    import socket
+
+    from clothsim.accuracy import parallel
+
+    monkeypatch.setattr(parallel, "CONNECT_TIMEOUT", 1)
+    with socket.socket() as srv:
+        srv.bind(("127.0.0.1", 0))
+        srv.listen(1)
+        address = f"tcp://127.0.0.1:{srv.getsockname()[1]}"
+        assert _refusal_within(address).startswith(
+            "not a Dask scheduler: it accepted the connection but sent no Dask handshake "
+            "within 1 s")
+
+
+def test_the_command_refuses_a_closed_port_in_one_line_under_a_timeout(tmp_path):
+    """The command line as a user runs it, in a process of its own under a timeout."""
+    pytest.importorskip("dask.distributed", reason="dask.distributed is not installed")
+    done = subprocess.run([sys.executable, "-m", "clothsim", "accuracy", "hanging", "--quick",
+                           "--scheduler", "tcp://127.0.0.1:1", "--out", str(tmp_path / "acc")],
+                          capture_output=True, text=True, timeout=120)
+    assert done.returncode == 2, done.stderr
+    assert done.stderr == ("clothsim: error: accuracy.scheduler: cannot use "
+                           "'tcp://127.0.0.1:1': Connection refused\n"), done.stderr
+    assert not (tmp_path / "acc").exists()
