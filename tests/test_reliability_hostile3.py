@@ -400,3 +400,51 @@ def test_the_command_refuses_a_closed_port_in_one_line_under_a_timeout(tmp_path)
     assert done.stderr == ("clothsim: error: accuracy.scheduler: cannot use "
                            "'tcp://127.0.0.1:1': Connection refused\n"), done.stderr
     assert not (tmp_path / "acc").exists()
+
+
+# ------------------------------------------------------------------ huge forces
+def test_a_pin_flung_beyond_float64_stops_in_one_line(tmp_path, capsys):
+    """flag's pins moved at 1e75 m/s: the run stops at frame 3 naming the cause, exit 1;
+    it also printed 'WARNING: RuntimeWarning (once): overflow encountered in dot' (the
+    gradient's norm, whose inf the solver itself explains)."""
+    out = tmp_path / "o"
+    code = main(["run", "flag", "--frames", "3", "--no-preview", "--out", str(out),
+                 "--set", "effects[1].velocity=[1e75, 0, 0]"])
+    line = _one_line(capsys, code, 1)
+    assert line.startswith("frame 3: the state became non-finite (the step's gradient |grad g| "
+                           "overflows float64 from its start: h²|f_ext|"), line
+    assert "frame 2 is the last one kept" in line
+
+
+@pytest.mark.parametrize("change", ["effects[1].velocity=[0, 3e7, 0]",   # pins 1e6 m a frame
+                                    "effects[0].acceleration=[0, -1e9, 0]",
+                                    "effects[2].velocity=[1e12, 0, 0]"])  # edge-on: no drag
+def test_huge_forces_within_the_bounds_run_finite_and_move(tmp_path, change):
+    out = tmp_path / "o"
+    assert main(["run", "flag", "--frames", "3", "--no-preview", "--out", str(out),
+                 "--set", change]) == 0
+    x = np.load(out / "trajectory.npz")["positions"]
+    assert np.isfinite(x).all()
+    assert all(np.abs(x[k] - x[k - 1]).max() > 0 for k in range(1, 4))  # never frozen
+
+
+def test_a_wind_whose_explicit_drag_overshoots_is_named_in_a_warning(tmp_path, capsys):
+    """flag in a 1e12 m/s wind facing it: 3 frames ended 2e115 m away with exit 0 and no
+    word (the drag, held over each step, overshot and grew every step). Now a
+    StabilityWarning names the wind, h·ρ·C_d·|w|·A_i/m_i and the longest stable step; the
+    flag's own 5 m/s wind (0.63) says nothing."""
+    from clothsim.solvers.symplectic import StabilityWarning
+
+    mesh = cs.grid(11, 11, size=(1.0, 1.0), center=(0.0, 1.0, 0.0), plane="xy")
+    model = cs.Model.build(mesh, cs.grid_springs(mesh, structural=800.0), total_mass=1.0)
+    with pytest.warns(StabilityWarning, match=r"^effects\[1\]\.velocity: the wind's drag is "
+                                              r"explicit .* = 48.4 at vertex 29 "):
+        cs.Simulation(model, h=1 / 30, effects=[cs.Pin([110]), cs.Wind((0.0, 0.0, 1e3))])
+    cs.Simulation(model, h=1 / 30, effects=[cs.Pin([110]), cs.Wind((0.0, 0.0, 5.0))])
+    out = tmp_path / "o"
+    assert main(["run", "flag", "--frames", "1", "--no-preview", "--out", str(out), "--set",
+                 "effects[2].velocity=[0, 0, 1e12]"]) == 0
+    err = capsys.readouterr().err
+    assert err.count("\n") == 1 and "StabilityWarning" in err, err
+    assert "effects[2].velocity: the wind's drag is explicit" in err
+    assert "a step shorter than 5.6e-13 s" in err, err
