@@ -448,3 +448,16 @@ def test_a_wind_whose_explicit_drag_overshoots_is_named_in_a_warning(tmp_path, c
     assert err.count("\n") == 1 and "StabilityWarning" in err, err
     assert "effects[2].velocity: the wind's drag is explicit" in err
     assert "a step shorter than 5.6e-13 s" in err, err
+
+
+def test_every_pwd_in_the_pages_commands_is_quoted():
+    """A clone whose path holds a space (`~/My Files/clothsim`): an unquoted $PWD in a
+    pasted command splits into two words (`MODEL=$PWD/out/…` in docs/ports.md and the
+    check-a-cpp-solution howto)."""
+    import re
+
+    from .test_docs_pages import PAGES, blocks, commands, is_shell
+
+    bare = [f"{b.name}: {c}" for page in PAGES for b in blocks(page) if is_shell(b)
+            for c in commands(b) if "$PWD" in re.sub(r'"[^"]*"', "", c)]
+    assert not bare, "\n".join(bare)
