@@ -297,13 +297,13 @@ def test_a_linked_case_folder_inside_a_conformance_set_is_refused(tmp_path, caps
     assert {p: p.read_bytes() for p in theirs.iterdir()} == before
 
 
-@pytest.mark.parametrize("name", ["trajectory.npz", "frame_000001.vtu", "trajectory.pvd",
-                                  "preview.gif", "final.png"])
-def test_a_linked_result_file_is_replaced_never_written_through(tmp_path, name):
+def test_linked_result_files_are_replaced_never_written_through(tmp_path):
     """A link to a file in a run folder is legitimate to replace: the run renames its new
     file onto the name, which replaces the link; the linked file never changes (fresh run
     and --resume). A link as the --out folder itself is followed (a folder on another
     disk)."""
+    names = ["trajectory.npz", "frame_000001.vtu", "trajectory.pvd", "preview.gif",
+             "final.png"]
     user = tmp_path / "user.txt"
     user.write_text("precious\n")
     real = tmp_path / "disk"
@@ -311,14 +311,15 @@ def test_a_linked_result_file_is_replaced_never_written_through(tmp_path, name):
     out = tmp_path / "r"
     out.symlink_to(real)
     args = ["run", "hanging", "--frames", "2", "--out", str(out)]
-    assert main(args + (["--no-preview"] if "gif" not in name and "png" not in name else [])) \
-        == 0
+    assert main(args) == 0
     for extra in ([], ["--resume", "--frames", "3"]):
-        (real / name).unlink()
-        (real / name).symlink_to(user)
+        for name in names:
+            (real / name).unlink()
+            (real / name).symlink_to(user)
         assert main(args + extra) == 0
         assert user.read_text() == "precious\n"
-        assert (real / name).is_file() and not (real / name).is_symlink()
+        for name in names:
+            assert (real / name).is_file() and not (real / name).is_symlink(), name
     assert len(list(real.glob("frame_*.vtu"))) == 4
 
 
