@@ -18,6 +18,7 @@ from .contacts import ContactSet
 from .effects.base import HOOKS, BoundEffects, Effect, overrides
 from .effects.pins import Pin
 from .errors import InputError, NonFiniteStateError, check_finite
+from .magnitudes import check_step
 from .model import Model
 from .objective import objective_gradient
 from .problem import PinSet, check_initial_guess
@@ -100,6 +101,8 @@ class Simulation:
                                  f"simulation; create one effect per simulation")
         for e in effects:
             e.bind(model, self.h)
+        # no float64 overflow, singular M + h²L or motion lost to rounding (a frozen cloth)
+        check_step(model, self.h, [(f"effects[{i}]", e) for i, e in enumerate(effects)])
         self._effects = BoundEffects(effects)
         self._hooks = {hook: [e for e in effects if overrides(e, hook)] for hook in HOOKS}
         t1 = (0.0 if state is None else float(getattr(state, "time", 0.0))) + self.h
@@ -208,6 +211,8 @@ class Simulation:
             f = np.zeros_like(s.positions)
             for e in self._hooks["add_force"]:
                 e.add_force(t, s, f)
+            if not np.isfinite(f).all():  # a blow-up an effect's force met first
+                raise NonFiniteStateError(self._force_cause(s))
         y = s.positions + h * s.velocities
         for e in self._hooks["adjust_target"]:
             y = e.adjust_target(t, s, y)
@@ -220,6 +225,21 @@ class Simulation:
                            pins.anchor_stiffness, start=self.initial_guess,
                            contact_vertices=held.vertices, contact_normals=held.normals,
                            contact_offsets=held.offsets)
+
+    def _force_cause(self, s: State) -> str:
+        """Which effect's force is not finite in the step from ``s``, and the state's size."""
+        with np.errstate(all="ignore"):
+            size = (f"|x| up to {float(np.abs(s.positions).max()):.3g} m, |v| up to "
+                    f"{float(np.abs(s.velocities).max()):.3g} m/s")
+            for e in self._hooks["add_force"]:
+                f = np.zeros_like(s.positions)
+                e.add_force(s.time, s, f)
+                if not np.isfinite(f).all():
+                    i = int(np.flatnonzero(~np.isfinite(f).all(axis=1))[0])
+                    return (f"the external forces became non-finite in the step from t = "
+                            f"{s.time:.6g} s: {e.kind}'s force on vertex {i} is "
+                            f"{f[i].tolist()} ({size})")
+        return f"the external forces became non-finite in the step from t = {s.time:.6g} s"
 
     def _held_sets(self, t: float) -> list[ContactSet]:
         return [e.hold_contacts(t) for e in self._hooks["hold_contacts"]]

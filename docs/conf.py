@@ -93,7 +93,8 @@ API_PAGES = {
         "clothsim.mesh", "clothsim.polygon", "clothsim.mesh_checks", "clothsim.voronoi",
         "clothsim.springs", "clothsim.model", "clothsim.gallery"]),
     "solvers": ("Solvers and the time step", [
-        "clothsim.simulation", "clothsim.state", "clothsim.problem", "clothsim.contacts",
+        "clothsim.simulation", "clothsim.magnitudes", "clothsim.state", "clothsim.problem",
+        "clothsim.contacts",
         "clothsim.objective", "clothsim.solvers", "clothsim.factorization",
         "clothsim.factor_mode"]),
     "effects": ("Effects", ["clothsim.effects"]),

@@ -26,7 +26,7 @@ STAGES = [
     {"problem", "objective", "contacts"},
     {"solvers"},
     {"effects"},
-    {"simulation", "state"},
+    {"simulation", "state", "magnitudes"},
     {"gallery"},
     {"io"},
     {"datasets"},

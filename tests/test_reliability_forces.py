@@ -3,7 +3,7 @@
 Gravity, an impulse, a force (per vertex or from a file), a wind or a pin's velocity of 1e160 …
 1e300 made the step's gradient overflow: the run finished with exit 0, status completed,
 0 iterations, residual inf, and the cloth never moved. A scene is now refused when it is
-built, naming the key (clothsim.scene.scale.force_problem: h²|f|·√n ≤ 1e150 kg·m and
+built, naming the key (clothsim.magnitudes.force_problem: h²|f|·√n ≤ 1e150 kg·m and
 h²|f|/m ≤ 1e100 m per step, h|v| ≤ 1e100 m for a pin); a step whose gradient overflows
 anyway (the Python API, a cloth that travelled too far) raises NonFiniteStateError naming
 the magnitude, and `run` stops with exit 1 and status failed.
@@ -12,13 +12,14 @@ the magnitude, and `run` stops with exit 1 and status failed.
 from __future__ import annotations
 
 import json
+import re
 
 import numpy as np
 import pytest
 
 import clothsim as cs
 from clothsim.cli import main
-from clothsim.errors import NonFiniteStateError
+from clothsim.errors import InputError, NonFiniteStateError
 from clothsim.scene import Scene, SceneError, load_scene
 
 BASE = {"scene": {"frames": 2}, "cloth": {"resolution": [4, 4], "plane": "xy"},
@@ -76,11 +77,23 @@ def test_ordinary_scenes_are_far_from_the_bounds():
         load_scene(name).build_simulation()  # no refusal
 
 
-def test_the_python_api_fails_the_step_loudly_instead_of_freezing():
+def test_the_python_api_fails_the_step_loudly_instead_of_freezing(monkeypatch):
+    """Simulation refuses the forces as the scene does (clothsim.magnitudes.check_step);
+    with that bound off (a cloth that travelled beyond it), the step's backstop raises."""
+    import clothsim.simulation
+
     mesh = cs.grid(4, 4, plane="xy")
     model = cs.Model.build(mesh, cs.grid_springs(mesh, structural=100.0), total_mass=1.0)
-    for effects in ([cs.Gravity((0.0, -1e300, 0.0))], [cs.Force((0.0, 1e200, 0.0))],
-                    [cs.Pin([0], velocity=(0.0, 1e300, 0.0), method="penalty")]):
+    cases = (([cs.Gravity((0.0, -1e300, 0.0))], "effects[0].acceleration"),
+             ([cs.Force((0.0, 1e200, 0.0))], "effects[0].per_vertex"),
+             ([cs.Pin([0], velocity=(0.0, 1e300, 0.0), method="penalty")],
+              "effects[0].velocity"))
+    for effects, key in cases:
+        with pytest.raises(InputError, match=re.escape(key) + ": .*float64") as info:
+            cs.Simulation(model, h=1 / 30, effects=[type(effects[0])(**_args(effects[0]))])
+        assert info.value.field == key
+    monkeypatch.setattr(clothsim.simulation, "check_step", lambda *a: None)
+    for effects, _key in cases:
         for method in ("local-global", "newton", "chebyshev"):
             sim = cs.Simulation(model, h=1 / 30, effects=effects if method == "local-global"
                                 else [type(effects[0])(**_args(effects[0]))], solver=method)
@@ -108,10 +121,10 @@ def test_run_refuses_a_huge_gravity_by_its_set_with_exit_2(tmp_path, capsys):
 
 
 def test_a_run_whose_step_overflows_anyway_fails_with_exit_1(tmp_path, capsys, monkeypatch):
-    """The scene bounds off (as if a cloth travelled beyond them): the step backstop."""
-    from clothsim.scene import build
+    """The bounds off (as if a cloth travelled beyond them): the step backstop."""
+    import clothsim.simulation
 
-    monkeypatch.setattr(build, "force_problem", lambda *a: None)
+    monkeypatch.setattr(clothsim.simulation, "check_step", lambda *a: None)
     code = main(["run", "hanging", "--set", "effects[0].acceleration=[0, -1e300, 0]",
                  "--set", "scene.frames=3", "--out", str(tmp_path / "o"), "--no-preview"])
     err = capsys.readouterr().err

@@ -133,10 +133,19 @@ def check_scheduler(address: str) -> None:
         raise InputError("accuracy.scheduler: needs dask.distributed: pip install "
                          "'clothsim[cluster]'") from None
 
+    if not address.strip():
+        raise _refusal(address, "empty; give a running scheduler's address, e.g. "
+                                "tcp://10.0.0.5:8786")
     try:
         scheme, location = parse_address(address)
+        if scheme == "inproc":  # a scheduler inside this process: none exists at the start
+            raise ValueError("an inproc:// address names a scheduler inside this process; "
+                             "give the tcp:// address of a running scheduler")
         if scheme == "tcp":
-            probe_scheduler(*parse_host_port(location), timeout=CONNECT_TIMEOUT)
+            host, port = parse_host_port(location)
+            if not 0 < port < 65536:
+                raise ValueError(f"port {port} is out of range (1 to 65535)")
+            probe_scheduler(host, port, timeout=CONNECT_TIMEOUT)
     except _NotDask as exc:
         raise _refusal(address, f"not a Dask scheduler: {exc}") from None
     except (OSError, ValueError, TypeError) as exc:   # refused, unreachable, malformed

@@ -20,6 +20,7 @@ Each record also holds the folder's status (:data:`STATUSES`), written by
 from __future__ import annotations
 
 import json
+import os
 from dataclasses import dataclass
 from pathlib import Path
 
@@ -118,6 +119,20 @@ def _foreign_entries(p: Path) -> list[str]:
     return names
 
 
+def _linked_folder(p: Path) -> Path | None:
+    """The first symbolic link to a folder inside ``p`` (its real subfolders searched too).
+
+    A link to a file is harmless (clothsim replaces a file by renaming a new one onto its
+    name, which replaces the link, never its target); a linked folder (a run's ``state``, a
+    conformance case, an export's ``iterates``) would take clothsim's files into its target.
+    """
+    for top, folders, _files in os.walk(p):
+        for name in sorted(folders):
+            if os.path.islink(os.path.join(top, name)):
+                return Path(top) / name
+    return None
+
+
 def claim_folder(folder, kind: str, *, force: bool = False) -> Path:
     """Check that clothsim may write its ``kind`` of output into ``folder``.
 
@@ -149,14 +164,23 @@ def claim_folder(folder, kind: str, *, force: bool = False) -> Path:
         raise InputError("--out: empty; name a folder")
     if p.exists() and not p.is_dir():
         raise InputError(f"{p}: is not a folder (--out names a folder)")
+    for link in (a for a in (p, *p.parents) if a.is_symlink() and not a.exists()):
+        raise InputError(f"{p}: {'' if link == p else f'{link} '}is a symbolic link to "
+                         f"{os.readlink(link)}, which does not exist; clothsim makes no folder "
+                         f"through a dangling link (create its target, or choose another "
+                         f"--out)")
     above = next((a for a in p.parents if a.exists()), None)
     if above is not None and not above.is_dir():  # --out file.txt/sub
         raise InputError(f"{p}: cannot be a folder: {above} is a file, not a folder")
-    if force or not p.exists():
+    if not p.exists():
         return p
     try:
-        found = folder_kind(p)
-        if found == kind:
+        if (link := _linked_folder(p)) is not None:  # its files would land in the target
+            raise InputError(f"{link}: is a symbolic link to a folder ({os.readlink(link)}); "
+                             f"clothsim never writes through one (remove it, or choose "
+                             f"another --out)")
+        found = None if force else folder_kind(p)
+        if force or found == kind:
             return p
         foreign = _foreign_entries(p)
     except OSError as exc:

@@ -28,7 +28,7 @@ from .checks import Invalid, integer, locate
 from .effects import _PYTHON_ONLY_KEYS, constructor_params
 from .overrides import blame, builds
 from .pins import declared_pins
-from .scale import check_extent, force_problem, overflow_problem, scene_key, stiffness_problem
+from .scale import check_extent, overflow_problem, scene_key, stiffness_problem
 from .schema import MAX_SUBSTEPS
 from .tables import read_index_list, read_spring_table, read_triangles, read_values, read_vertices
 from .validate import validate, validate_solver
@@ -343,10 +343,8 @@ class Scene:
                              iterations=solver["iterations"], tolerance=solver["tolerance"],
                              backend=solver["backend"],
                              initial_guess=solver["initial_guess"])
-        except InputError as exc:
+        except InputError as exc:  # among them clothsim.magnitudes.check_step's bounds
             raise self._locate(exc, model, h) from None
-        if (problem := force_problem(pairs, model, h)) is not None:  # no silent freeze
-            raise self._error(*problem)
         if solver["cholmod_mode"] != "auto":
             if not hasattr(sim.solver, "cholmod_mode"):
                 raise self._error("solver.cholmod_mode", f"applies to the local/global family "
@@ -376,6 +374,8 @@ class Scene:
         msg = " ".join(str(exc).split())
         fld, _, rest = msg.partition(": ")
         fld = getattr(exc, "field", None) or fld
+        if (at := re.fullmatch(r"effects\[(\d+)\](.*)", fld)) and rest:  # Simulation's index
+            return self._error(self._effects(model)[int(at[1])][0] + at[2], rest)
         if rest and fld.startswith("solver."):
             return self._error(fld, rest)
         if rest and fld.startswith("effects."):

@@ -11,6 +11,7 @@ from pathlib import Path
 
 from ..effects import EFFECTS
 from ..errors import InputError
+from ..magnitudes import MAX_LENGTH  # [m]: coordinates and radii whose squares stay finite
 from .checks import (
     Invalid,
     check_keys,
@@ -26,8 +27,6 @@ from .checks import (
 )
 from .files import resolve_path
 from .schema import EFFECT_KEYS, MAX_ITERATIONS
-
-MAX_LENGTH = 1e100  # [m]: coordinates and radii whose squares stay finite
 
 PARAMETERS = {kind: {key: t for key, (t, _unit) in keys.items()}
               for kind, keys in EFFECT_KEYS.items()}  # kind -> key -> type word
