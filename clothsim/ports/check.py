@@ -27,9 +27,9 @@ from .effect_causes import damping_cause, obstacle_cause
 from .frame_order import repeated_frame, start_mismatch, velocity_cause
 from .held_causes import explain
 from .held_margins import adopt, position_rounding
+from .held_settle import settle
 from .held_steps import HeldSteps
 from .held_verdicts import (
-    marginal_changes,
     off_plane_note,
     on_port_planes,
     planes_verdict,
@@ -166,11 +166,10 @@ def check_steps(simulation, positions, velocities=None, *, precision: str = "flo
             tol = max(tol_k, bound32())
         adopted = ""
         if held and (contacts is not None or err[worst] > tol):
-            changes, adopted = marginal_changes(k, held, model, problem, tol, contacts,
-                                                x_port, x_cs, rounding)
-            if changes:   # too close to call from the port's state: the port's decision
-                adopt(held, changes, None if contacts is None else contacts.step(k))
-                problem, x_cs, v_cs, err, worst = _step(sim, held, state, x_port)
+            solved, adopted = settle(k, held, model, problem, tol, contacts, x_port, x_cs,
+                                     rounding, lambda s=state, x=x_port: _step(sim, held, s, x))
+            if solved is not None:   # too close to call from the port's state: the port's
+                problem, x_cs, v_cs, err, worst = solved   # decision
         with ExitStack() as stack:
             if post and err[worst] > tol:   # post-solve decisions too close to call
                 stack.enter_context(post.adopted(x_port, rounding, err))
