@@ -25,7 +25,7 @@ from .compare import EPS32
 from .contact_planes import PortPlanes
 from .effect_causes import damping_cause, obstacle_cause
 from .frame_order import repeated_frame, start_mismatch, velocity_cause
-from .held_causes import explain
+from .held_causes import explain, followed
 from .held_margins import adopt, position_rounding
 from .held_settle import settle
 from .held_steps import HeldSteps
@@ -138,6 +138,7 @@ def check_steps(simulation, positions, velocities=None, *, precision: str = "flo
     obstacles = [None] if any(e.kind in ("sphere", "plane", "box") for e in sim.effects) \
         else []
     dampings, held_causes = [], []   # failing held steps a contact setting was sought for
+    named = None   # (Change, k): the setting that reproduced step k, carried on
     gravity = next((e.acceleration for e in sim.effects if e.kind == "gravity"), None)
 
     t = sim.state.time  # accumulated as the simulation does (time-dependent effects)
@@ -198,13 +199,17 @@ def check_steps(simulation, positions, velocities=None, *, precision: str = "flo
         if planes is not None:   # and the port's solve, on its own planes?
             adopt(held, differing, contacts.step(k))
             planes.note += "; " + on_port_planes(_step(sim, held, state, x_port)[3], tol)
-        change, why_held = None, ""
-        if (held and moved is None and off > tol and err[worst] > tol
+        change, why_held, further = None, "", ""
+        if named is not None and moved is None:   # the setting named before, carried on
+            change, why_held, further = followed(held, named, state, x_port, err, tol)
+            variant = None if change is not None else variant
+        elif (held and moved is None and off > tol and err[worst] > tol
                 and len(held_causes) < MAX_EFFECT):   # a setting of the port's?
             held_causes.append(k)
             change, why_held, nearer = explain(held, x_port, x_cs, err, tol)
             if change is not None and nearer < off:
                 variant = None          # the setting reproduces the step better
+                named = (change, k) if nearer <= tol else None
             elif variant is not None:
                 change, why_held = None, ""
         if planes is not None and variant is not None:   # the treatment behind the planes
@@ -277,6 +282,8 @@ def check_steps(simulation, positions, velocities=None, *, precision: str = "flo
             step.role = pin_role(problem, step.vertex)
         if adopted:
             step.note = f"{step.note}; {adopted}" if step.note else adopted
+        if further and not step.passed:   # beyond the setting named at an earlier step
+            step.note, step.further = "; ".join(filter(None, (further, step.note))), True
         sim.solver.set_state(carried)
         out.append(step)
     name_cause({s.k: s for s in out}, unexplained, others)   # a model the port solves?
