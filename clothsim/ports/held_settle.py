@@ -33,18 +33,8 @@ def settle(k, held, model, problem, tol, port_planes, x_port, x_cs, rounding, so
 
     Parameters
     ----------
-    k : int
-    held : HeldSteps
-        Anchored at the step, stepped.
-    model : Model
-    problem : StepProblem
-    tol : float
-        The step's tolerance [m].
-    port_planes : PortPlanes or None
-    x_port, x_cs : ndarray, shape (n, 3)
-        The port's and clothsim's x_{k+1} [m].
-    rounding : ndarray, shape (n,)
-        The rounding of the port's state per vertex [m].
+    k, held, model, problem, tol, port_planes, x_port, x_cs, rounding
+        As :func:`marginal_changes`.
     solve : callable
         () -> (problem, x, v, err, worst) of clothsim's step on the held decision.
 
