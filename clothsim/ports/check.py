@@ -27,7 +27,7 @@ from .effect_causes import damping_cause, obstacle_cause
 from .frame_order import repeated_frame, start_mismatch, velocity_cause
 from .held_causes import explain, followed
 from .held_margins import adopt, position_rounding
-from .held_settle import settle
+from .held_settle import marginal_entries, settle
 from .held_steps import HeldSteps
 from .held_verdicts import (
     off_plane_note,
@@ -233,7 +233,11 @@ def check_steps(simulation, positions, velocities=None, *, precision: str = "flo
             step = StepCheck(k, "agrees", float(err[worst]), worst, tolerance=tol)
             if velocities is not None:
                 verr = np.linalg.norm(v_cs - vs[k + 1], axis=1)
-                if verr.max() > 10 * tol / h:
+                entry = held and marginal_entries(held, x_port, rounding, tol,
+                                                  verr > 10 * tol / h)
+                if entry:   # a contact entry too close to call: the port's
+                    step.note = entry
+                elif verr.max() > 10 * tol / h:
                     step = StepCheck(k, "velocities differ", float(err[worst]),
                                      int(np.argmax(verr)), tolerance=tol,
                                      note=f"|v_clothsim - v_port| = {verr.max():.3e} m/s")

@@ -12,10 +12,10 @@ from __future__ import annotations
 
 import numpy as np
 
-from .held_margins import MARGINAL_KINDS, Margins, adopt, inferred, unsure
+from .held_margins import MARGINAL_KINDS, Margins, _holding, adopt, inferred, unsure
 from .plane_diff import clothsim_rows, plane_differences
 
-__all__ = ["marginal_changes", "settle"]
+__all__ = ["marginal_changes", "marginal_entries", "settle"]
 
 
 def settle(k, held, model, problem, tol, port_planes, x_port, x_cs, rounding, solve):
@@ -129,3 +129,66 @@ def marginal_changes(k, held, model, problem, tol, port_planes, x_port, x_cs, ro
     return changes, (f"{len(changes)} contact decision{'s' * (len(changes) != 1)} too close "
                      f"to call from the port's state ({where}) taken as the port's: vertex "
                      f"{v} {words}")
+
+
+def marginal_entries(held, x_port, rounding, tol, differ) -> str:
+    """New contacts whose entry is too close to call, when only their velocities differ.
+
+    clothsim's step catches a vertex that entered an obstacle (its inward normal velocity
+    removed, held in the next step); from the port's state rounded, a vertex the port's
+    step left a rounding outside the surface can enter. When the positions agree and the
+    velocities differ only at such vertices (caught by clothsim's step, not held in it,
+    at a depth within the step's tolerance, and the port's x_{k+1} within it of the
+    obstacle's contact surface: the printed start moves clothsim's answer by that much),
+    the entry is taken as the port's: not caught, and the next step's decision is left
+    without them. A port that catches a vertex deeper and keeps its inward velocity still
+    differs.
+
+    Parameters
+    ----------
+    held : HeldSteps
+        Anchored at the step, stepped (the obstacles hold the next step's decision).
+    x_port : ndarray, shape (n, 3)
+        The port's x_{k+1} [m].
+    rounding : ndarray, shape (n,)
+        The rounding of the port's positions per vertex [m].
+    tol : float
+        The step's tolerance [m].
+    differ : ndarray of bool, shape (n,)
+        The vertices whose velocities differ.
+
+    Returns
+    -------
+    str
+        The note (the decision changed), or "" (another difference: nothing changed).
+    """
+    vs = np.flatnonzero(differ)
+    now = {int(u) for _, h in held.planes() for u in h.vertices}
+    caught = {int(u): e for e in held.obstacles for u in e._holding.vertices}
+    if not len(vs) or any(int(v) in now or int(v) not in caught for v in vs):
+        return ""
+    gaps = [float(np.linalg.norm(caught[int(v)].closest(x_port[v][None])[0][0] - x_port[v]))
+            for v in vs]
+    mass, h2 = held.sim.model.vertex_mass, held.sim.h ** 2
+    depths = [float(caught[int(v)]._holding.normal_force[
+        np.flatnonzero(caught[int(v)]._holding.vertices == v)[0]]) * h2 / mass[v] for v in vs]
+    if any(max(g, d) > max(rounding[v], tol) for g, d, v in zip(gaps, depths, vs, strict=True)):
+        return ""   # caught deeper than the rounding reaches (m depth / h², its force)
+    for e in held.obstacles:
+        h = e._holding
+        keep = ~np.isin(h.vertices, vs)
+        if keep.all():
+            continue
+        c = len(h.vertices)
+        e._holding = _holding(x_port, h.vertices[keep], h.normals[keep], h.stick[keep],
+                              h.normal_force[keep], h.pull[keep], h.planes.offsets[:c][keep])
+        out = ~np.isin(e.contact_vertices, vs)
+        e.contact_vertices, e.contact_normals = e.contact_vertices[out], e.contact_normals[out]
+    held.stepped()
+    v = int(vs[0])
+    return (f"{len(vs)} contact entr{'y' if len(vs) == 1 else 'ies'} too close to call from "
+            f"the port's state (vertex {v} ends {gaps[0]:.1e} m from the {caught[v].kind}'s "
+            f"contact surface, caught by clothsim's step {depths[0]:.1e} m deep, both within "
+            f"the step's tolerance {max(rounding[v], tol):.1e} m; its inward velocity "
+            f"removed) taken as the port's: vertex {v} not caught")
+
