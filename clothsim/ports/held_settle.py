@@ -6,6 +6,8 @@ the rounding moves them). :func:`marginal_changes` finds the marginal decisions 
 took the other way, from its planes or from its answer; :func:`settle` adopts them and
 solves the step again, and decides by solving the step both ways the marginal releases
 the port's answer cannot show (:func:`~clothsim.ports.held_margins.unsure`).
+:func:`marginal_entries` takes a contact entry within the step's tolerance as the port's
+when only the velocities of the vertices it caught differ.
 """
 
 from __future__ import annotations
