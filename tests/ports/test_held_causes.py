@@ -47,6 +47,9 @@ CAUSES = {
                      "(0.2708, 0.5, 0.25) m instead of (-0.25, 0, -0.25) m, (0.25, 0.5, 0.25) "
                      "m) (its vertices on a face lie beyond the scene's footprint: moved "
                      "along x by 0.009258 m to 0.03241 m)", 8),
+    "box sideways xz": (BOX, 10, "none", ["effects[1].min=[-0.23, 0.0, -0.22]",
+                                          "effects[1].max=[0.27, 0.5, 0.28]"],
+                        "model differs", "a box moved by (0.02083, 0, 0.02083) m", 8),
     "box friction 2x": (BOX, 11, "none", ["effects[1].friction=0.6"], "model differs",
                         "the box's friction coefficient 0.6 instead of 0.3", 9),
     "box friction 0": (BOX, 11, "none", ["effects[1].friction=0"], "model differs",
@@ -61,9 +64,10 @@ CAUSES = {
                       "model differs", "a sphere of centre (0.02, 0.5, 0) m instead of "
                                        "(0, 0.5, 0) m and radius 0.3 m", 5),
 }
-SLOW = ("box top", "box friction 0", "sphere centre")
+SLOW = ("box top", "box friction 0", "sphere centre", "box sideways xz")
 #: The scene keys each cause's line says to look at.
 LOOK = {"box larger": "effects[1].min and .max", "box sideways": "effects[1].min and .max",
+        "box sideways xz": "effects[1].min and .max",
         "box top": "effects[1].max", "sphere radius": "effects[1].radius"}
 
 
