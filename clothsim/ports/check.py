@@ -25,7 +25,8 @@ from .compare import EPS32
 from .contact_planes import PortPlanes
 from .effect_causes import damping_cause, obstacle_cause
 from .frame_order import repeated_frame, start_mismatch, velocity_cause
-from .held_causes import explain, followed
+from .held_causes import explain
+from .held_follow import followed, transient
 from .held_margins import adopt, position_rounding
 from .held_settle import marginal_entries, settle
 from .held_steps import HeldSteps
@@ -202,6 +203,10 @@ def check_steps(simulation, positions, velocities=None, *, precision: str = "flo
         change, why_held, further = None, "", ""
         if named is not None and moved is None:   # the setting named before, carried on
             change, why_held, further = followed(held, named, state, x_port, err, tol)
+            if further:   # read again here: the same setting, its value read off this step?
+                again, words, nearer = explain(held, x_port, x_cs, err, tol)
+                if again is not None and again.setting == named[0].setting:
+                    change, why_held, further, named = again, words, "", (again, k)
             variant = None if change is not None else variant
         elif (held and moved is None and off > tol and err[worst] > tol
                 and len(held_causes) < MAX_EFFECT):   # a setting of the port's?
@@ -291,6 +296,7 @@ def check_steps(simulation, positions, velocities=None, *, precision: str = "flo
         sim.solver.set_state(carried)
         out.append(step)
     name_cause({s.k: s for s in out}, unexplained, others)   # a model the port solves?
+    transient(out)   # a further difference the named setting reproduces after: not one
     if printed is not None:   # the steps the printed state cannot place say so
         printed.annotate(out)
     return CheckReport(out, float(tol64), precision, notes, expected_steps=expected_steps,

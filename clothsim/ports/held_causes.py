@@ -44,7 +44,7 @@ from .held_verdicts import NEARER
 
 log = logging.getLogger(__name__)
 
-__all__ = ["Change", "carry", "changes", "explain", "followed", "shadow"]
+__all__ = ["Change", "changes", "explain", "shadow"]
 
 
 
@@ -66,7 +66,7 @@ class Change:
     carried : list or None
         The decision clothsim's held steps with the change left after the last step
         :func:`shadow` took (per obstacle: holding, contact vertices and normals), where
-        :func:`carry` goes on from.
+        :func:`clothsim.ports.held_follow.carry` goes on from.
     """
 
     obstacle: object
@@ -179,76 +179,6 @@ def shadow(held, change: Change, window) -> list[np.ndarray]:
         held.restore()
         sim.state = saved
     return out
-
-
-def carry(held, change: Change, state):
-    """clothsim's held step from the port's ``state`` with ``change``, on the decision its
-    held steps with the change carried to here (:attr:`Change.carried`), carried further.
-
-    Once a setting is named (:func:`explain`), each later step is taken with it, so that a
-    step it does not reproduce is a further difference of the port's, not the first one
-    again.
-
-    Parameters
-    ----------
-    held : HeldSteps
-        The check's, anchored at the step and stepped (restored afterwards).
-    change : Change
-        Named at an earlier step; its :attr:`~Change.carried` is advanced.
-    state : State
-        The port's (x_k, v_k).
-
-    Returns
-    -------
-    ndarray, shape (n, 3), or None
-        That step's x_{k+1} [m] (None: no decision to go on from, or the step failed).
-    """
-    if change.carried is None:
-        return None
-    xs = shadow(held, change, [(state, change.carried)])
-    return xs[-1] if xs else None
-
-
-def followed(held, named, state, x_port, err, tol):
-    """A later step under the setting named before: reproduced, or a further difference.
-
-    Parameters
-    ----------
-    held : HeldSteps
-        Anchored at the step and stepped.
-    named : (Change, int)
-        The setting and the step it was named at, reproduced there within the tolerance.
-    state : State
-        The port's (x_k, v_k).
-    x_port : ndarray, shape (n, 3)
-        The port's x_{k+1} [m].
-    err : ndarray, shape (n,)
-        |x_clothsim − x_port| of the scene's step [m].
-    tol : float
-
-    Returns
-    -------
-    (Change or None, str, str)
-        The change when it reproduces the step and the step fails, its note, and the note
-        of a further difference (the change does not reproduce a failing step) or "".
-    """
-    change, k0 = named
-    x = carry(held, change, state)
-    scene = float(err.max())
-    if scene <= tol or x is None:
-        return None, "", ""
-    off = np.linalg.norm(x - x_port, axis=1)
-    d, worst = float(off.max()), int(np.argmax(off))
-    if d <= tol:
-        return change, (f"the port's steps are clothsim's held steps with {change.words} "
-                        f"(named at step {k0} -> {k0 + 1}, its decisions carried from there: "
-                        f"{d:.1e} m off the port's answer, against {scene:.1e} m with the "
-                        f"scene's; look at {change.setting})"), ""
-    return None, "", (f"a further difference: with {change.words} (named at step {k0} -> "
-                      f"{k0 + 1}, its decisions carried from there) clothsim's held step is "
-                      f"still {d:.1e} m from the port's answer at vertex {worst}, beyond the "
-                      f"tolerance {tol:.1e} m (against {scene:.1e} m with the scene's): the "
-                      f"port differs by something more from this step on")
 
 
 def changes(held, x_port, tol) -> list[Change]:

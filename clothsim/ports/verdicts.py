@@ -93,7 +93,7 @@ class StepCheck:
         iterations = 50``), else "".
     further : bool
         The step differs beyond a setting named at an earlier step and carried to it (a
-        second difference of the port's; :func:`clothsim.ports.held_causes.followed`).
+        second difference of the port's; :func:`clothsim.ports.held_follow.followed`).
     """
 
     k: int
