@@ -40,17 +40,9 @@ MODES = ("hold", "post-solve")
 SOLVERS = tuple((m, k) for m in ("anderson", "lbfgs", "chebyshev") for k in (10, 30))
 PORTS = ("%g", "float32")
 FAULT = 1e-3
-#: Why a right port of a row still fails, as far as it was established (docs/ports.md).
-KNOWN = {
-    ("drape-sphere", "hold", "lbfgs 30", "%g"):
-        "hold mode: the step's held-contact decisions too close to call are taken as the "
-        "port's (clothsim.ports.held_margins), and still clothsim's step and all its replays "
-        "from the printed start (on every branch of L-BFGS's Armijo tests they reach) stay "
-        "farther from the port's answer than the tolerance (unprinted, the port agrees "
-        "exactly). The replays keep the step's held planes as anchored, so what the printed "
-        "start does to the held decisions themselves is not measured: the likely cause, not "
-        "established",
-}
+#: Why a right port of a row still fails, as far as it was established (docs/ports.md):
+#: (scene, mode, solver, port) -> the reason; none is known now.
+KNOWN: dict = {}
 _g = np.vectorize(lambda c: float(f"{c:g}"))   # printed with %g and read back
 
 

@@ -26,10 +26,11 @@ from .contact_planes import PortPlanes
 from .effect_causes import damping_cause, obstacle_cause
 from .frame_order import repeated_frame, start_mismatch, velocity_cause
 from .held_causes import explain
+from .held_follow import followed, transient
 from .held_margins import adopt, position_rounding
+from .held_settle import marginal_entries, settle
 from .held_steps import HeldSteps
 from .held_verdicts import (
-    marginal_changes,
     off_plane_note,
     on_port_planes,
     planes_verdict,
@@ -138,6 +139,7 @@ def check_steps(simulation, positions, velocities=None, *, precision: str = "flo
     obstacles = [None] if any(e.kind in ("sphere", "plane", "box") for e in sim.effects) \
         else []
     dampings, held_causes = [], []   # failing held steps a contact setting was sought for
+    named = None   # (Change, k): the setting that reproduced step k, carried on
     gravity = next((e.acceleration for e in sim.effects if e.kind == "gravity"), None)
 
     t = sim.state.time  # accumulated as the simulation does (time-dependent effects)
@@ -166,11 +168,10 @@ def check_steps(simulation, positions, velocities=None, *, precision: str = "flo
             tol = max(tol_k, bound32())
         adopted = ""
         if held and (contacts is not None or err[worst] > tol):
-            changes, adopted = marginal_changes(k, held, model, problem, tol, contacts,
-                                                x_port, x_cs, rounding)
-            if changes:   # too close to call from the port's state: the port's decision
-                adopt(held, changes, None if contacts is None else contacts.step(k))
-                problem, x_cs, v_cs, err, worst = _step(sim, held, state, x_port)
+            solved, adopted = settle(k, held, model, problem, tol, contacts, x_port, x_cs,
+                                     rounding, lambda s=state, x=x_port: _step(sim, held, s, x))
+            if solved is not None:   # too close to call from the port's state: the port's
+                problem, x_cs, v_cs, err, worst = solved   # decision
         with ExitStack() as stack:
             if post and err[worst] > tol:   # post-solve decisions too close to call
                 stack.enter_context(post.adopted(x_port, rounding, err))
@@ -199,13 +200,21 @@ def check_steps(simulation, positions, velocities=None, *, precision: str = "flo
         if planes is not None:   # and the port's solve, on its own planes?
             adopt(held, differing, contacts.step(k))
             planes.note += "; " + on_port_planes(_step(sim, held, state, x_port)[3], tol)
-        change, why_held = None, ""
-        if (held and moved is None and off > tol and err[worst] > tol
+        change, why_held, further = None, "", ""
+        if named is not None and moved is None:   # the setting named before, carried on
+            change, why_held, further = followed(held, named, state, x_port, err, tol)
+            if further:   # read again here: the same setting, its value read off this step?
+                again, words, nearer = explain(held, x_port, x_cs, err, tol)
+                if again is not None and again.setting == named[0].setting:
+                    change, why_held, further, named = again, words, "", (again, k)
+            variant = None if change is not None else variant
+        elif (held and moved is None and off > tol and err[worst] > tol
                 and len(held_causes) < MAX_EFFECT):   # a setting of the port's?
             held_causes.append(k)
             change, why_held, nearer = explain(held, x_port, x_cs, err, tol)
             if change is not None and nearer < off:
                 variant = None          # the setting reproduces the step better
+                named = (change, k) if nearer <= tol else None
             elif variant is not None:
                 change, why_held = None, ""
         if planes is not None and variant is not None:   # the treatment behind the planes
@@ -229,7 +238,11 @@ def check_steps(simulation, positions, velocities=None, *, precision: str = "flo
             step = StepCheck(k, "agrees", float(err[worst]), worst, tolerance=tol)
             if velocities is not None:
                 verr = np.linalg.norm(v_cs - vs[k + 1], axis=1)
-                if verr.max() > 10 * tol / h:
+                entry = held and marginal_entries(held, x_port, rounding, tol,
+                                                  verr > 10 * tol / h)
+                if entry:   # a contact entry too close to call: the port's
+                    step.note = entry
+                elif verr.max() > 10 * tol / h:
                     step = StepCheck(k, "velocities differ", float(err[worst]),
                                      int(np.argmax(verr)), tolerance=tol,
                                      note=f"|v_clothsim - v_port| = {verr.max():.3e} m/s")
@@ -278,9 +291,12 @@ def check_steps(simulation, positions, velocities=None, *, precision: str = "flo
             step.role = pin_role(problem, step.vertex)
         if adopted:
             step.note = f"{step.note}; {adopted}" if step.note else adopted
+        if further and not step.passed:   # beyond the setting named at an earlier step
+            step.note, step.further = "; ".join(filter(None, (further, step.note))), True
         sim.solver.set_state(carried)
         out.append(step)
     name_cause({s.k: s for s in out}, unexplained, others)   # a model the port solves?
+    transient(out)   # a further difference the named setting reproduces after: not one
     if printed is not None:   # the steps the printed state cannot place say so
         printed.annotate(out)
     return CheckReport(out, float(tol64), precision, notes, expected_steps=expected_steps,

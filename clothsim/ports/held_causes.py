@@ -63,6 +63,10 @@ class Change:
         Attribute → value set on the obstacle while the change is replayed.
     rule : str
         "" or a contact rule replaced: "no-stick", "clinging".
+    carried : list or None
+        The decision clothsim's held steps with the change left after the last step
+        :func:`shadow` took (per obstacle: holding, contact vertices and normals), where
+        :func:`clothsim.ports.held_follow.carry` goes on from.
     """
 
     obstacle: object
@@ -70,6 +74,7 @@ class Change:
     setting: str
     values: dict = field(default_factory=dict)
     rule: str = ""
+    carried: list | None = None
 
     @property
     def status(self) -> str:
@@ -165,8 +170,10 @@ def shadow(held, change: Change, window) -> list[np.ndarray]:
                 out.append(sim.state.positions.copy())
                 holdings = [(e._holding, e.contact_vertices, e.contact_normals)
                             for e in held.obstacles]
+        change.carried = holdings
     except (ValueError, ArithmeticError, RuntimeError) as error:   # a change too far
         log.debug("replay of %s failed: %s", change.words, error)
+        change.carried = None
         return out[:0]
     finally:
         held.restore()

@@ -256,6 +256,42 @@ def inferred(held, margins, x_port, x_cs) -> list[tuple[int, str]]:
     return out
 
 
+def unsure(held, margins, x_port, changes) -> list[tuple[int, str]]:
+    """Marginal decisions the port's answer cannot show: held or not, it is on the surface.
+
+    A vertex clothsim holds by a decision too close to call (a new contact caught at a
+    depth within the rounding, a push within it of 0) and that the port's answer has on
+    its plane or on the obstacle's surface may have been free in the port's step: caught
+    at its end and placed there, it lands on the surface too. Which it was shows only in
+    the rest of the cloth, through the solve (:func:`clothsim.ports.held_verdicts.settle`
+    solves the step both ways).
+
+    Parameters
+    ----------
+    held : HeldSteps
+    margins : Margins
+    x_port : ndarray, shape (n, 3)
+        The port's x_{k+1} [m].
+    changes : list of (int, str)
+        The decisions :func:`inferred` already takes as the port's (left out).
+
+    Returns
+    -------
+    list of (int, str)
+        (vertex, "clothsim"): release it.
+    """
+    tol, taken, out = margins.tol, {u for u, _ in changes}, []
+    for e, h in held.planes():
+        c = len(h.vertices)
+        v, n, o = h.vertices, h.normals, h.planes.offsets[:c]
+        gap = np.abs(np.einsum("ij,ij->i", x_port[v], n) - o)
+        surface = np.linalg.norm(e.closest(x_port[v])[0] - x_port[v], axis=1)
+        out += [(int(u), "clothsim") for u, a, b in zip(v, gap, surface, strict=True)
+                if int(u) not in taken and min(a, b) <= tol[u]
+                and margins.marginal(int(u), "clothsim")]
+    return out
+
+
 def adopt(held, changes, port_planes=None) -> None:
     """Change the step's decision to the port's, vertex by vertex.
 
@@ -320,4 +356,4 @@ def _holding(x, vertices, normals, stick, force, pull, offsets) -> Holding:
     return out
 
 
-__all__ = ["MARGINAL_KINDS", "Margins", "adopt", "inferred", "position_rounding"]
+__all__ = ["MARGINAL_KINDS", "Margins", "adopt", "inferred", "position_rounding", "unsure"]

@@ -170,7 +170,47 @@ def geometry(e, x, index: int, tol: float):
                              {"min": e.min - grown, "max": e.max + grown})
                 shift = np.zeros(3)
                 shift[axis] = d
-                yield (f"a box moved by {_fmt(shift)} (min {_fmt(e.min + shift)}, "
-                                f"max {_fmt(e.max + shift)} instead of {_fmt(e.min)}, "
-                                f"{_fmt(e.max)})", f"{key}.min and .max (the box)",
-                             {"min": e.min + shift, "max": e.max + shift})
+                yield _moved(e, key, shift, "")
+        yield from _sideways(e, x, key, max(tol, 1e-9 * scale), NEAR * scale)
+
+
+def _moved(e, key, shift, words):
+    """A box moved by ``shift``, in words, its keys and its values."""
+    return (f"a box moved by {_fmt(shift)} (min {_fmt(e.min + shift)}, max "
+            f"{_fmt(e.max + shift)} instead of {_fmt(e.min)}, {_fmt(e.max)}){words}",
+            f"{key}.min and .max (the box)", {"min": e.min + shift, "max": e.max + shift})
+
+
+def _sideways(e, x, key, tol, near):
+    """A box moved along a face it holds vertices on, read off the face's extent.
+
+    The port's vertices on a face at the scene's level (≥ :data:`SHARED` of them) lie
+    over its own footprint: along each axis of the face, those beyond the scene's
+    footprint (the box grown by its thickness) say how far it moved at least, and the
+    far side's gap how far at most (a grid's spacing: each step of the cloth caught over
+    one footprint is caught over any in that range). The middle of the range is tried, in
+    each axis with evidence, and in both together.
+    """
+    lo, hi = e.min - e.margin, e.max + e.margin
+    bounds = {}
+    for axis, level in [(a, v) for a in range(3) for v in (lo[a], hi[a])]:
+        on = x[np.abs(x[:, axis] - level) <= tol]
+        if len(on) < SHARED:
+            continue
+        for a in (b for b in range(3) if b != axis):
+            least, most = float(on[:, a].max() - hi[a]), float(on[:, a].min() - lo[a])
+            if least > most or (least <= tol and most >= -tol) or min(
+                    abs(least), abs(most)) > near:
+                continue          # over the scene's footprint, or wider than it
+            bounds.setdefault(a, (least, most))
+    shifts = []
+    for a, (least, most) in sorted(bounds.items()):
+        shift = np.zeros(3)
+        shift[a] = 0.5 * (least + most)
+        shifts.append((shift, f"{'xyz'[a]} by {_fmt(min(least, most, key=abs))} to "
+                              f"{_fmt(max(least, most, key=abs))}"))
+    if len(shifts) > 1:
+        shifts.insert(0, (sum(s for s, _ in shifts), " and ".join(w for _, w in shifts)))
+    for shift, words in shifts:
+        yield _moved(e, key, shift, f" (its vertices on a face lie beyond the scene's "
+                                    f"footprint: moved along {words})")

@@ -225,14 +225,44 @@ class HeldSteps:
         self._before = [(h, cv, cn) for (_, h), (_, cv, cn) in zip(planes, self._before,
                                                                   strict=True)]
 
-    def again(self) -> None:
-        """Put the obstacles back to the step's anchored decision, as :meth:`replay` does
-        for ``"hold"``, so that clothsim's step can be taken again from the port's state
+    def decision(self) -> list:
+        """The step's anchored decision, as :meth:`restart` takes it back.
+
+        Returns
+        -------
+        list
+            Per obstacle: its holding, contact vertices and normals.
+        """
+        return list(self._before)
+
+    def restart(self, decision) -> None:
+        """Anchor the step at ``decision`` again (:meth:`decision`; after :meth:`replace`).
+
+        Parameters
+        ----------
+        decision : list
+        """
+        self._before = list(decision)
+        self.again()
+
+    def again(self, *, friction: bool = True, holdings=None) -> None:
+        """Put the obstacles back to the step's anchored decision (the start of every
+        :meth:`replay`), so that clothsim's step can be taken again from the port's state
         (along another branch of the solver's choices: the step taken before left the
         obstacles' next decision in their place).
+
+        Parameters
+        ----------
+        friction : bool, default True
+            False: the held vertices without friction (no sticking planes, no kinetic
+            friction; the ``"frictionless"`` replay).
+        holdings : list of Holding, optional
+            Per obstacle, another decision of the step's held vertices (the ``"flipped"``
+            replay's); default the anchored one. Its vertices in contact stay the step's.
         """
-        for e, (h, cv, cn) in zip(self.obstacles, self._before, strict=True):
-            e._holding = _copy(h, self._x)
+        for i, (e, (h, cv, cn)) in enumerate(zip(self.obstacles, self._before, strict=True)):
+            h = h if holdings is None else holdings[i]
+            e._holding = _copy(h, self._x, friction=friction)
             e.contact_vertices, e.contact_normals = cv, cn
 
     def stepped(self) -> None:
@@ -275,10 +305,9 @@ class HeldSteps:
                 if self._previous is None or self._previous[0] is None:
                     return None
                 self._decide_flipped()
-            for e, (h, cv, cn) in zip(self.obstacles, self._before, strict=True):
-                h = e._holding if variant == "flipped" else h
-                e._holding = _copy(h, self._x, friction=variant != "frictionless")
-                e.contact_vertices, e.contact_normals = cv, cn
+            self.again(friction=variant != "frictionless", holdings=[
+                e._holding for e in self.obstacles] if variant == "flipped" else None)
+            for e in self.obstacles:
                 if variant == "post-solve":
                     e.contact = "post-solve"
                 if variant == "flipped":

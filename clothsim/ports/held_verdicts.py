@@ -17,7 +17,6 @@ from __future__ import annotations
 
 import numpy as np
 
-from .held_margins import MARGINAL_KINDS, Margins, inferred
 from .held_steps import VARIANTS, face_name
 from .plane_diff import clothsim_rows, plane_differences
 from .verdicts import StepCheck
@@ -152,57 +151,6 @@ def on_port_planes(err, tol) -> str:
             f"step (vertex {w})")
 
 
-def marginal_changes(k, held, model, problem, tol, port_planes, x_port, x_cs, rounding):
-    """The contact decisions of step k too close to call that the port took otherwise.
-
-    Parameters
-    ----------
-    k : int
-    held : HeldSteps
-        Anchored at the step, stepped.
-    model : Model
-    problem : StepProblem
-    tol : float
-        The step's tolerance [m].
-    port_planes : PortPlanes or None
-        The port's planes (the port's decisions); None: read off its answer.
-    x_port, x_cs : ndarray, shape (n, 3)
-        The port's and clothsim's x_{k+1} [m].
-    rounding : ndarray, shape (n,)
-        The rounding of the port's state per vertex [m]
-        (:func:`~clothsim.ports.held_margins.position_rounding`).
-
-    Returns
-    -------
-    (list of (int, str), str)
-        The changes for :func:`clothsim.ports.held_margins.adopt` and a note naming them
-        ("" when there are none).
-    """
-    margins = Margins(held, model, problem, rounding)
-    if port_planes is not None:
-        v, n, o = port_planes.step(k)
-        diffs = plane_differences(clothsim_rows(held.planes()), v, n, o, held.x(),
-                                  held.obstacles,
-                                  offset_tolerance=max(tol, port_planes.offset_rounding),
-                                  normal_tolerance=port_planes.normal_tolerance,
-                                  skip=problem.fixed_vertices)
-        changes = [(u, kind) for u, kind, _ in diffs
-                   if kind in MARGINAL_KINDS and margins.marginal(u, kind)]
-    else:
-        changes = inferred(held, margins, x_port, x_cs)
-    if not changes:
-        return [], ""
-    v, kind = changes[0]
-    words = {"clothsim": "released", "port": "held", "stick": "sliding",
-             "slide": "sticking"}[kind]
-    where = (f"vertex {v}'s first contact within the rounding of the friction cone's edge, "
-             f"{margins.tol[v]:.1e} m" if margins.first_contact(v, kind) else
-             f"within {margins.force[v]:.2g} N of its threshold at vertex {v}")
-    return changes, (f"{len(changes)} contact decision{'s' * (len(changes) != 1)} too close "
-                     f"to call from the port's state ({where}) taken as the port's: vertex "
-                     f"{v} {words}")
-
-
 def variant_verdict(k, held, state, x_port, err, tol) -> tuple[StepCheck | None, float]:
     """``contacts differ`` when another contact treatment reproduces the port's step.
 
@@ -305,5 +253,4 @@ def off_plane_note(held, x_port, tol) -> str:
     return text
 
 
-__all__ = ["NEARER", "marginal_changes", "off_plane_note", "on_port_planes", "planes_verdict",
-           "variant_verdict"]
+__all__ = ["NEARER", "off_plane_note", "on_port_planes", "planes_verdict", "variant_verdict"]

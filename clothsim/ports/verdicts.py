@@ -91,6 +91,9 @@ class StepCheck:
         The solver settings with which clothsim's own iterations reproduce the port's
         answer, when the checker found them (e.g. ``[solver] initial_guess = "x_n" and
         iterations = 50``), else "".
+    further : bool
+        The step differs beyond a setting named at an earlier step and carried to it (a
+        second difference of the port's; :func:`clothsim.ports.held_follow.followed`).
     """
 
     k: int
@@ -103,6 +106,7 @@ class StepCheck:
     role: str = ""
     tolerance: float = float("nan")
     settings: str = ""
+    further: bool = False
 
     @property
     def passed(self) -> bool:
@@ -229,6 +233,11 @@ class CheckReport:
             agree = "1 step agrees" if n == 1 else f"{n} steps agree"
             return (f"{head or 'PASS: '}{agree} within {tol:.3e} m ({self.precision}), "
                     f"max error {worst:.3e} m{extra}")
+        second = next((s for s in failing if s.further), None)
+        if second is not None:
+            extra = (f"; and beyond the setting named first, a further difference from step "
+                     f"{second.k} -> {second.k + 1}: {second.status}, max error "
+                     f"{second.error:.3e} m at vertex {second.vertex}" + extra)
         counts = Counter(s.status for s in failing)
         tally = ", ".join(f"{c} {status}" for status, c in counts.most_common())
         word = "UNDECIDED" if set(counts) <= set(UNDECIDED) else "FAIL"

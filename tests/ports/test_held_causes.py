@@ -37,6 +37,19 @@ CAUSES = {
                    8),
     "box top": (BOX, 10, "none", ["effects[1].max=[0.25, 0.52, 0.25]"], "model differs",
                 "a box of max (0.25, 0.52, 0.25) m instead of (0.25, 0.5, 0.25) m", 8),
+    # moved sideways: the top stays at 0.5 m, so no face's level tells; the port's vertices
+    # on the top reach beyond the scene's +x side (x = 0.2917 m, the box's edge with its
+    # thickness 0.0324 m at 0.2824 m) and stop short of its -x side: a shift of 0.0093 to
+    # 0.0324 m, each of which catches the same vertices when the cloth lands
+    "box sideways": (BOX, 10, "none", ["effects[1].min=[-0.22, 0.0, -0.25]",
+                                       "effects[1].max=[0.28, 0.5, 0.25]"], "model differs",
+                     "a box moved by (0.02083, 0, 0) m (min (-0.2292, 0, -0.25) m, max "
+                     "(0.2708, 0.5, 0.25) m instead of (-0.25, 0, -0.25) m, (0.25, 0.5, 0.25) "
+                     "m) (its vertices on a face lie beyond the scene's footprint: moved "
+                     "along x by 0.009258 m to 0.03241 m)", 8),
+    "box sideways xz": (BOX, 10, "none", ["effects[1].min=[-0.23, 0.0, -0.22]",
+                                          "effects[1].max=[0.27, 0.5, 0.28]"],
+                        "model differs", "a box moved by (0.02083, 0, 0.02083) m", 8),
     "box friction 2x": (BOX, 11, "none", ["effects[1].friction=0.6"], "model differs",
                         "the box's friction coefficient 0.6 instead of 0.3", 9),
     "box friction 0": (BOX, 11, "none", ["effects[1].friction=0"], "model differs",
@@ -51,7 +64,11 @@ CAUSES = {
                       "model differs", "a sphere of centre (0.02, 0.5, 0) m instead of "
                                        "(0, 0.5, 0) m and radius 0.3 m", 5),
 }
-SLOW = ("box top", "box friction 0", "sphere centre")
+SLOW = ("box top", "box friction 0", "sphere centre", "box sideways xz")
+#: The scene keys each cause's line says to look at.
+LOOK = {"box larger": "effects[1].min and .max", "box sideways": "effects[1].min and .max",
+        "box sideways xz": "effects[1].min and .max",
+        "box top": "effects[1].max", "sphere radius": "effects[1].radius"}
 
 
 @pytest.mark.parametrize("name", [pytest.param(n, marks=pytest.mark.slow) if n in SLOW
@@ -68,6 +85,7 @@ def test_each_obstacle_or_contact_setting_is_named(name):
     # one line: the step, the vertex, the obstacle, the numbers and the setting to look at
     assert f"step {k} -> {k + 1}: {status}" in line and f"at vertex {first.vertex}" in line
     assert "m off the port's answer, against" in line and "look at " in line
+    assert f"look at {LOOK.get(name, '')}" in line, line
     assert "\n" not in report.summary()
     assert all(s.passed for s in report.steps[:k])     # the steps before agree
 
@@ -83,14 +101,57 @@ def test_the_friction_coefficient_is_fitted_when_it_is_no_probe():
 
 def test_two_settings_at_once_name_only_the_one_a_step_shows():
     # the box 1 cm larger and frictionless: its landing step (8 -> 9) is the larger box's
-    # alone (the cloth falls straight: friction takes no part); the next step needs both
+    # alone (the cloth falls straight: friction takes no part); the next step needs both:
+    # taken with the larger box, it is a further difference
     X, V, _ = run_port(load_scene(BOX, LARGER + ["effects[1].friction=0"]), "none", 10)
     report = check_steps(load_scene(BOX), X, V)
     first = report.first_failure
     assert first.k == 8 and "a box 1 cm larger on every side" in first.note, first.line()
     second = report.steps[9]
     assert not second.passed and "held steps with" not in second.note, second.line()
-    assert "no single obstacle or contact setting reproduces the port's step" in second.note
+    assert second.further and second.note.startswith(
+        "a further difference: with a box 1 cm larger on every side"), second.line()
+    assert "a further difference from step 9 -> 10" in report.summary()
+
+
+def _two_faults(frames=14, at=12):
+    """A port with the box's friction 0.6 from the start and gravity 9.0 m/s² instead of
+    9.81 from step ``at`` on (its g's force scaled there)."""
+    sim = load_scene(BOX, ["effects[1].friction=0.6"]).build_simulation()
+    xs, vs = [sim.state.positions.copy()], [sim.state.velocities.copy()]
+    for k in range(frames):
+        if k == at:
+            sim.effects[0]._force = sim.effects[0]._force * (9.0 / 9.81)
+        sim.step()
+        xs.append(sim.state.positions.copy())
+        vs.append(sim.state.velocities.copy())
+    return np.stack(xs), np.stack(vs)
+
+
+def test_a_second_fault_after_a_named_setting_is_called_out():
+    # the friction is named at the first step it shows (9 -> 10) and reproduces the next
+    # two, its decisions carried; the lighter gravity from step 12 on is not hidden under it
+    X, V = _two_faults()
+    report = check_steps(load_scene(BOX), X, V)
+    first = report.first_failure
+    assert first.k == 9 and "friction coefficient 0.6 instead of 0.3" in first.note
+    for s in report.steps[10:12]:
+        assert s.status == "model differs" and not s.further, s.line()
+        assert "named at step 9 -> 10, its decisions carried" in s.note, s.line()
+    later = report.steps[12]
+    assert not later.passed and later.further, later.line()
+    assert later.note.startswith("a further difference: with the box's friction coefficient "
+                                 "0.6 instead of 0.3"), later.line()
+    assert all(s.further for s in report.steps[12:])
+    summary = report.summary()
+    assert summary.startswith("FAIL at step 9 -> 10: model differs"), summary
+    assert "a further difference from step 12 -> 13" in summary, summary
+    # the friction alone: every later step is the named setting's, no further difference
+    X, V, _ = run_port(load_scene(BOX, ["effects[1].friction=0.6"]), "none", 14)
+    report = check_steps(load_scene(BOX), X, V)
+    assert not any(s.further for s in report.steps), report.summary()
+    assert "further" not in report.summary()
+    assert all(s.passed or "friction coefficient 0.6" in s.note for s in report.steps)
 
 
 def test_a_model_fault_in_a_hold_scene_names_no_contact_setting():
