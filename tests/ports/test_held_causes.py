@@ -76,7 +76,7 @@ LOOK = {"box larger": "effects[1].min and .max", "box sideways": "effects[1].min
 def test_each_obstacle_or_contact_setting_is_named(name):
     scene, frames, fault, sets, status, words, k = CAUSES[name]
     X, V, _ = run_port(load_scene(scene, sets), fault, frames)
-    report = check_steps(load_scene(scene), X, V)
+    report = check_steps(load_scene(scene), X, V, steps=k + 1)   # through the first failure
     first = report.first_failure
     assert first is not None and first.k == k, report.summary()
     assert first.status == status, first.line()
@@ -104,7 +104,7 @@ def test_two_settings_at_once_name_only_the_one_a_step_shows():
     # alone (the cloth falls straight: friction takes no part); the next step needs both:
     # taken with the larger box, it is a further difference
     X, V, _ = run_port(load_scene(BOX, LARGER + ["effects[1].friction=0"]), "none", 10)
-    report = check_steps(load_scene(BOX), X, V)
+    report = check_steps(load_scene(BOX), X, V, steps=10)   # through the next step
     first = report.first_failure
     assert first.k == 8 and "a box 1 cm larger on every side" in first.note, first.line()
     second = report.steps[9]
@@ -217,13 +217,13 @@ def test_a_first_contacts_friction_state_within_the_rounding_is_the_ports(tmp_pa
     note = report.steps[11].note
     assert "vertex 186's first contact within the rounding of the friction cone's edge" \
         in note and "taken as the port's: vertex 186 sliding" in note, note
-    # without the first-contact margin the step fails (as before it)
+    # without the first-contact margin the step fails (as before it); checked through it
     monkeypatch.setattr(held_margins, "first_contact_flips", lambda *a: set())
-    first = check_steps(load_scene(BOX, EDGE), Xg, Vg).first_failure
+    first = check_steps(load_scene(BOX, EDGE), Xg, Vg, steps=12).first_failure
     assert first is not None and first.k == 11 and first.vertex == 186, first
     # at full precision the other friction state is no rounding: it fails
     monkeypatch.undo()
-    first = check_steps(load_scene(BOX, EDGE), X, V).first_failure
+    first = check_steps(load_scene(BOX, EDGE), X, V, steps=12).first_failure
     assert first is not None and first.k == 11, first
 
 

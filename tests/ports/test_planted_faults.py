@@ -31,8 +31,10 @@ def port(path, *overrides):
     return trajectory(scene.build_simulation(scene.build_model()), scene.frames)
 
 
-def verdict(path, *overrides):
-    report = check_steps(cs.load_scene(path), *port(path, *overrides))
+def verdict(path, *overrides, steps=None):
+    """(report, summary) of the port with ``overrides`` checked against the scene (its
+    first ``steps`` steps: through the first failure a test's assertions are about)."""
+    report = check_steps(cs.load_scene(path), *port(path, *overrides), steps=steps)
     return report, report.summary()
 
 
@@ -229,7 +231,8 @@ def test_a_lower_box_top_in_post_solve_mode_is_named(tmp_path):
     """The port's box is 0.45 m tall, the scene's 0.5 m: named at the landing step (the
     later steps also carry the port's contacts of its previous step, which the replay from
     x_k, v_k does not have: they stay as judged)."""
-    report, summary = verdict(drop_on_square(tmp_path, 11), "effects[1].max=[0.25, 0.45, 0.25]")
+    report, summary = verdict(drop_on_square(tmp_path, 11), "effects[1].max=[0.25, 0.45, 0.25]",
+                              steps=10)
     assert summary.startswith("FAIL at step 9 -> 10: model differs"), summary
     assert "a box of max (0.25, 0.45, 0.25) m instead of (0.25, 0.5, 0.25) m" in summary, summary
 
