@@ -334,9 +334,6 @@ class Scene:
         else:
             h = 1.0 / (self.fps * substeps)
         model = self.build_model() if model is None else model
-        self._check_stiffness(model, h)
-        if (problem := overflow_problem(model, h)) is not None:  # no silent freeze
-            raise self._error(scene_key(problem[0], self.data), problem[1])
         pairs = self._checked_effects(model)
         try:
             sim = Simulation(model, h=h, effects=[e for _, e in pairs], solver=solver["method"],
@@ -344,6 +341,11 @@ class Scene:
                              backend=solver["backend"],
                              initial_guess=solver["initial_guess"])
         except InputError as exc:  # among them clothsim.magnitudes.check_step's bounds
+            # The simulation checked the magnitudes once (no silent freeze); on a refusal the
+            # scene's own checks name the scene key the model's field comes from.
+            self._check_stiffness(model, h)
+            if (problem := overflow_problem(model, h)) is not None:
+                raise self._error(scene_key(problem[0], self.data), problem[1]) from None
             raise self._locate(exc, model, h) from None
         if solver["cholmod_mode"] != "auto":
             if not hasattr(sim.solver, "cholmod_mode"):
