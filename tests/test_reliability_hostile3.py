@@ -156,6 +156,23 @@ def test_an_effect_after_the_cloth_files_pins_is_named_by_its_own_index(tmp_path
     assert line.startswith(f"{p}: effects[0].acceleration: gravity's largest"), line
 
 
+
+def test_a_warning_after_the_cloth_files_pins_is_named_by_its_own_index(tmp_path):
+    """The wind's drag warning comes from Simulation, whose effects[1] is the scene's
+    effects[0] when a spring table's attachment pin comes first: the warning names the
+    scene's key, as an error does."""
+    from clothsim.solvers.symplectic import StabilityWarning
+
+    (tmp_path / "t.txt").write_text("0 -1 1000 0\n")
+    p = tmp_path / "s.toml"
+    p.write_text('[cloth]\nresolution = [5, 5]\n[springs]\ntable = "t.txt"\n'
+                 '[[effects]]\nkind = "wind"\nvelocity = [0, 0, 1e6]\n')
+    scene = cs.load_scene(str(p))
+    with pytest.warns(StabilityWarning) as record:
+        scene.build_simulation()
+    lines = [str(w.message) for w in record if issubclass(w.category, StabilityWarning)]
+    assert lines and all(m.startswith("effects[0].velocity: the wind's drag") for m in lines), lines
+
 # ------------------------------------------------------------------ make check with spaces
 CPP = Path(__file__).resolve().parents[1] / "examples" / "ports" / "cpp"
 

@@ -9,6 +9,7 @@ from __future__ import annotations
 
 import copy
 import re
+import warnings
 from dataclasses import dataclass, field
 from pathlib import Path
 
@@ -26,6 +27,7 @@ from ..simulation import Simulation
 from ..springs import FAMILIES, Springs, grid_springs, mesh_springs, springs_from_pairs
 from .checks import Invalid, integer, locate
 from .effects import _PYTHON_ONLY_KEYS, constructor_params
+from .keys import located, warn_again
 from .overrides import blame, builds
 from .pins import declared_pins
 from .scale import check_extent, overflow_problem, scene_key, stiffness_problem
@@ -336,17 +338,19 @@ class Scene:
         model = self.build_model() if model is None else model
         pairs = self._checked_effects(model)
         try:
-            sim = Simulation(model, h=h, effects=[e for _, e in pairs], solver=solver["method"],
-                             iterations=solver["iterations"], tolerance=solver["tolerance"],
-                             backend=solver["backend"],
-                             initial_guess=solver["initial_guess"])
+            with warnings.catch_warnings(record=True) as caught:  # keys renamed below
+                sim = Simulation(model, h=h, effects=[e for _, e in pairs],
+                                 solver=solver["method"], iterations=solver["iterations"],
+                                 tolerance=solver["tolerance"], backend=solver["backend"],
+                                 initial_guess=solver["initial_guess"])
         except InputError as exc:  # among them clothsim.magnitudes.check_step's bounds
             # The simulation checked the magnitudes once (no silent freeze); on a refusal the
             # scene's own checks name the scene key the model's field comes from.
             self._check_stiffness(model, h)
             if (problem := overflow_problem(model, h)) is not None:
                 raise self._error(scene_key(problem[0], self.data), problem[1]) from None
-            raise self._locate(exc, model, h) from None
+            raise located(self, exc, model, h) from None
+        warn_again(self, model, caught)  # Simulation's effects[i] named as the scene's key
         if solver["cholmod_mode"] != "auto":
             if not hasattr(sim.solver, "cholmod_mode"):
                 raise self._error("solver.cholmod_mode", f"applies to the local/global family "
@@ -360,29 +364,6 @@ class Scene:
             "springs"] else 0
         if (problem := stiffness_problem(model, h, self.data, table)) is not None:
             raise self._error(*problem)
-
-    def _locate(self, exc: InputError, model, h: float) -> SceneError:
-        """Name the effect whose binding failed (bind each one alone to find it)."""
-        for path, effect in self._effects(model):
-            try:
-                effect.bind(model, h)
-            except InputError as err:
-                if not path.startswith("effects["):  # a pin the cloth's files declare
-                    if err.field == "pin.stiffness" and "pin_stiffness" in self.data["cloth"]:
-                        return self._error("cloth.pin_stiffness", str(err).split(": ", 1)[1])
-                    label = "b" if path == "cloth.file" else "attachments"
-                    return self._error(path, f"{label}: {err}")
-                return self._error(*locate(err, path, effect.kind, path))
-        msg = " ".join(str(exc).split())
-        fld, _, rest = msg.partition(": ")
-        fld = getattr(exc, "field", None) or fld
-        if (at := re.fullmatch(r"effects\[(\d+)\](.*)", fld)) and rest:  # Simulation's index
-            return self._error(self._effects(model)[int(at[1])][0] + at[2], rest)
-        if rest and fld.startswith("solver."):
-            return self._error(fld, rest)
-        if rest and fld.startswith("effects."):
-            return self._error("effects", rest)
-        return self._error("", msg)
 
 
 __all__ = ["Scene"]
