@@ -334,17 +334,21 @@ class Simulation:
         """
         start = _time.perf_counter()
         s, h = self.state, self.h
-        problem = self.problem(s)
-        result: StepResult = self._step_solver(s).solve(problem)
-        x = result.x
-        t1 = s.time + h
-        if problem.has_contacts:
-            self._contact_forces(problem, x, t1)
-        for e in self._hooks["correct_positions"]:
-            x = e.correct_positions(t1, s, x)
-        v = (x - s.positions) / h
-        for e in self._hooks["correct_velocities"]:
-            v = e.correct_velocities(t1, s, x, v)
+        # An overflow ends as inf, which the solver (overflow_cause) or the check below
+        # names as a NonFiniteStateError; numpy's "overflow encountered in dot" lines said
+        # nothing more, after the error (Newton's wind force, Chebyshev's noise floor).
+        with np.errstate(over="ignore"):
+            problem = self.problem(s)
+            result: StepResult = self._step_solver(s).solve(problem)
+            x = result.x
+            t1 = s.time + h
+            if problem.has_contacts:
+                self._contact_forces(problem, x, t1)
+            for e in self._hooks["correct_positions"]:
+                x = e.correct_positions(t1, s, x)
+            v = (x - s.positions) / h
+            for e in self._hooks["correct_velocities"]:
+                v = e.correct_velocities(t1, s, x, v)
         bad = ~(np.isfinite(x).all(axis=1) & np.isfinite(v).all(axis=1))
         if bad.any():
             raise NonFiniteStateError(

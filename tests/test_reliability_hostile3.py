@@ -421,13 +421,16 @@ def test_the_command_refuses_a_closed_port_in_one_line_under_a_timeout(tmp_path)
 
 
 # ------------------------------------------------------------------ huge forces
-def test_a_pin_flung_beyond_float64_stops_in_one_line(tmp_path, capsys):
+@pytest.mark.parametrize("method", ["local-global", "newton", "chebyshev"])
+def test_a_pin_flung_beyond_float64_stops_in_one_line(tmp_path, capsys, method):
     """flag's pins moved at 1e75 m/s: the run stops at frame 3 naming the cause, exit 1;
     it also printed 'WARNING: RuntimeWarning (once): overflow encountered in dot' (the
-    gradient's norm, whose inf the solver itself explains)."""
+    gradient's norm, whose inf the solver itself explains), and with Newton two more lines
+    (the wind's force on the flung cloth), with Chebyshev one (its noise floor)."""
     out = tmp_path / "o"
     code = main(["run", "flag", "--frames", "3", "--no-preview", "--out", str(out),
-                 "--set", "effects[1].velocity=[1e75, 0, 0]"])
+                 "--set", "effects[1].velocity=[1e75, 0, 0]", "--set",
+                 f"solver.method={method}"])
     line = _one_line(capsys, code, 1)
     assert line.startswith("frame 3: the state became non-finite (the step's gradient |grad g| "
                            "overflows float64 from its start: h²|f_ext|"), line
