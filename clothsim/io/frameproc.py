@@ -59,20 +59,27 @@ class FrameProcess:
             spring_rest_length=writer.springs.spring_rest_length)
         try:
             self._shared = SharedFrame(writer.mesh.vertex_count)
-            self._proc = start_child("clothsim.io.frameproc", (self._shared.fd,), light=True)
         except (OSError, ValueError) as exc:
             log.info("frames written in this process (no second one: %s)", exc)
-            self.close()
-        # sent with the first frame, by the thread writing it: the run's own thread does not
-        # wait for the process to start and read the mesh (tens of MB at 513²)
+        # the process starts, and is sent the mesh (tens of MB at 513²), with the first frame,
+        # by the thread writing it: the run's own thread does not wait for either, and the
+        # process's imports do not run beside the first factorization (runner: frame 0 is
+        # handed over after it)
         self._init = dict(out_dir=str(writer.out_dir), mesh=writer.mesh, springs=springs,
                           compression=writer.compression, parent=os.getpid(),
                           fd=None if self._shared is None else self._shared.fd)
 
+    def _start(self) -> None:
+        try:
+            self._proc = start_child("clothsim.io.frameproc", (self._shared.fd,), light=True)
+        except (OSError, ValueError) as exc:
+            log.info("frames written in this process (no second one: %s)", exc)
+            self.close()
+
     @property
     def running(self) -> bool:
-        """Whether the process runs and takes frames."""
-        return self._proc is not None
+        """Whether the process runs and takes frames (or will start with the first one)."""
+        return self._proc is not None or (self._init is not None and self._shared is not None)
 
     def write(self, path, x, v, mask) -> bool:
         """Have the process write one frame file at ``path``; wait for it (without the GIL).
@@ -97,6 +104,8 @@ class FrameProcess:
         Exception
             What writing the file raised in the process (e.g. OSError: the disk is full).
         """
+        if self._init is not None and self._proc is None and self._shared is not None:
+            self._start()   # the first frame
         if self._proc is None:
             return False
         self._shared.put(x, v, mask)   # the arrays through shared memory, the rest a pipe
