@@ -210,7 +210,7 @@ class Factor:
         log.debug("factored %d x %d matrix with %s", *self.shape, self.backend)
         self.condition_bound = None
         if eigenvalue_floor is not None and eigenvalue_floor > 0 and self.shape[0] > 0:
-            norm_A = float(abs(self.A).sum(axis=0).max())
+            norm_A = _norm1(self.A)
             self.condition_bound = np.sqrt(self.shape[0]) * norm_A / float(eigenvalue_floor)
         proven = (self.condition_bound is not None
                   and self.condition_bound <= CONDITION_WARNING_THRESHOLD)
@@ -274,8 +274,19 @@ class Factor:
             return float(np.linalg.cond(Ad, 1))
         inv = spla.LinearOperator(self.shape, matvec=self.solve, rmatvec=self.solve,
                                   matmat=self.solve, dtype=np.float64)
-        norm_A = float(abs(self.A).sum(axis=0).max())   # exact, and cheaper than estimated
+        norm_A = _norm1(self.A)   # exact, and cheaper than estimated
         return norm_A * float(spla.onenormest(inv))
+
+
+def _norm1(A: sp.csc_matrix) -> float:
+    """‖A‖₁, the largest column sum of |A| of a CSC matrix without duplicates: the sums
+    ``abs(A).sum(axis=0)`` forms (``np.add.reduceat`` over each non-empty column), without
+    its copy of A (duplicates summed first, in place, as it does)."""
+    A.sum_duplicates()
+    nonempty = np.flatnonzero(np.diff(A.indptr))
+    if not len(nonempty):
+        return 0.0
+    return float(np.add.reduceat(np.abs(A.data), A.indptr[nonempty]).max())
 
 
 # -- helpers of the iterations around a factor --------------------------------------------
