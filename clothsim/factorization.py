@@ -36,7 +36,6 @@ from functools import cached_property
 
 import numpy as np
 import scipy.sparse as sp
-import scipy.sparse.linalg as spla
 
 from .errors import ConditioningWarning, FactorizationError, InputError
 
@@ -194,9 +193,10 @@ class Factor:
                 # Diagonal pivots only (diag_pivot_thresh=0): then, when the row and column
                 # permutations agree, U's diagonal is D of a symmetric LDLᵀ and its signs
                 # decide definiteness. Off-diagonal pivots would hide an indefinite matrix.
+                from scipy.sparse.linalg import splu  # loaded here only (scipy.linalg)
                 try:
-                    lu = spla.splu(self.A, permc_spec="MMD_AT_PLUS_A", diag_pivot_thresh=0.0,
-                                   options={"SymmetricMode": True})
+                    lu = splu(self.A, permc_spec="MMD_AT_PLUS_A", diag_pivot_thresh=0.0,
+                              options={"SymmetricMode": True})
                 except RuntimeError as exc:  # "Factor is exactly singular"
                     raise FactorizationError(f"system matrix is singular: {exc}") from exc
                 pivots = lu.U.diagonal()
@@ -272,6 +272,8 @@ class Factor:
         if n <= 3:
             Ad = self.A.toarray()
             return float(np.linalg.cond(Ad, 1))
+        import scipy.sparse.linalg as spla  # loaded here only: it brings scipy.linalg
+
         inv = spla.LinearOperator(self.shape, matvec=self.solve, rmatvec=self.solve,
                                   matmat=self.solve, dtype=np.float64)
         norm_A = _norm1(self.A)   # exact, and cheaper than estimated
