@@ -10,6 +10,12 @@ frame, and moved into place by the final files), and the process's wall and CPU 
 total. On a shared machine the wall time
 counts the other processes too: compare CPU seconds, or two variants interleaved
 (:func:`phases`, used by ``benchmarks.scale_ladder``).
+
+``python -m benchmarks.run_phases --step-parts [--size 513] [--write]`` splits one step of
+that run instead (:func:`step_parts`): the thread CPU of the step and of each part of its
+iteration (the CHOLMOD solve, the local step's passes, the right-hand side, the residual)
+and of its per-step setup, each the best of 5; ``--write`` also writes
+``docs/data/step-parts.md``.
 """
 
 from __future__ import annotations
@@ -50,6 +56,7 @@ for owner, name, label in [
         (Scene, "build_model", "model build"), (Scene, "build_simulation", "simulation build"),
         (runner, "scene_hash", "scene hash"), (runner, "input_hashes", "input hashes"),
         (runfolder.RunFolder, "begin", "folder begin"),
+        (simulation.Simulation, "prepare", "first factorization (before frame 0)"),
         (local_global, "factor_system", "assembly + factorization"),
         (factorization.Factor, "__init__", "factorization (CHOLMOD)"),
         (simulation.Simulation, "step", "step"),
@@ -84,6 +91,87 @@ print(json.dumps({"rc": rc, "imports": imports, "run": run, "spans": spans,
                   "total": (time.perf_counter() - T0, time.process_time()),
                   "children_cpu": children.children_user + children.children_system}))
 """
+
+
+STEP = r"""
+import json, sys, time
+import numpy as np
+import clothsim as cs
+from clothsim.factorization import single_threaded
+from clothsim.solvers.fused import FusedStep
+n, repeats = int(sys.argv[1]), int(sys.argv[2])
+sim = cs.load_scene("hanging", [f"cloth.resolution=[{n}, {n}]"]).build_simulation()
+sim.expect_steps(5)      # clothsim run's 5 frames: the factor that run keeps
+for _ in range(2):
+    sim.step()
+out = {"iterations": sim.solver.iterations, "mode": sim.solver.factorization.split(":")[0]}
+
+def best(name, fn, before=None):
+    t = []
+    for _ in range(repeats):
+        if before is not None:
+            before()
+        c = time.thread_time()
+        fn()
+        t.append(time.thread_time() - c)
+    out[name] = min(t)
+
+best("step", sim.step)
+with single_threaded():
+    best("setup", lambda: FusedStep(sim.solver, sim.problem()))
+    st = FusedStep(sim.solver, sim.problem())
+    delta = st.solve()
+    dirs, eT, xT = st.dirs, st.eT, st._place(delta)
+    spare = np.empty_like(eT)
+    best("solve", st.solve)
+    best("place", lambda: st._place(delta))
+    best("vectors", lambda: dirs.vectors_into(xT, eT))
+    best("scale", lambda: dirs._scale(eT), lambda: dirs.vectors_into(xT, eT))
+    best("difference", lambda: np.subtract(eT, st.pyT, out=spare))
+    best("rhs", lambda: st._right_hand_side(eT, st.rhs_previous))
+    best("norm", lambda: st.gradient_norm(st.rhs_previous))
+print(json.dumps(out))
+"""
+
+#: The parts of one step (:func:`step_parts`): key, what it is, calls per step ("k": one
+#: per iteration).
+PARTS = [("setup", "per step: y's spring vectors, c_F, x_0's local step and rhs "
+          "(`FusedStep`)", 1),
+         ("solve", "global step: CHOLMOD's solve of the three columns", "k"),
+         ("place", "x = y + δ over the free runs", "k"),
+         ("vectors", "local step: spring vectors p(x) (strided slices)", "k"),
+         ("scale", "local step: ‖p‖ (einsum, sqrt), d = (r / ‖p‖) p", "k"),
+         ("difference", "local step: e = d − p(y)", "k"),
+         ("rhs", "right-hand side c_F + h² J_F e (three sparse products)", "k"),
+         ("norm", "‖∇g‖ from the two right-hand sides", "k")]
+
+
+def step_parts(size: int = 513, repeats: int = 5) -> dict:
+    """Thread CPU seconds of one step of ``clothsim run hanging`` at ``size``² (its factor:
+    5 frames expected) and of each part of it, each the best of ``repeats``, in a fresh
+    process: the JSON of :data:`STEP` (keys of :data:`PARTS`, ``step``, ``iterations``)."""
+    out = subprocess.run([sys.executable, "-c", STEP, str(size), str(repeats)], check=True,
+                         capture_output=True, text=True, cwd=ROOT)
+    return json.loads(out.stdout.strip().splitlines()[-1])
+
+
+def parts_table(r: dict) -> list[str]:
+    """:func:`step_parts` as Markdown rows: per call, per step, share of the step; "other"
+    is the step less its parts (the problem, velocities, checks, the loop itself)."""
+    k, step = r["iterations"], r["step"]
+    lines = ["| part | per call | calls per step | per step | share of the step |",
+             "|---|---|---|---|---|"]
+    total = 0.0
+    for key, label, calls in PARTS:
+        calls = k if calls == "k" else calls
+        total += r[key] * calls
+        lines.append(f"| {label} | {r[key] * 1e3:.1f} ms | {calls} | {r[key] * calls:.3f} s "
+                     f"| {r[key] * calls / step:.0%} |")
+    lines.append(f"| other: the problem, velocities, checks, the loop | | | "
+                 f"{step - total:.3f} s | {(step - total) / step:.0%} |")
+    lines.append(f"| whole step (`Simulation.step`, {r['mode']} factor) | | 1 | {step:.3f} s "
+                 f"| 100% |")
+    return lines
 
 
 def phases(size: int = 513, frames: int = 5, extra: list[str] | None = None,
@@ -127,12 +215,28 @@ def main(argv: list[str] | None = None) -> None:
     parser.add_argument("--frames", type=int, default=5)
     parser.add_argument("--set", action="append", default=[], help="a scene override")
     parser.add_argument("--no-preview", action="store_true")
+    parser.add_argument("--step-parts", action="store_true",
+                        help="instead, the thread CPU of one step's parts (best of 5)")
+    parser.add_argument("--write", action="store_true",
+                        help="with --step-parts: also write docs/data/step-parts.md")
     parser.add_argument("--ab", type=int, default=0, metavar="PAIRS",
                         help="instead, PAIRS interleaved runs with and without the frame "
                              "process: wall, this process's CPU, its children's CPU")
     args = parser.parse_args([] if argv is None else argv)
     extra = [a for s in args.set for a in ("--set", s)]
     extra += ["--no-preview"] if args.no_preview else []
+    if args.step_parts:
+        from benchmarks.scale_ladder import commit
+        load = Path("/proc/loadavg").read_text().split()[0]
+        text = "\n".join([
+            f"Measured by `python -m benchmarks.run_phases --step-parts --size {args.size} "
+            f"--write` at commit {commit()} (thread CPU seconds, each part the best of 5, "
+            f"one BLAS/OpenMP thread; load average {load} at the start).", "",
+            *parts_table(step_parts(args.size))]) + "\n"
+        print(text)
+        if args.write:
+            (ROOT / "docs" / "data" / "step-parts.md").write_text(text, encoding="utf-8")
+        return
     if args.ab:
         print("| pair | load | frames written by | wall | run's CPU | children's CPU | "
               "wall ratio (process / thread) |\n|---|---|---|---|---|---|---|")

@@ -36,7 +36,6 @@ from functools import cached_property
 
 import numpy as np
 import scipy.sparse as sp
-import scipy.sparse.linalg as spla
 
 from .errors import ConditioningWarning, FactorizationError, InputError
 
@@ -194,9 +193,10 @@ class Factor:
                 # Diagonal pivots only (diag_pivot_thresh=0): then, when the row and column
                 # permutations agree, U's diagonal is D of a symmetric LDLᵀ and its signs
                 # decide definiteness. Off-diagonal pivots would hide an indefinite matrix.
+                from scipy.sparse.linalg import splu  # loaded here only (scipy.linalg)
                 try:
-                    lu = spla.splu(self.A, permc_spec="MMD_AT_PLUS_A", diag_pivot_thresh=0.0,
-                                   options={"SymmetricMode": True})
+                    lu = splu(self.A, permc_spec="MMD_AT_PLUS_A", diag_pivot_thresh=0.0,
+                              options={"SymmetricMode": True})
                 except RuntimeError as exc:  # "Factor is exactly singular"
                     raise FactorizationError(f"system matrix is singular: {exc}") from exc
                 pivots = lu.U.diagonal()
@@ -210,7 +210,7 @@ class Factor:
         log.debug("factored %d x %d matrix with %s", *self.shape, self.backend)
         self.condition_bound = None
         if eigenvalue_floor is not None and eigenvalue_floor > 0 and self.shape[0] > 0:
-            norm_A = float(abs(self.A).sum(axis=0).max())
+            norm_A = _norm1(self.A)
             self.condition_bound = np.sqrt(self.shape[0]) * norm_A / float(eigenvalue_floor)
         proven = (self.condition_bound is not None
                   and self.condition_bound <= CONDITION_WARNING_THRESHOLD)
@@ -272,10 +272,23 @@ class Factor:
         if n <= 3:
             Ad = self.A.toarray()
             return float(np.linalg.cond(Ad, 1))
+        import scipy.sparse.linalg as spla  # loaded here only: it brings scipy.linalg
+
         inv = spla.LinearOperator(self.shape, matvec=self.solve, rmatvec=self.solve,
                                   matmat=self.solve, dtype=np.float64)
-        norm_A = float(abs(self.A).sum(axis=0).max())   # exact, and cheaper than estimated
+        norm_A = _norm1(self.A)   # exact, and cheaper than estimated
         return norm_A * float(spla.onenormest(inv))
+
+
+def _norm1(A: sp.csc_matrix) -> float:
+    """‖A‖₁, the largest column sum of |A| of a CSC matrix without duplicates: the sums
+    ``abs(A).sum(axis=0)`` forms (``np.add.reduceat`` over each non-empty column), without
+    its copy of A (duplicates summed first, in place, as it does)."""
+    A.sum_duplicates()
+    nonempty = np.flatnonzero(np.diff(A.indptr))
+    if not len(nonempty):
+        return 0.0
+    return float(np.add.reduceat(np.abs(A.data), A.indptr[nonempty]).max())
 
 
 # -- helpers of the iterations around a factor --------------------------------------------

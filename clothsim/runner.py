@@ -241,7 +241,9 @@ def _run_in(folder: RunFolder, scene, model, sim, frames: int, progress, resume:
     if resuming:
         folder.save_npz()   # frames 0..start: what run.json's trajectory_frames then says
         folder.mark("writing")
-    else:   # frame 0 and run.json: written while frame 1 is computed
+    else:   # frame 0 and run.json: written while frame 1 is computed, once its system is
+        if frames >= 1:   # factored (a large cloth's factorization takes both cores)
+            sim.prepare()
         folder.write_frame(0, x, v, wait=False, state=effect_states(sim.effects))
     first = start + 1 if resuming else 1
     for k in range(first, frames + 1):

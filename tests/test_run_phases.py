@@ -16,6 +16,7 @@ def test_the_phases_of_a_small_run_are_all_there_and_counted():
     assert rows["frame write (all)"][0] == frames + 1
     assert rows["  frame .vtu + .pvd"][0] == frames + 1
     assert rows["factorization (CHOLMOD)"][0] == 1
+    assert rows["first factorization (before frame 0)"][0] == 1   # Simulation.prepare
     assert "    .vtu file (frame process, waited for)" not in rows   # 81 vertices: here
     assert rows["trajectory store (run's thread)"][0] == frames + 1
     assert "  trajectory.npz" not in rows            # written once, beside the last frame
@@ -27,3 +28,16 @@ def test_the_phases_of_a_small_run_are_all_there_and_counted():
     table = run_phases.table(r)
     assert table[0].startswith("| phase |") and table[-1].startswith("| whole process |")
     assert len(table) == len(rows) + 3
+
+
+def test_the_parts_of_one_step_add_up_to_it():
+    r = run_phases.step_parts(9, repeats=1)
+    assert r["iterations"] == cs.load_scene("hanging").data["solver"]["iterations"]
+    for key, _label, _calls in run_phases.PARTS:
+        assert r[key] >= 0, key
+    rows = run_phases.parts_table(r)
+    assert len(rows) == 2 + len(run_phases.PARTS) + 2
+    assert rows[-2].startswith("| other:") and rows[-1].startswith("| whole step")
+    # each part's per-step figure is its per-call figure times its calls
+    solve = next(row for row in rows if row.startswith("| global step"))
+    assert f"| {r['iterations']} |" in solve

@@ -59,20 +59,32 @@ class FrameProcess:
             spring_rest_length=writer.springs.spring_rest_length)
         try:
             self._shared = SharedFrame(writer.mesh.vertex_count)
-            self._proc = start_child("clothsim.io.frameproc", (self._shared.fd,), light=True)
         except (OSError, ValueError) as exc:
             log.info("frames written in this process (no second one: %s)", exc)
-            self.close()
-        # sent with the first frame, by the thread writing it: the run's own thread does not
-        # wait for the process to start and read the mesh (tens of MB at 513²)
+        # the process starts, and is sent the mesh (tens of MB at 513²), with the first frame,
+        # by the thread writing it: the run's own thread does not wait for either, and the
+        # process's imports do not run beside the first factorization (runner: frame 0 is
+        # handed over after it)
+        self._init_file = None
         self._init = dict(out_dir=str(writer.out_dir), mesh=writer.mesh, springs=springs,
                           compression=writer.compression, parent=os.getpid(),
                           fd=None if self._shared is None else self._shared.fd)
 
+    def _start(self) -> None:
+        """Start the process; the writer's description goes with the first frame, its arrays
+        (the mesh and springs) in a file the process inherits (:func:`pack`)."""
+        try:
+            self._init, self._init_file = pack(self._init)
+            self._proc = start_child("clothsim.io.frameproc",
+                                     (self._shared.fd, self._init_file.fileno()), light=True)
+        except (OSError, ValueError, pickle.PickleError) as exc:
+            log.info("frames written in this process (no second one: %s)", exc)
+            self.close()
+
     @property
     def running(self) -> bool:
-        """Whether the process runs and takes frames."""
-        return self._proc is not None
+        """Whether the process runs and takes frames (or will start with the first one)."""
+        return self._proc is not None or (self._init is not None and self._shared is not None)
 
     def write(self, path, x, v, mask) -> bool:
         """Have the process write one frame file at ``path``; wait for it (without the GIL).
@@ -97,6 +109,8 @@ class FrameProcess:
         Exception
             What writing the file raised in the process (e.g. OSError: the disk is full).
         """
+        if self._init is not None and self._proc is None and self._shared is not None:
+            self._start()   # the first frame
         if self._proc is None:
             return False
         self._shared.put(x, v, mask)   # the arrays through shared memory, the rest a pipe
@@ -108,6 +122,7 @@ class FrameProcess:
                         protocol=pickle.HIGHEST_PROTOCOL)
             self._proc.stdin.flush()
             answer = pickle.load(self._proc.stdout)
+            self._close_init()   # read by the process before it answered
         except (OSError, EOFError, pickle.PickleError, AttributeError, ValueError) as exc:
             log.info("frames written in this process from now on (the second one failed: "
                      "%s)", exc or type(exc).__name__)
@@ -117,10 +132,16 @@ class FrameProcess:
             raise answer
         return True
 
+    def _close_init(self) -> None:
+        init_file, self._init_file = self._init_file, None
+        if init_file is not None:
+            init_file.close()
+
     def close(self) -> None:
         """End the process (its input closes, it ends) and wait for it."""
         proc, self._proc = self._proc, None
         end_child(proc)
+        self._close_init()
         shared, self._shared = self._shared, None
         if shared is not None:
             shared.close()
@@ -149,8 +170,7 @@ class SharedFrame:
     def __init__(self, n: int, fd: int | None = None):
         size = max(49 * n, 1)
         if fd is None:
-            self._file = tempfile.TemporaryFile(dir="/dev/shm" if os.path.isdir("/dev/shm")
-                                                else None)
+            self._file = tempfile.TemporaryFile(dir=_shm_dir())
             fd = self._file.fileno()
             # its pages reserved now: a full /dev/shm (or disk) raises OSError here (no
             # process then), never SIGBUS when a frame is copied in
@@ -193,6 +213,68 @@ class SharedFrame:
             self._file.close()
 
 
+def _shm_dir() -> str | None:
+    return "/dev/shm" if os.path.isdir("/dev/shm") else None
+
+
+def pack(obj) -> tuple[dict, object]:
+    """``obj`` as a small message and a file: pickled with its large buffers (contiguous
+    arrays) out of band, written one after the other into a file without a name (in
+    ``/dev/shm`` where there is one). Through a pipe, the mesh and springs of a 513² cloth
+    (about 60 MB) took a thousand writes of 64 KiB, each taking Python's lock back from the
+    first step's iterations; into the file, one write per array.
+
+    Parameters
+    ----------
+    obj : object
+        What to send (the writer's description).
+
+    Returns
+    -------
+    (dict, file)
+        The message for :func:`unpack` (the pickle, the buffers' sizes, the file's
+        descriptor, which the process must inherit), and the file (close it once read).
+    """
+    buffers = []
+    data = pickle.dumps(obj, protocol=5, buffer_callback=buffers.append)
+    file = tempfile.TemporaryFile(dir=_shm_dir())
+    sizes = []
+    for buffer in buffers:
+        raw = buffer.raw()
+        file.write(raw)
+        sizes.append(raw.nbytes)
+    file.flush()
+    return {"pickle": data, "sizes": sizes, "fd": file.fileno()}, file
+
+
+def unpack(message: dict):
+    """The object :func:`pack` sent (in the process that inherited its file; its arrays are
+    copies, writable).
+
+    Parameters
+    ----------
+    message : dict
+        :func:`pack`'s message.
+
+    Returns
+    -------
+    object
+    """
+    buffers = []
+    with os.fdopen(message["fd"], "rb", buffering=0) as file:
+        file.seek(0)
+        for size in message["sizes"]:
+            buffer = bytearray(size)
+            view, done = memoryview(buffer), 0
+            while done < size:
+                got = file.readinto(view[done:])
+                if not got:
+                    raise EOFError("the writer's description is cut short")
+                done += got
+            buffers.append(buffer)
+    return pickle.loads(message["pickle"], buffers=buffers)
+
+
 def serve() -> None:
     """The process's side: read the writer's description, then write each frame asked for
     and answer None or the error raised. Ends when its input closes, or when its run is
@@ -206,7 +288,7 @@ def serve() -> None:
 
     out = answer_stream()
     try:
-        init = pickle.load(sys.stdin.buffer)
+        init = unpack(pickle.load(sys.stdin.buffer))
     except (EOFError, pickle.UnpicklingError):   # its run ended (mid-message)
         return
     writer = FrameWriter(init["out_dir"], init["mesh"], springs=init["springs"],
@@ -245,4 +327,4 @@ def wanted(vertex_count: int) -> bool:
     return vertex_count > PROCESS_FROM and cores() >= 2 and bool(sys.executable)
 
 
-__all__ = ["FrameProcess", "SharedFrame", "PROCESS_FROM", "serve", "wanted"]
+__all__ = ["FrameProcess", "SharedFrame", "PROCESS_FROM", "pack", "serve", "unpack", "wanted"]

@@ -30,10 +30,10 @@ Anal. 49(4), 2011.
 
 from __future__ import annotations
 
+import functools
 from collections.abc import Iterator
 
 import numpy as np
-from scipy.linalg import lapack
 
 from ..errors import InputError
 from ..model import Model
@@ -143,7 +143,11 @@ class AndersonSolver(LocalGlobalSolver):
                           d=step.current_directions())
 
 
-_posv = lapack.get_lapack_funcs("posv", dtype=np.float64)
+@functools.cache
+def _posv():
+    """LAPACK's dposv (scipy.linalg loads on first use: a run without Anderson skips it)."""
+    from scipy.linalg import lapack
+    return lapack.get_lapack_funcs("posv", dtype=np.float64)
 
 
 class _Window:
@@ -179,7 +183,7 @@ class _Window:
         """ΔG θ with θ = argmin ‖f − ΔF θ‖ (rows of ΔG: [Δδ | ΔA δ])."""
         n = self.count
         F = self.F[:n]
-        _, theta, info = _posv(self.gram[:n, :n], F @ f)   # Cholesky of the Gram matrix
+        _, theta, info = _posv()(self.gram[:n, :n], F @ f)   # Cholesky of the Gram matrix
         if info != 0 or not np.all(np.isfinite(theta)):    # singular: least squares
             theta = np.linalg.lstsq(F.T, f, rcond=None)[0]
         return np.dot(theta, self.G[:n], out=self._out)

@@ -31,7 +31,6 @@ import warnings
 
 import numpy as np
 import scipy.sparse as sp
-import scipy.sparse.linalg as spla
 
 from .. import energy, matrices
 from ..errors import ClothsimWarning
@@ -78,7 +77,8 @@ def stable_time_step(model: Model, *, anchor_vertices=None, anchor_stiffness=Non
     if n <= 50:
         lam = float(np.linalg.eigvalsh(K.toarray())[-1])
     else:
-        lam = float(spla.eigsh(K, k=1, which="LA", return_eigenvectors=False, tol=1e-6)[0])
+        from scipy.sparse.linalg import eigsh  # loaded here only: it brings scipy.linalg
+        lam = float(eigsh(K, k=1, which="LA", return_eigenvectors=False, tol=1e-6)[0])
     return float("inf") if lam <= 0 else 2.0 / np.sqrt(lam)
 
 

@@ -131,9 +131,9 @@ def factor_system(model: Model, problem: StepProblem, Js: sp.csr_matrix, a: np.n
                                anchor_stiffness=problem.anchor_stiffness)
     fixed = np.unique(problem.fixed_vertices)
     free = np.flatnonzero(problem.free_mask(n))
-    rows = A.tocsr()[free]
-    A_FF = rows[:, free]
-    A_FP = rows[:, fixed]
+    # A_FF in CSC, the form CHOLMOD takes, from A's free columns (A is CSC: no conversion)
+    A_FF = A[:, free][free]
+    A_FP = A[:, fixed][free].tocsr()
     mode = (ModeChoice("simplicial", "simplicial") if choose_mode is None
             else choose_mode(len(free)))
     # h² (L + K_anchor) is positive semidefinite: A_FF's eigenvalues are at least the
@@ -155,7 +155,6 @@ def factor_system(model: Model, problem: StepProblem, Js: sp.csr_matrix, a: np.n
         runs = [(int(free[i]), int(free[j - 1]) + 1, int(i)) for i, j in zip(starts, stops)
                 if j > i]
     pinned_springs = np.flatnonzero(np.isin(a, fixed) | np.isin(b, fixed))
-    A_FP = A_FP.tocsr()
     coupled = np.flatnonzero(np.diff(A_FP.indptr))
     return SystemFactor(A, free, fixed, factor, A_FP, h2J_F, runs, pinned_springs,
                         np.empty((3, 3, len(free))),
