@@ -14,6 +14,7 @@ import time as _time
 
 import numpy as np
 
+from .blowups import force_cause, state_cause
 from .contacts import ContactSet
 from .effects.base import HOOKS, BoundEffects, Effect, overrides
 from .effects.pins import Pin
@@ -212,7 +213,7 @@ class Simulation:
             for e in self._hooks["add_force"]:
                 e.add_force(t, s, f)
             if not np.isfinite(f).all():  # a blow-up an effect's force met first
-                raise NonFiniteStateError(self._force_cause(s))
+                raise NonFiniteStateError(force_cause(self._hooks["add_force"], s))
         y = s.positions + h * s.velocities
         for e in self._hooks["adjust_target"]:
             y = e.adjust_target(t, s, y)
@@ -243,21 +244,6 @@ class Simulation:
             self.h, s.positions, s.velocities, s.positions, None, pins.fixed_vertices,
             pins.fixed_positions, pins.anchor_vertices, pins.anchor_positions,
             pins.anchor_stiffness, start=self.initial_guess))
-
-    def _force_cause(self, s: State) -> str:
-        """Which effect's force is not finite in the step from ``s``, and the state's size."""
-        with np.errstate(all="ignore"):
-            size = (f"|x| up to {float(np.abs(s.positions).max()):.3g} m, |v| up to "
-                    f"{float(np.abs(s.velocities).max()):.3g} m/s")
-            for e in self._hooks["add_force"]:
-                f = np.zeros_like(s.positions)
-                e.add_force(s.time, s, f)
-                if not np.isfinite(f).all():
-                    i = int(np.flatnonzero(~np.isfinite(f).all(axis=1))[0])
-                    return (f"the external forces became non-finite in the step from t = "
-                            f"{s.time:.6g} s: {e.kind}'s force on vertex {i} is "
-                            f"{f[i].tolist()} ({size})")
-        return f"the external forces became non-finite in the step from t = {s.time:.6g} s"
 
     def _held_sets(self, t: float) -> list[ContactSet]:
         return [e.hold_contacts(t) for e in self._hooks["hold_contacts"]]
@@ -367,11 +353,9 @@ class Simulation:
             v = (x - s.positions) / h
             for e in self._hooks["correct_velocities"]:
                 v = e.correct_velocities(t1, s, x, v)
-        bad = ~(np.isfinite(x).all(axis=1) & np.isfinite(v).all(axis=1))
-        if bad.any():
-            raise NonFiniteStateError(
-                f"the state became non-finite at {int(bad.sum())} of {len(bad)} vertices "
-                f"(first: {int(np.flatnonzero(bad)[0])}) in the step from t = {s.time:.6g} s")
+        blowup = state_cause(x, v, s.time)
+        if blowup:
+            raise NonFiniteStateError(blowup)
         self.state = State(x, v, t1, s.step + 1)
         return StepRecord(result.iterations, result.residual, _time.perf_counter() - start,
                           result.converged, result.residual_history)

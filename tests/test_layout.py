@@ -26,7 +26,7 @@ STAGES = [
     {"problem", "objective", "contacts"},
     {"solvers"},
     {"effects"},
-    {"simulation", "state", "magnitudes"},
+    {"simulation", "state", "magnitudes", "blowups"},
     {"gallery"},
     {"io"},
     {"datasets"},
