@@ -24,7 +24,13 @@ from .causes import FITTED, StepData, name_cause
 from .compare import EPS32
 from .contact_planes import PortPlanes
 from .effect_causes import damping_cause, obstacle_cause
-from .frame_order import repeated_frame, start_mismatch, velocity_cause
+from .frame_order import (
+    not_finite,
+    repeated_frame,
+    start_mismatch,
+    stepped_from,
+    velocity_cause,
+)
 from .held_causes import explain
 from .held_follow import followed, transient
 from .held_margins import adopt, position_rounding
@@ -143,7 +149,12 @@ def check_steps(simulation, positions, velocities=None, *, precision: str = "flo
     gravity = next((e.acceleration for e in sim.effects if e.kind == "gravity"), None)
 
     t = sim.state.time  # accumulated as the simulation does (time-dependent effects)
+    initial = (sim.state.positions.copy(), sim.state.velocities.copy())
     for k in range(count):
+        if (nan := not_finite(xs, vs, k)) is not None:   # no step from it, or no answer
+            out.append(StepCheck(k, "not finite", float("inf"), nan[0], note=nan[1]))
+            t = t + h
+            continue
         rounding = position_rounding(xs[k], printed.digits if printed else 17,
                                      precision == "float32" or bool(printed and
                                                                     printed.float32), tol64)
@@ -234,6 +245,10 @@ def check_steps(simulation, positions, velocities=None, *, precision: str = "flo
         elif (again := repeated_frame(xs, vs, k, x_cs, err, tol, h)):
             step = StepCheck(k, "frame repeated", float(err[worst]), worst, tolerance=tol,
                              note=again)
+        elif err[worst] > tol and not held and (other := stepped_from(
+                sim, initial, xs, vs, k, state.time, tol)):
+            step = StepCheck(k, "start differs", float(err[worst]), worst, tolerance=tol,
+                             note=other)
         elif err[worst] <= tol:
             step = StepCheck(k, "agrees", float(err[worst]), worst, tolerance=tol)
             if velocities is not None:

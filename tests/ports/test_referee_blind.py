@@ -1,0 +1,83 @@
+"""Planted faults of referee4's blind audit (faults the referee matrix does not hold) that
+the referee got wrong: each port is clothsim's own run of a small hanging cloth with one
+fault, checked as ``clothsim check`` checks it.
+
+Before: a NaN in a frame before the last stopped the check with an InputError
+(``state.positions[5, 0]: must be a finite number``) instead of a verdict; velocities of
+the frame after (v_{k+1} written at frame k), or a frame 0 written otherwise than the port
+starts, were "not a minimizer: the port's answer is its start point y itself: its solve
+does not move the cloth", or UNDECIDED "start-dependent".
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+import clothsim as cs
+from benchmarks.referee_matrix import edited, run
+from clothsim.ports.check import check_steps
+
+from .test_referee_audit import checked, scene
+
+
+def test_a_nan_before_the_last_frame_is_a_verdict_not_an_error(tmp_path):
+    def blown(xs, vs, scene_):
+        xs[3:, 5] = np.nan
+        vs[3:, 5] = np.nan
+        return xs, vs
+
+    report, summary = checked(scene(tmp_path, frames=5), edited(blown))
+    assert summary.startswith("FAIL at step 2 -> 3: not finite, max error inf m at vertex 5"), \
+        summary
+    assert "from frame 3 on: its run blew up there or wrote NaN" in summary, summary
+    assert "3 of 5 steps fail: 3 not finite" in summary, summary
+    assert [s.status for s in report.steps[:2]] == ["agrees", "agrees"]
+
+
+def test_an_infinite_velocity_is_named_as_the_velocities(tmp_path):
+    def blown(xs, vs, scene_):
+        vs[2, 7, 1] = np.inf
+        return xs, vs
+
+    report, summary = checked(scene(tmp_path), edited(blown))
+    assert "step 1 -> 2: not finite" in summary, summary
+    assert "the port's velocities of frame 2 (the step's answer) are not finite" in summary
+    assert report.steps[3].status == "agrees"   # frame 3 is finite again: judged
+
+
+def test_velocities_of_the_frame_after_are_named(tmp_path):
+    def ahead(xs, vs, scene_):   # v_{k+1} written at frame k
+        return xs, np.concatenate([vs[1:], vs[-1:]])
+
+    report, summary = checked(scene(tmp_path), edited(ahead))
+    assert summary.startswith("FAIL at step 0 -> 1: start differs"), summary
+    assert "frame 0 holds other velocities than the state it starts from" in summary
+    for s in report.steps[1:3]:
+        assert s.status == "start differs", s.line()
+        assert "its velocities are those of the frame after" in s.note, s.line()
+    assert "does not move the cloth" not in " ".join(s.note for s in report.steps)
+
+
+def test_a_frame_0_written_otherwise_than_the_port_starts_is_named(tmp_path):
+    def up(xs, vs, scene_):   # frame 0 written 1 cm up, the run from the scene's start
+        xs[0, :, 1] += 0.01
+        return xs, vs
+
+    report, summary = checked(scene(tmp_path), edited(up))
+    assert summary.startswith("FAIL at step 0 -> 1: start differs"), summary
+    assert ("clothsim's step from the scene's initial state: the port's frame 0 holds other "
+            "positions than the state it starts from") in summary, summary
+    assert "1 of 4 steps fail" in summary, summary
+
+
+def test_a_port_right_from_its_own_start_is_not_sent_to_the_scenes(tmp_path):
+    """The scene's start is tried only where the port's step fails: a port started from its
+    own state and right from it still passes."""
+    path = scene(tmp_path)
+
+    def moving(state):
+        state.velocities[:, 0] += 0.1
+
+    xs, vs = run(cs.load_scene(path), start=moving)
+    report = check_steps(cs.load_scene(path), xs, vs)
+    assert report.passed, report.summary()
