@@ -23,13 +23,14 @@ from __future__ import annotations
 import numpy as np
 from scipy.spatial import cKDTree
 
+from ..errors import InputError
 from ..simulation import State
 
 #: Frames of the scene's own run a port's first frame is compared with.
 MAX_START_FRAMES = 3
 
 
-__all__ = ["not_finite", "repeated_frame", "start_mismatch", "stepped_from",
+__all__ = ["not_finite", "port_frames", "repeated_frame", "start_mismatch", "stepped_from",
            "velocity_cause"]
 
 
@@ -286,3 +287,50 @@ def stepped_from(sim, start, xs, vs, k: int, t: float, tol: float) -> str:
             return (f"the port's x_{k + 1} is clothsim's step from {words} ({off:.1e} m off "
                     f"its answer)")
     return ""
+
+
+def port_frames(sim, positions, velocities, steps):
+    """The port's frames as (frames, n, 3) positions and velocities, validated.
+
+    Parameters
+    ----------
+    sim : Simulation
+        The scene's simulation (its vertex count and h).
+    positions : array_like, shape (frames, n, 3) or (frames, 3 n)
+        The port's x_k [m].
+    velocities : array_like or None
+        The port's v_k [m/s]; None: (x_k − x_{k−1}) / h, and 0 at frame 0.
+    steps : int or None
+        The steps to check (at most the frames written).
+
+    Returns
+    -------
+    xs, vs : ndarray, shape (frames, n, 3)
+    notes : list of str
+        The note on derived velocities, if any.
+
+    Raises
+    ------
+    InputError
+        A shape that is not the scene's, fewer than 2 frames, or ``steps`` out of range.
+    """
+    xs = np.asarray(positions, np.float64)
+    n = sim.model.vertex_count
+    if xs.ndim == 2:
+        xs = xs.reshape(len(xs), -1, 3)
+    if xs.ndim != 3 or xs.shape[1:] != (n, 3):
+        raise InputError(f"positions: expected (frames, {n}, 3), got {xs.shape}")
+    if len(xs) < 2:
+        raise InputError("positions: need at least 2 frames to check a step")
+    if steps is not None and steps < 1:
+        raise InputError(f"steps: must be >= 1, got {steps}")
+    if steps is not None and steps > len(xs) - 1:
+        raise InputError(f"steps: {steps} steps asked for, but the port has only {len(xs)} "
+                         f"frames ({len(xs) - 1} steps)")
+    if velocities is None:
+        vs = np.concatenate([np.zeros_like(xs[:1]), np.diff(xs, axis=0) / sim.h])
+        return xs, vs, ["no port velocities: v_k = (x_k - x_{k-1}) / h assumed"]
+    vs = np.asarray(velocities, np.float64)
+    if vs.size != xs.size:
+        raise InputError(f"velocities: expected {xs.shape}, got {vs.shape}")
+    return xs, vs.reshape(xs.shape), []

@@ -14,7 +14,7 @@ from __future__ import annotations
 import numpy as np
 
 import clothsim as cs
-from benchmarks.referee_matrix import edited, run
+from benchmarks.referee_matrix import edited, keys, run
 from clothsim.ports.check import check_steps
 
 from .test_referee_audit import checked, scene
@@ -81,3 +81,77 @@ def test_a_port_right_from_its_own_start_is_not_sent_to_the_scenes(tmp_path):
     xs, vs = run(cs.load_scene(path), start=moving)
     report = check_steps(cs.load_scene(path), xs, vs)
     assert report.passed, report.summary()
+
+
+def _noise(scale, pins=True):
+    def noisy(xs, vs, scene_):
+        sim = scene_.build_simulation()
+        which = np.arange(xs.shape[1])
+        if not pins:
+            which = np.setdiff1d(which, sim.problem(sim.state).fixed_vertices)
+        rng = np.random.default_rng(0)
+        xs[1:, which] += scale * rng.standard_normal(xs[1:, which].shape)
+        return xs, vs
+    return noisy
+
+
+def test_a_right_port_with_noise_is_noisy_not_undecided(tmp_path):
+    """1e-6 m of noise on the free vertices (1000 × the tolerance) was UNDECIDED
+    'start-dependent: the port iterates otherwise' (not the port's error)."""
+    report, summary = checked(scene(tmp_path), edited(_noise(1e-6, pins=False)))
+    assert summary.startswith("FAIL at step 0 -> 1: noisy"), summary
+    assert "the difference from clothsim's step is noise" in summary, summary
+    assert "4 of 4 steps fail: 4 noisy" in summary, summary
+
+
+def test_pinned_vertices_off_by_the_noise_are_not_missing_pins(tmp_path):
+    """Noise on every vertex, pinned ones too, was 'pinned vertex moved … its pins are
+    missing or act elsewhere'."""
+    report, summary = checked(scene(tmp_path), edited(_noise(1e-6)))
+    assert summary.startswith("FAIL at step 0 -> 1: noisy"), summary
+    assert "by the noise its free vertices carry too" in summary, summary
+    assert "its pins are missing" not in summary, summary
+
+
+def test_smooth_differences_are_not_called_noise(tmp_path):
+    """A model difference (the structural springs left out: rough, 0.71 of noise's
+    roughness) is named by the model fit, and an iteration count by the settings."""
+    for fault, named in (("springs.structural=0", "the structural springs only"),
+                         ("solver.iterations=9", "iterations = 9")):
+        report, summary = checked(scene(tmp_path), keys(fault))
+        assert named in summary and "noisy" not in summary, summary
+
+
+def _builtin(tmp_path, name, frames, **subs):
+    import re
+
+    from clothsim.scene import builtin_scene_text
+    text = re.sub(r"(?m)^frames = \d+", f"frames = {frames}", builtin_scene_text(name))
+    for pattern, value in subs.items():
+        text = re.sub(pattern, value, text)
+    path = tmp_path / f"{name}.toml"
+    path.write_text(text, encoding="utf-8")
+    return path
+
+
+def test_an_impulse_twice_as_strong_is_named_not_undecided(tmp_path):
+    """The impulse's force × 2 was UNDECIDED 'start-dependent … the port iterates
+    otherwise' (no few-parameter model reproduced a force on the disk alone)."""
+    path = _builtin(tmp_path, "impulse", 6, **{r"resolution = \[25, 25\]": "resolution = [13, 13]"})
+    report, summary = checked(path, keys("effects[1].force=[0.0, 12.0, 0.0]"))
+    assert summary.startswith("FAIL at step 3 -> 4: model differs"), summary
+    assert "the scene's external forces other than gravity × 2.000" in summary, summary
+    assert "3 of 6 steps fail: 3 model differs" in summary, summary
+
+
+def test_a_wind_of_twice_the_drag_is_named(tmp_path):
+    path = _builtin(tmp_path, "flag", 2)
+    report, summary = checked(path, keys("effects[2].drag=2.0"))
+    assert summary.startswith("FAIL at step 0 -> 1: model differs"), summary
+    assert "the scene's external forces other than gravity × 2.000" in summary, summary
+
+
+def test_a_right_impulse_port_still_passes(tmp_path):
+    path = _builtin(tmp_path, "impulse", 6, **{r"resolution = \[25, 25\]": "resolution = [13, 13]"})
+    report, summary = checked(path, keys())
+    assert report.passed, summary
