@@ -33,7 +33,7 @@ from .frame_order import (
     velocity_cause,
 )
 from .held_causes import explain
-from .held_follow import followed, transient
+from .held_follow import beyond, followed, transient
 from .held_margins import adopt, position_rounding
 from .held_settle import marginal_entries, settle
 from .held_steps import HeldSteps
@@ -147,7 +147,7 @@ def check_steps(simulation, positions, velocities=None, *, precision: str = "flo
     obstacles = [None] if any(e.kind in ("sphere", "plane", "box") for e in sim.effects) \
         else []
     dampings, held_causes = [], []   # failing held steps a contact setting was sought for
-    noisy = {}   # step k -> the note of a difference as rough as noise
+    noisy, seconds = {}, []   # step k -> a noise's note; further steps searched again
     named = None   # (Change, k): the setting that reproduced step k, carried on
     gravity = next((e.acceleration for e in sim.effects if e.kind == "gravity"), None)
 
@@ -221,6 +221,10 @@ def check_steps(simulation, positions, velocities=None, *, precision: str = "flo
                 again, words, nearer = explain(held, x_port, x_cs, err, tol)
                 if again is not None and again.setting == named[0].setting:
                     change, why_held, further, named = again, words, "", (again, k)
+                elif len(seconds) < MAX_EFFECT:   # a second setting, the first one kept?
+                    seconds.append(k)
+                    change, also = beyond(held, named[0], x_port, x_cs, err, tol)
+                    further = f"{further}; {also}" if also else further
             variant = None if change is not None else variant
         elif (held and moved is None and off > tol and err[worst] > tol
                 and len(held_causes) < MAX_EFFECT):   # a setting of the port's?
