@@ -247,3 +247,19 @@ def test_first_contact_flips_needs_a_rounding_that_reaches_the_edge():
     n = sim.model.vertex_count
     assert 186 in first_contact_flips(held, np.full(n, 1e-6))
     assert first_contact_flips(held, np.full(n, 1e-9)) == set()
+
+
+def test_a_box_moved_5_cm_sideways_is_named_at_every_later_step():
+    """Its landing step reads a range (0.009 to 0.074 m: every shift in it lands the same)
+    and names the middle, 0.042 m, which missed the steps after it: they were further
+    differences (start-dependent) up to step 13, where the reading happened to be exact.
+    The shift is now fitted in the range on the step that tells more."""
+    sets = ["effects[1].min=[-0.2, 0.0, -0.25]", "effects[1].max=[0.3, 0.5, 0.25]"]
+    X, V, _ = run_port(load_scene(BOX, sets), "none", 14)
+    report = check_steps(load_scene(BOX), X, V)
+    first = report.first_failure
+    assert first.k == 8 and "a box moved by (0.04167, 0, 0) m" in first.note, first.line()
+    for s in report.steps[9:]:
+        assert s.status == "model differs" and not s.further, s.line()
+        assert "a box moved by (0.05, 0, 0) m" in s.note, s.line()
+    assert "further" not in report.summary()
