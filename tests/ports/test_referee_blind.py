@@ -155,3 +155,17 @@ def test_a_right_impulse_port_still_passes(tmp_path):
     path = _builtin(tmp_path, "impulse", 6, **{r"resolution = \[25, 25\]": "resolution = [13, 13]"})
     report, summary = checked(path, keys())
     assert report.passed, summary
+
+
+def test_a_frozen_cloth_is_told_it_has_no_force_not_one_of_1e_15(tmp_path):
+    """Every frame the first: the still cloth minimizes g without gravity; the fitted
+    force was printed '(-1e-15, -4e-16, 0) N per vertex'."""
+    def frozen(xs, vs, scene_):
+        xs[1:] = xs[0]
+        vs[:] = 0.0
+        return xs, vs
+
+    report, summary = checked(scene(tmp_path), edited(frozen))
+    assert "the external force (0, 0, 0) N per vertex instead of (0, -0.0681, 0)" in summary, \
+        summary
+    assert "e-15" not in summary and "e-16" not in summary, summary
