@@ -169,3 +169,15 @@ def test_a_frozen_cloth_is_told_it_has_no_force_not_one_of_1e_15(tmp_path):
     assert "the external force (0, 0, 0) N per vertex instead of (0, -0.0681, 0)" in summary, \
         summary
     assert "e-15" not in summary and "e-16" not in summary, summary
+
+
+def test_a_post_solve_box_of_another_friction_is_named_not_undecided(tmp_path):
+    """drop-on-square 13² in post-solve mode, starting 3 cm above the box: the box's
+    friction 0.6 for 0.3 was UNDECIDED 'start-dependent' (only sizes were read off)."""
+    path = _builtin(tmp_path, "drop-on-square", 6, **{
+        r"resolution = \[25, 25\]": "resolution = [13, 13]",
+        r"center = \[0.0, 1.0, 0.0\]": "center = [0.0, 0.53, 0.0]"})
+    path.write_text(path.read_text() + '\n[contact]\nmode = "post-solve"\n')
+    report, summary = checked(path, keys("effects[1].friction=0.6"))
+    assert summary.startswith("FAIL at step 2 -> 3: model differs"), summary
+    assert "with the box's friction coefficient 0.6 instead of 0.3" in summary, summary
