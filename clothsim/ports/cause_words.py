@@ -161,6 +161,10 @@ def _force_words(steps, hyp, theta) -> str:
     unit = "N per vertex" if hyp == "force per vertex" else "m/s² × m on each vertex"
     if not np.any(f):
         return f"an external force {_vector(theta)} {unit} the scene does not have"
+    if np.allclose(f, f[0]) and hyp != "force per vertex" and np.all(m > 0) \
+            and np.allclose(m, m[0]):   # per unit mass beside the scene's, in m/s² too
+        port, scene = _vectors(theta, f[0] / m[0])
+        return f"the external force {port} {unit} instead of {scene} m/s² × m"
     if np.allclose(f, f[0]):
         port, scene = _vectors(theta, f[0])
         text = f"the external force {port} {unit} instead of {scene} N per vertex"

@@ -181,3 +181,15 @@ def test_a_post_solve_box_of_another_friction_is_named_not_undecided(tmp_path):
     report, summary = checked(path, keys("effects[1].friction=0.6"))
     assert summary.startswith("FAIL at step 2 -> 3: model differs"), summary
     assert "with the box's friction coefficient 0.6 instead of 0.3" in summary, summary
+
+
+def test_gravity_x2_in_free_fall_is_named_beside_the_inertia_it_cannot_be_told_from(tmp_path):
+    """A falling cloth whose springs are at rest: the inertia term × 0.5 and gravity × 2
+    make the same steps; only 'as if h were 0.04714 s' was named."""
+    path = _builtin(tmp_path, "drop-on-square", 3,
+                    **{r"resolution = \[25, 25\]": "resolution = [13, 13]"})
+    report, summary = checked(path, keys("effects[0].acceleration=[0.0, -19.62, 0.0]"))
+    assert "the inertia term M (x − y) / h² × 0.500" in summary, summary
+    assert ("or, the same steps (the springs hardly act in them), the external force "
+            "(0, -19.6, 0) m/s² × m on each vertex instead of (0, -9.81, 0) m/s² × m") \
+        in summary, summary
