@@ -178,6 +178,38 @@ def _reversed_all(xs, vs, scene):     # the vertices written last to first
     return xs[:, ::-1], vs[:, ::-1]
 
 
+def _velocities_ahead(xs, vs, scene):   # v_{k+1} written at frame k
+    return xs, np.concatenate([vs[1:], vs[-1:]])
+
+
+def _frame0_up(xs, vs, scene):        # frame 0 written 1 cm up; the run from the scene's
+    xs[0, :, 1] += 0.01
+    return xs, vs
+
+
+def _nan_from(frame):
+    """NaN at vertex 5 from ``frame`` on (a run that blew up)."""
+    def blown(xs, vs, scene):
+        xs[frame:, 5] = np.nan
+        vs[frame:, 5] = np.nan
+        return xs, vs
+    return blown
+
+
+def _noise(scale, pins=True):
+    """Independent noise of ``scale`` [m] per coordinate on x_1 …, the exactly pinned
+    vertices included or not."""
+    def noisy(xs, vs, scene):
+        sim = scene.build_simulation()
+        which = np.arange(xs.shape[1])
+        if not pins:
+            which = np.setdiff1d(which, sim.problem(sim.state).fixed_vertices)
+        xs[1:, which] += scale * np.random.default_rng(0).standard_normal(
+            xs[1:, which].shape)
+        return xs, vs
+    return noisy
+
+
 def _float32_accumulated(xs, vs, scene):
     """The port keeps x and v in float32 and integrates x_{k+1} = x_k + h v_{k+1} in
     float32 (its rounding accumulates frame after frame)."""
@@ -293,6 +325,17 @@ def _rows():
             ("rows in reverse order",)),
         Row("hanging 12²", "npz float32", "float32 accumulation (checked as float32)",
             edited(_float32_accumulated), True, (), "float32"),
+        Row("hanging 12²", "%.17g", "NaN from frame 3", edited(_nan_from(3)), False,
+            ("step 2 -> 3: not finite", "from frame 3 on")),
+        Row("hanging 12²", "%.17g", "velocities of the frame after",
+            edited(_velocities_ahead), False, ("start differs",)),
+        Row("hanging 12²", "%.17g", "frame 0 written 1 cm up", edited(_frame0_up), False,
+            ("start differs", "frame 0 holds other positions")),
+        Row("hanging 12²", "%.17g", "noise 1e-6 m on the free vertices",
+            edited(_noise(1e-6, pins=False)), False, ("noisy", "is noise")),
+        Row("hanging 12²", "%.17g", "noise 1e-6 m, pins too", edited(_noise(1e-6)), False,
+            ("noisy", "by the noise its free vertices carry too")),
+        Row("hanging 12²", "%.17g", "noise 3e-10 m", edited(_noise(3e-10, pins=False)), True),
         Row("hanging 12² damped", "%.17g", "damping left out",
             keys("effects[2].coefficient=0"), False, ("left out",), scene_kw={"damping": True}),
     ]
@@ -337,6 +380,15 @@ def _rows():
         Row("flag 31x21 (wind)", "%.17g", "wind left out", keys(
             "effects[2].velocity=[0.0, 0.0, 0.0]"), False,
             ("gravity alone: the scene's other external forces",), scene_kw=flag),
+        Row("flag 31x21 (wind)", "%.17g", "drag × 2", keys("effects[2].drag=2.0"), False,
+            ("external forces other than gravity × 2.000",), scene_kw=flag),
+    ]
+    impulse = {"builtin": "impulse", "frames": 6, "resolution": [13, 13]}
+    yield from [
+        Row("impulse 13²", "%.17g", "none", right, True, scene_kw=impulse),
+        Row("impulse 13²", "%.17g", "impulse force × 2", keys(
+            "effects[1].force=[0.0, 12.0, 0.0]"), False,
+            ("external forces other than gravity × 2.000",), scene_kw=impulse),
     ]
     net = {"coursework": "net", "frames": 3}
     yield from [
@@ -384,6 +436,8 @@ def _scene_file(folder: Path, kw: dict) -> Path:
     if "builtin" in kw:
         text = builtin_scene_text(kw["builtin"])
         text = re.sub(r"(?m)^frames = \d+", f"frames = {frames}", text)
+        if "resolution" in kw:
+            text = re.sub(r"(?m)^resolution = .*$", f"resolution = {kw['resolution']}", text)
     elif "coursework" in kw:
         write_coursework(folder / "cases")
         path = folder / "cases" / kw["coursework"] / "scene.toml"

@@ -124,17 +124,21 @@ def listing(items, limit=6) -> str:
     return ", ".join(items[:limit]) + (f", … {len(items)} in all" if len(items) > limit else "")
 
 
-def _vector(v, digits: int = 3) -> str:
-    """(+0.1, -9.8, 0): three digits; a component below 1e-6 of the largest is fit noise."""
-    big = max(float(np.abs(v).max()), 1e-300)
+def _vector(v, digits: int = 3, scale: float = 0.0) -> str:
+    """(+0.1, -9.8, 0): three digits; a component below 1e-6 of the largest (of ``v``, or
+    ``scale`` when larger) is fit noise."""
+    big = max(float(np.abs(v).max()), scale, 1e-300)
     return "(" + ", ".join("0" if abs(c) < 1e-6 * big else f"{c:+.{digits}g}" for c in v) + ")"
 
 
 def _vectors(a, b) -> tuple[str, str]:
     """Two vectors with the fewest digits (at least 3) that tell them apart: a port's
-    gravity of 9.8 beside the scene's 9.81 is not printed as the same (-9.8) twice."""
+    gravity of 9.8 beside the scene's 9.81 is not printed as the same (-9.8) twice; each
+    component below 1e-6 of the larger vector is 0 (a still cloth fits a force of 1e-15 N,
+    which is none)."""
+    scale = max(float(np.abs(a).max()), float(np.abs(b).max()))
     for digits in range(3, 10):
-        ta, tb = _vector(a, digits), _vector(b, digits)
+        ta, tb = _vector(a, digits, scale), _vector(b, digits, scale)
         if ta != tb:
             break
     return ta, tb
@@ -157,6 +161,10 @@ def _force_words(steps, hyp, theta) -> str:
     unit = "N per vertex" if hyp == "force per vertex" else "m/s² × m on each vertex"
     if not np.any(f):
         return f"an external force {_vector(theta)} {unit} the scene does not have"
+    if np.allclose(f, f[0]) and hyp != "force per vertex" and np.all(m > 0) \
+            and np.allclose(m, m[0]):   # per unit mass beside the scene's, in m/s² too
+        port, scene = _vectors(theta, f[0] / m[0])
+        return f"the external force {port} {unit} instead of {scene} m/s² × m"
     if np.allclose(f, f[0]):
         port, scene = _vectors(theta, f[0])
         text = f"the external force {port} {unit} instead of {scene} N per vertex"

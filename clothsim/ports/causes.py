@@ -181,9 +181,25 @@ def infer_cause(steps: list[StepData]) -> Cause | None:
                 theta = refine(fitted[:1], hyp, theta, REFINE)
             if all(_explains(s, hyp, theta, gradients, evidence, fitted=fitted_theta)
                    for s in fitted):
-                return Cause(cause_text(fitted, hyp, theta, gradients, evidence), hyp, theta,
-                             gradients, evidence)
+                return Cause(cause_text(fitted, hyp, theta, gradients, evidence) +
+                             _same_steps(fitted, hyp), hyp, theta, gradients, evidence)
     return _vertex_force_cause(steps[0]) or _vertex_mass_cause(steps[0])
+
+
+def _same_steps(fitted, hyp) -> str:
+    """Where the springs hardly act (a free fall), the inertia term × c and the external
+    force × 1 / c make the same steps: the force, fitted too, is named beside the inertia
+    when it explains the same steps (gravity × 2 was named 'as if h were 0.04714 s')."""
+    if hyp != "inertia":
+        return ""
+    for other in ("force per unit mass", "force per vertex"):
+        if other not in applicable(fitted):
+            continue
+        theta = fit(fitted, other)
+        if theta is not None and all(_explains(s, other, theta, {}, {}) for s in fitted):
+            return (f"; or, the same steps (the springs hardly act in them), "
+                    f"{describe(fitted, other, theta)}")
+    return ""
 
 
 def _minimizes(step, r: float) -> bool:

@@ -24,9 +24,16 @@ from .causes import FITTED, StepData, name_cause
 from .compare import EPS32
 from .contact_planes import PortPlanes
 from .effect_causes import damping_cause, obstacle_cause
-from .frame_order import repeated_frame, start_mismatch, velocity_cause
+from .frame_order import (
+    not_finite,
+    port_frames,
+    repeated_frame,
+    start_mismatch,
+    stepped_from,
+    velocity_cause,
+)
 from .held_causes import explain
-from .held_follow import followed, transient
+from .held_follow import beyond, followed, transient
 from .held_margins import adopt, position_rounding
 from .held_settle import marginal_entries, settle
 from .held_steps import HeldSteps
@@ -37,6 +44,7 @@ from .held_verdicts import (
     variant_verdict,
 )
 from .judge import CONVERGING, gradient_scale, judge, pin_role, pinned_moved
+from .noise import noise_note
 from .postsolve_margins import PortDecisions
 from .precision import Printed
 from .rounding import float32_tolerance
@@ -100,7 +108,7 @@ def check_steps(simulation, positions, velocities=None, *, precision: str = "flo
     sim = as_simulation(simulation)
     if expected_steps is not None and expected_steps < 0:
         raise InputError(f"expected_steps: must be >= 0, got {expected_steps}")
-    xs, vs, notes = _frames(sim, positions, velocities, steps)
+    xs, vs, notes = port_frames(sim, positions, velocities, steps)
     if precision not in ("float32", "float64"):
         raise InputError(f"precision: must be 'float32' or 'float64', got {precision!r}")
     h = sim.h
@@ -139,11 +147,17 @@ def check_steps(simulation, positions, velocities=None, *, precision: str = "flo
     obstacles = [None] if any(e.kind in ("sphere", "plane", "box") for e in sim.effects) \
         else []
     dampings, held_causes = [], []   # failing held steps a contact setting was sought for
+    noisy, seconds = {}, []   # step k -> a noise's note; further steps searched again
     named = None   # (Change, k): the setting that reproduced step k, carried on
     gravity = next((e.acceleration for e in sim.effects if e.kind == "gravity"), None)
 
     t = sim.state.time  # accumulated as the simulation does (time-dependent effects)
+    initial = (sim.state.positions.copy(), sim.state.velocities.copy())
     for k in range(count):
+        if (nan := not_finite(xs, vs, k)) is not None:   # no step from it, or no answer
+            out.append(StepCheck(k, "not finite", float("inf"), nan[0], note=nan[1]))
+            t = t + h
+            continue
         rounding = position_rounding(xs[k], printed.digits if printed else 17,
                                      precision == "float32" or bool(printed and
                                                                     printed.float32), tol64)
@@ -207,6 +221,10 @@ def check_steps(simulation, positions, velocities=None, *, precision: str = "flo
                 again, words, nearer = explain(held, x_port, x_cs, err, tol)
                 if again is not None and again.setting == named[0].setting:
                     change, why_held, further, named = again, words, "", (again, k)
+                elif len(seconds) < MAX_EFFECT:   # a second setting, the first one kept?
+                    seconds.append(k)
+                    change, also = beyond(held, named[0], x_port, x_cs, err, tol)
+                    further = f"{further}; {also}" if also else further
             variant = None if change is not None else variant
         elif (held and moved is None and off > tol and err[worst] > tol
                 and len(held_causes) < MAX_EFFECT):   # a setting of the port's?
@@ -222,9 +240,14 @@ def check_steps(simulation, positions, velocities=None, *, precision: str = "flo
             variant = None
         if moved is not None:
             v, dist = moved
-            step = StepCheck(k, "pinned vertex moved", float(err[worst]), v, role=pin_role(
-                problem, v), tolerance=tol, note=f"the port moved it {dist:.3e} m from its "
-                f"target: its pins are missing or act elsewhere")
+            noise = noise_note(model, problem, x_cs, x_port, tol)
+            free = np.delete(err, problem.fixed_vertices).max(initial=0.0) > tol
+            step = StepCheck(k, "noisy" if noise and free else "pinned vertex moved",
+                             float(err[worst]), v, role=pin_role(problem, v), tolerance=tol,
+                             note=f"the port moved it {dist:.3e} m from its target: " + (
+                                 f"by the noise its free vertices carry too (it computes its "
+                                 f"pinned vertices rather than holding them); {noise}"
+                                 if noise else "its pins are missing or act elsewhere"))
         elif planes is not None or variant is not None:
             step = planes or variant
             step.note += f"; {why_held}" if why_held else ""
@@ -234,6 +257,10 @@ def check_steps(simulation, positions, velocities=None, *, precision: str = "flo
         elif (again := repeated_frame(xs, vs, k, x_cs, err, tol, h)):
             step = StepCheck(k, "frame repeated", float(err[worst]), worst, tolerance=tol,
                              note=again)
+        elif err[worst] > tol and not held and (other := stepped_from(
+                sim, initial, xs, vs, k, state.time, tol)):
+            step = StepCheck(k, "start differs", float(err[worst]), worst, tolerance=tol,
+                             note=other)
         elif err[worst] <= tol:
             step = StepCheck(k, "agrees", float(err[worst]), worst, tolerance=tol)
             if velocities is not None:
@@ -276,6 +303,9 @@ def check_steps(simulation, positions, velocities=None, *, precision: str = "flo
                     step.status == "not converged",
                     fixed_settings(sim), gravity=gravity, derived=velocities is None,
                     blind=optimality < step.gradient_clothsim <= opt))
+            if step.status in ("start-dependent", "not a minimizer") and not step.settings \
+                    and (noise := noise_note(model, problem, x_cs, x_port, tol)):
+                noisy[k] = noise   # unless a model fitted after the loop explains the step
             if precision == "float64" and printed is not None and not step.passed:
                 printed.hint32(step, float(err[worst]), lambda b=bound32, t=tol_k: max(t, b()))
             if why_held and change is None:
@@ -296,6 +326,10 @@ def check_steps(simulation, positions, velocities=None, *, precision: str = "flo
         sim.solver.set_state(carried)
         out.append(step)
     name_cause({s.k: s for s in out}, unexplained, others)   # a model the port solves?
+    for s in out:   # no model, no settings, and a difference as rough as noise
+        if s.k in noisy and s.status in ("start-dependent", "not a minimizer"):
+            hint = "; the port's numbers are float32 values: check with --precision float32"
+            s.status, s.note = "noisy", noisy[s.k] + (hint if hint in s.note else "")
     transient(out)   # a further difference the named setting reproduces after: not one
     if printed is not None:   # the steps the printed state cannot place say so
         printed.annotate(out)
@@ -352,27 +386,3 @@ def _step(sim, held, state, x_port):
     err = np.linalg.norm(x_cs - x_port, axis=1)
     err = np.where(np.isfinite(err), err, np.inf)
     return problem, x_cs, v_cs, err, int(np.argmax(err))
-
-
-def _frames(sim, positions, velocities, steps):
-    """The port's frames as (frames, n, 3) positions and velocities, validated."""
-    xs = np.asarray(positions, np.float64)
-    n = sim.model.vertex_count
-    if xs.ndim == 2:
-        xs = xs.reshape(len(xs), -1, 3)
-    if xs.ndim != 3 or xs.shape[1:] != (n, 3):
-        raise InputError(f"positions: expected (frames, {n}, 3), got {xs.shape}")
-    if len(xs) < 2:
-        raise InputError("positions: need at least 2 frames to check a step")
-    if steps is not None and steps < 1:
-        raise InputError(f"steps: must be >= 1, got {steps}")
-    if steps is not None and steps > len(xs) - 1:
-        raise InputError(f"steps: {steps} steps asked for, but the port has only {len(xs)} "
-                         f"frames ({len(xs) - 1} steps)")
-    if velocities is None:
-        vs = np.concatenate([np.zeros_like(xs[:1]), np.diff(xs, axis=0) / sim.h])
-        return xs, vs, ["no port velocities: v_k = (x_k - x_{k-1}) / h assumed"]
-    vs = np.asarray(velocities, np.float64)
-    if vs.size != xs.size:
-        raise InputError(f"velocities: expected {xs.shape}, got {vs.shape}")
-    return xs, vs.reshape(xs.shape), []

@@ -8,7 +8,9 @@ corrections, velocity update) from the port's state with the effect changed.
 - :func:`obstacle_cause`: in post-solve contact the port's projected vertices lie on its
   own obstacle: a sphere's radius (their common distance from the centre), a plane's
   offset (their common n · x) or a box's face (their common coordinate over the box's
-  footprint), less the contact margin, is read off them, and the step replayed with it.
+  footprint), less the contact margin, is read off them, and the step replayed with it;
+  else an obstacle's friction coefficient is fitted on replays (a secant from the scene's
+  μ, 0 and 2 μ).
 """
 
 from __future__ import annotations
@@ -124,7 +126,52 @@ def obstacle_cause(sim, state, x_port, tol: float) -> str:
                         f"{_fmt(read)} instead of {_fmt(value)} (its vertices in contact "
                         f"lie there; replayed: {off:.1e} m off the port's answer, against "
                         f"{scene:.1e} m with the scene's {effect.kind})")
+    for effect in (e for e in _obstacles(sim) if getattr(e, "friction", 0) > 0):
+        found = _friction(sim, state, effect, x_scene, x_port)
+        if found is not None and found[1] <= max(tol, 0.01 * scene):
+            mu, off = found
+            return (f"the port's steps are clothsim's with the {effect.kind}'s friction "
+                    f"coefficient {mu:.3g} instead of {effect.friction:g} (replayed: "
+                    f"{off:.1e} m off the port's answer, against {scene:.1e} m with the "
+                    f"scene's)")
     return ""
+
+
+def _friction(sim, state, effect, x_scene, x_port):
+    """(μ, distance) of the friction coefficient fitted to the port's post-solve step: the
+    step taken as linear in μ between the two replays nearest its answer (the scene's μ,
+    0 and 2 μ), refined twice; None when a replay fails."""
+    mu0 = effect.friction
+
+    def at(mu):
+        try:
+            effect.friction = mu
+            return _replay_step(sim, state)[0]
+        except (ValueError, ArithmeticError, RuntimeError):
+            return None
+        finally:
+            effect.friction = mu0
+
+    def off(x):
+        return float(np.linalg.norm(x - x_port, axis=1).max())
+
+    points = [(mu0, x_scene)] + [(m, x) for m in (0.0, 2 * mu0) if (x := at(m)) is not None]
+    for _ in range(3):
+        points = sorted(points, key=lambda p: off(p[1]))[:2]
+        if len(points) < 2:
+            return None
+        (a, xa), (b, xb) = points
+        dx = xb - xa
+        denom = float(np.sum(dx * dx))
+        c = a + (b - a) * float(np.sum((x_port - xa) * dx)) / denom if denom else a
+        if not 0 <= c <= 10 * mu0 or min(abs(c - a), abs(c - b)) <= 1e-6 * mu0:
+            break
+        x = at(c)
+        if x is None:
+            break
+        points.append((c, x))
+    mu, x = min(points, key=lambda p: off(p[1]))
+    return (mu, off(x)) if mu != mu0 else None
 
 
 def _set(effect, name, value):

@@ -11,7 +11,11 @@ step agreeing from a start that is not the scene's). These tests name the layout
 - :func:`repeated_frame`: a step whose answer is its start, x_{k+1} = x_k, where clothsim's
   step moves the cloth, and whose next frame is clothsim's step (a frame written twice:
   frame k printed as k + 1);
-- :func:`velocity_cause`: velocities of the frame before, or of another h.
+- :func:`velocity_cause`: velocities of the frame before, or of another h;
+- :func:`not_finite`: a frame holding NaN or infinity (a run that blew up, or wrote NaN);
+- :func:`stepped_from`: a step whose answer is clothsim's step from another state than
+  the one the port wrote: frame 0's state from the scene's start, or the velocities of
+  the frame after (v_{k+1} written at frame k).
 """
 
 from __future__ import annotations
@@ -19,11 +23,15 @@ from __future__ import annotations
 import numpy as np
 from scipy.spatial import cKDTree
 
+from ..errors import InputError
+from ..simulation import State
+
 #: Frames of the scene's own run a port's first frame is compared with.
 MAX_START_FRAMES = 3
 
 
-__all__ = ["repeated_frame", "start_mismatch", "velocity_cause"]
+__all__ = ["not_finite", "port_frames", "repeated_frame", "start_mismatch", "stepped_from",
+           "velocity_cause"]
 
 
 def _grid_orders(sim):
@@ -194,3 +202,135 @@ def velocity_cause(xs, vs, k: int, h: float, x_cs, v_cs, tol_v: float) -> str:
         return ""
     return (f"the port's v_{k + 1} is (x_{k + 1} - x_{k}) / {1 / c:.4g} s, not / h = "
             f"{h:.4g} s: another time step in its velocity update")
+
+
+def not_finite(xs, vs, k: int):
+    """``(vertex, note)`` when the port's frame k or k + 1 holds a NaN or an infinity (the
+    step cannot be taken from it, or its answer is no position), else None.
+
+    Parameters
+    ----------
+    xs, vs : ndarray, shape (frames, n, 3)
+        The port's positions [m] and velocities [m/s].
+    k : int
+        The step k → k + 1.
+
+    Returns
+    -------
+    tuple of (int, str) or None
+    """
+    for f, what in ((k, "start"), (k + 1, "answer")):
+        bad = ~(np.isfinite(xs[f]).all(axis=1) & np.isfinite(vs[f]).all(axis=1))
+        if bad.any():
+            which = ("positions" if not np.isfinite(xs[f][bad]).all() else "velocities")
+            first = next(j for j in range(len(xs)) if not (np.isfinite(xs[j]).all()
+                                                             and np.isfinite(vs[j]).all()))
+            return int(np.flatnonzero(bad)[0]), (
+                f"the port's {which} of frame {f} (the step's {what}) are not finite (NaN "
+                f"or inf) at {int(bad.sum())} of {len(bad)} vertices; its frames hold them "
+                f"from frame {first} on: its run blew up there or wrote NaN")
+    return None
+
+
+def stepped_from(sim, start, xs, vs, k: int, t: float, tol: float) -> str:
+    """The note of a failing step whose answer is clothsim's step from another state than
+    the port's frame k as written, else "".
+
+    Tried: for k = 0, the scene's initial state, and its positions or velocities alone
+    with the port's other half (the port writes frame 0 otherwise than it starts: a state
+    before its setup, velocities already stepped); for k ≥ 1, the port's x_k with its
+    v_{k−1} (each frame's velocities are those of the frame after, v_{k+1} written at k).
+
+    Parameters
+    ----------
+    sim : Simulation
+        The scene's simulation (its state is replaced; its solver's carried state is
+        kept).
+    start : tuple of ndarray
+        The scene's initial positions and velocities, (n, 3) each.
+    xs, vs : ndarray, shape (frames, n, 3)
+        The port's positions [m] and velocities [m/s].
+    k : int
+        The step k → k + 1.
+    t : float
+        The time of frame k [s].
+    tol : float
+        The step's tolerance [m].
+
+    Returns
+    -------
+    str
+    """
+    if k == 0:
+        x0, v0 = start
+        off = [what for what, a, b in (("positions", xs[0], x0), ("velocities", vs[0], v0))
+               if float(np.abs(a - b).max()) > 0]
+        tries = [((x0, v0), f"the scene's initial state: the port's frame 0 holds other "
+                  f"{' and '.join(off)} than the state it starts from"),
+                 ((x0, vs[0]), "the scene's initial positions with the port's v_0: the "
+                  "port's frame 0 holds other positions than the ones it starts from"),
+                 ((xs[0], v0), "the port's x_0 with the scene's initial velocities: the "
+                  "port's frame 0 holds other velocities than the ones it starts from")]
+    else:
+        tries = [((xs[k], vs[k - 1]), f"the port's x_{k} with its v_{k - 1}: its velocities "
+                  f"are those of the frame after (v_{k + 1} written at frame {k}, so each "
+                  f"frame's velocities are one step ahead of its positions)")]
+    saved = sim.solver.get_state()
+    for (x, v), words in tries:
+        if np.array_equal(x, xs[k]) and np.array_equal(v, vs[k]):
+            continue
+        sim.state = State(x.copy(), v.copy(), t, k)
+        sim.step()
+        sim.solver.set_state(saved)
+        off = float(np.linalg.norm(sim.state.positions - xs[k + 1], axis=1).max())
+        if off <= tol:
+            return (f"the port's x_{k + 1} is clothsim's step from {words} ({off:.1e} m off "
+                    f"its answer)")
+    return ""
+
+
+def port_frames(sim, positions, velocities, steps):
+    """The port's frames as (frames, n, 3) positions and velocities, validated.
+
+    Parameters
+    ----------
+    sim : Simulation
+        The scene's simulation (its vertex count and h).
+    positions : array_like, shape (frames, n, 3) or (frames, 3 n)
+        The port's x_k [m].
+    velocities : array_like or None
+        The port's v_k [m/s]; None: (x_k − x_{k−1}) / h, and 0 at frame 0.
+    steps : int or None
+        The steps to check (at most the frames written).
+
+    Returns
+    -------
+    xs, vs : ndarray, shape (frames, n, 3)
+    notes : list of str
+        The note on derived velocities, if any.
+
+    Raises
+    ------
+    InputError
+        A shape that is not the scene's, fewer than 2 frames, or ``steps`` out of range.
+    """
+    xs = np.asarray(positions, np.float64)
+    n = sim.model.vertex_count
+    if xs.ndim == 2:
+        xs = xs.reshape(len(xs), -1, 3)
+    if xs.ndim != 3 or xs.shape[1:] != (n, 3):
+        raise InputError(f"positions: expected (frames, {n}, 3), got {xs.shape}")
+    if len(xs) < 2:
+        raise InputError("positions: need at least 2 frames to check a step")
+    if steps is not None and steps < 1:
+        raise InputError(f"steps: must be >= 1, got {steps}")
+    if steps is not None and steps > len(xs) - 1:
+        raise InputError(f"steps: {steps} steps asked for, but the port has only {len(xs)} "
+                         f"frames ({len(xs) - 1} steps)")
+    if velocities is None:
+        vs = np.concatenate([np.zeros_like(xs[:1]), np.diff(xs, axis=0) / sim.h])
+        return xs, vs, ["no port velocities: v_k = (x_k - x_{k-1}) / h assumed"]
+    vs = np.asarray(velocities, np.float64)
+    if vs.size != xs.size:
+        raise InputError(f"velocities: expected {xs.shape}, got {vs.shape}")
+    return xs, vs.reshape(xs.shape), []

@@ -38,7 +38,7 @@ import numpy as np
 
 from ..effects.holding import Holding
 from ..simulation import State
-from .held_readings import NEAR, geometry
+from .held_readings import NEAR, geometry, shift_in_range
 from .held_steps import _copy
 from .held_verdicts import NEARER
 
@@ -67,6 +67,9 @@ class Change:
         The decision clothsim's held steps with the change left after the last step
         :func:`shadow` took (per obstacle: holding, contact vertices and normals), where
         :func:`clothsim.ports.held_follow.carry` goes on from.
+    span : tuple or None
+        A box moved sideways: (axis, least, most), the range of shifts along the axis its
+        reading allows (:func:`clothsim.ports.held_readings.shift_in_range`).
     """
 
     obstacle: object
@@ -75,6 +78,7 @@ class Change:
     values: dict = field(default_factory=dict)
     rule: str = ""
     carried: list | None = None
+    span: tuple | None = None
 
     @property
     def status(self) -> str:
@@ -279,6 +283,10 @@ def explain(held, x_port, x_cs, err, tol):
                 _fit_friction(change, frictions[id(e)], x_port, test)
         if best is not None and best[1] <= tol:
             break
+    for change in (c for c in found if c.span is not None):   # a box moved sideways: its
+        if best is not None and best[1] <= tol:                # range's middle not this
+            break                                              # step's shift
+        shift_in_range(change, x_port, test, tol)
     if best is None:
         kinds = sorted({c.setting.split(" (")[0] for c in tried})
         return None, (f"no single obstacle or contact setting reproduces the port's step "

@@ -5,16 +5,18 @@ reproduces a failing step within its tolerance, each later step is taken again f
 port's state with that setting, on the contact decisions its own held steps carried to
 there (:func:`carry`). A failing step it reproduces says so; one it does not is a
 **further difference** of the port's (:func:`followed`), not the first one again, unless
-the setting reproduces the step after it again (:func:`transient`).
+the setting reproduces the step after it again (:func:`transient`). The further
+difference itself is searched for as the first was, with the named setting kept
+(:func:`beyond`): a port with two faults gets both named, each at the step it shows.
 """
 
 from __future__ import annotations
 
 import numpy as np
 
-from .held_causes import Change, shadow
+from .held_causes import Change, explain, shadow
 
-__all__ = ["carry", "followed", "transient"]
+__all__ = ["beyond", "carry", "followed", "transient"]
 
 
 def carry(held, change: Change, state):
@@ -106,3 +108,36 @@ def transient(steps) -> None:
             a.further = False
             a.note = a.note.replace("a further difference: with", "not a further difference "
                                     "(the setting reproduces the next step again): with", 1)
+
+
+def beyond(held, change: Change, x_port, x_cs, err, tol):
+    """The second setting of a further difference: the single-setting search of
+    :func:`~clothsim.ports.held_causes.explain` run with ``change`` kept on its obstacle.
+
+    Parameters
+    ----------
+    held : HeldSteps
+        Anchored at the step and stepped.
+    change : Change
+        The setting named at an earlier step.
+    x_port, x_cs : ndarray, shape (n, 3)
+        The port's and clothsim's x_{k+1} [m].
+    err : ndarray, shape (n,)
+        |x_clothsim − x_port| of the scene's step [m].
+    tol : float
+
+    Returns
+    -------
+    (Change or None, str)
+        The second setting and its words, with how near the two together come; (None, "")
+        when no single further setting reproduces the step within its tolerance.
+    """
+    if change.rule:   # a rule changes the decision each step starts from: not kept here
+        return None, ""
+    with change.applied():
+        second, _, d = explain(held, x_port, x_cs, err, tol)
+    if second is None or d > tol or second.setting == change.setting:
+        return None, ""
+    return second, (f"with that setting kept, clothsim's held steps with {second.words} too "
+                    f"are {d:.1e} m off the port's answer: the port differs by that as well "
+                    f"(look at {second.setting})")

@@ -189,7 +189,9 @@ def _sideways(e, x, key, tol, near):
     footprint (the box grown by its thickness) say how far it moved at least, and the
     far side's gap how far at most (a grid's spacing: each step of the cloth caught over
     one footprint is caught over any in that range). The middle of the range is tried, in
-    each axis with evidence, and in both together.
+    each axis with evidence, and in both together; a single axis's range goes with it
+    (:attr:`~clothsim.ports.held_causes.Change.span`), for a later step that tells more
+    to fit the shift in (:func:`shift_in_range`).
     """
     lo, hi = e.min - e.margin, e.max + e.margin
     bounds = {}
@@ -208,9 +210,71 @@ def _sideways(e, x, key, tol, near):
         shift = np.zeros(3)
         shift[a] = 0.5 * (least + most)
         shifts.append((shift, f"{'xyz'[a]} by {_fmt(min(least, most, key=abs))} to "
-                              f"{_fmt(max(least, most, key=abs))}"))
+                              f"{_fmt(max(least, most, key=abs))}", (a, least, most)))
     if len(shifts) > 1:
-        shifts.insert(0, (sum(s for s, _ in shifts), " and ".join(w for _, w in shifts)))
-    for shift, words in shifts:
-        yield _moved(e, key, shift, f" (its vertices on a face lie beyond the scene's "
-                                    f"footprint: moved along {words})")
+        shifts.insert(0, (sum(s for s, *_ in shifts), " and ".join(w for _, w, _ in shifts),
+                          None))
+    for shift, words, span in shifts:
+        yield (*_moved(e, key, shift, f" (its vertices on a face lie beyond the scene's "
+                                      f"footprint: moved along {words})"), "", None, span)
+
+
+#: Secant steps of :func:`shift_in_range` (each one replay of the step's window).
+REFINE = 8
+
+
+def shift_in_range(change, x_port, test, tol: float) -> None:
+    """The shift of a box moved sideways fitted in its range (:func:`_sideways`) on a step
+    the range's middle does not reproduce: the step taken as linear in the shift between
+    the two replays nearest the port's answer (a secant from the range's ends and middle),
+    refined up to :data:`REFINE` times; each candidate goes through ``test`` (which keeps
+    the nearest).
+
+    A box moved 5 cm reads 0.009 to 0.074 m at its landing step, whose every shift in that
+    range lands the same: its middle, 0.042 m, is named there and misses the steps after,
+    where the cloth slides over the edge.
+
+    Parameters
+    ----------
+    change : Change
+        The middle's change, with its :attr:`~clothsim.ports.held_causes.Change.span`.
+    x_port : ndarray, shape (n, 3)
+        The port's x_{k+1} [m].
+    test : callable
+        ``test(Change) -> x`` (None when the replay fails): replays and records it.
+    tol : float
+        The step's tolerance [m].
+    """
+    axis, least, most = change.span
+    e, key = change.obstacle, change.setting.split(".min")[0]
+
+    def at(s):
+        shift = np.zeros(3)
+        shift[axis] = s
+        words, setting, values = _moved(e, key, shift, f" (read off the step: the shift "
+                                        f"along {'xyz'[axis]} in {_fmt(least)} to "
+                                        f"{_fmt(most)} that reproduces it)")
+        return test(type(change)(e, words, setting, values, span=change.span))
+
+    def off(x):
+        return float(np.linalg.norm(x - x_port, axis=1).max()) if x is not None else np.inf
+
+    mid = 0.5 * (least + most)
+    points = [(s, x) for s in (least, mid, most) if (x := at(s)) is not None]
+    for _ in range(REFINE):
+        points = sorted(points, key=lambda p: off(p[1]))[:2]
+        if len(points) < 2 or off(points[0][1]) <= tol:
+            return
+        (a, xa), (b, xb) = points
+        dx = xb - xa
+        denom = float(np.sum(dx * dx))
+        if denom == 0:
+            return
+        c = a + (b - a) * float(np.sum((x_port - xa) * dx)) / denom
+        if not min(least, most) <= c <= max(least, most) or min(abs(c - a), abs(c - b)) \
+                <= 1e-6 * abs(most - least):
+            return
+        x = at(c)
+        if x is None:
+            return
+        points.append((c, x))

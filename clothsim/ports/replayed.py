@@ -26,6 +26,7 @@ import warnings
 import numpy as np
 
 from .cause_words import describe, lumpings, masses_text
+from .force_field import force_field_cause
 from .hypotheses import ADDING, REPLACING, StepData, applicable, fit
 from .replays import refine, replay
 
@@ -122,8 +123,12 @@ def _first_reproducing(steps):
             best = (score, hyp, theta, d)
         if score <= 1:                 # within the tolerance: no nearer hypothesis needed
             break
-    if best is None:
-        return None
+    if best is None:   # a force that differs on some vertices, or beside gravity?
+        field = force_field_cause(steps[:JOINT + MAX_REPLAYS], _reproduces, len(fitted))
+        if field is None:
+            return None
+        what, hyp, d = field
+        return _text(fitted, hyp, what, d), d
     _, hyp, theta, d = best
     for s in steps[JOINT:JOINT + MAX_REPLAYS]:
         dk = replay(s, hyp, theta)
@@ -134,7 +139,9 @@ def _first_reproducing(steps):
 
 def _text(fitted, hyp, theta, d) -> str:
     s = fitted[0]
-    if hyp == "time step":
+    if isinstance(theta, str):   # a force fitted per vertex, in words
+        what = theta
+    elif hyp == "time step":
         h = s.problem.h
         what = f"h = {h * (1 + theta[0]):.4g} s instead of {h:.4g} s"
     elif hyp == "vertex mass":

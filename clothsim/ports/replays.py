@@ -34,7 +34,7 @@ def variant(step: StepData, hypothesis: str, theta) -> tuple:
     model, p = step.model, step.problem
     sp = model.springs
     k, r, mass = sp.spring_stiffness, sp.spring_rest_length, model.vertex_mass
-    one = 1.0 + float(np.atleast_1d(theta)[0])
+    one = 1.0 + float(np.ravel(theta)[0])
     if hypothesis == "stiffness":
         k = max(one, 0.0) * k
     elif hypothesis == "rest lengths":
@@ -63,6 +63,8 @@ def variant(step: StepData, hypothesis: str, theta) -> tuple:
         f = np.zeros_like(step.x_port) if p.f_ext is None else p.f_ext
         if hypothesis == "vertex force":
             f = f * (1.0 + np.asarray(theta))[:, None]
+        elif hypothesis == "force field":   # θ: the force added per vertex (n, 3) [N]
+            f = f + np.asarray(theta).reshape(f.shape)
         elif hypothesis in ADDING:   # θ: the change of gravity [m/s²]
             f = f + mass[:, None] * np.asarray(theta)[None, :]
         else:   # REPLACING: θ is the force per vertex or per unit mass

@@ -41,6 +41,20 @@ Verdicts that fail:
 ``frame repeated``
     The port's x_{k+1} is its x_k where clothsim's step moves the cloth: a frame written
     twice (frame k printed as k + 1; :mod:`clothsim.ports.frame_order`).
+``noisy``
+    The difference from clothsim's step is as rough as independent noise (vertices joined
+    by a spring differ as much as any two) and spread over the cloth, and no model or
+    setting reproduces it: the port's arithmetic or output adds it
+    (:mod:`clothsim.ports.noise`). Pinned vertices off by the same noise, where the free
+    vertices are off by more than the tolerance, are noisy too, not "missing pins".
+``start differs``
+    The port's x_{k+1} is clothsim's step from another state than the frame k it wrote:
+    for k = 0 the scene's initial state (frame 0 written otherwise than the port starts),
+    for k ≥ 1 its x_k with its v_{k−1} (the velocities of the frame after written at each
+    frame; :func:`clothsim.ports.frame_order.stepped_from`).
+``not finite``
+    The port's frame k or k + 1 holds NaN or infinity: no step from it, or no answer
+    (a run that blew up; the note names the first such frame).
 ``velocities differ``
     Positions agree but v_{k+1} does not (a damping or velocity update that differs; a
     damping left out or of another coefficient is named, :mod:`clothsim.ports.effect_causes`).
