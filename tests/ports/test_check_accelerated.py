@@ -73,6 +73,12 @@ def test_the_sphere_printed_with_17_digits_passes_every_step(tmp_path):
     assert report.passed and max(s.error for s in report.steps) < 1e-9, report.summary()
 
 
+# the sphere's fault is a variant in make test (about 40 % of this file's time, most of it
+# the cause search on its failing step): the fast run keeps drop-on-square's, and faults on
+# a step the check replays in test_a_1mm_fault_in_the_branching_step_still_fails and at
+# one it solves both ways on the sphere in test_a_1mm_fault_where_a_release_is_solved_...
+@pytest.mark.parametrize("contact_port", [pytest.param("drape-sphere", marks=pytest.mark.slow),
+                                          "drop-on-square"], indirect=True)
 def test_a_planted_1mm_fault_still_fails_under_anderson(contact_port):
     scene, X, V, _ = contact_port
     X = X.copy()
