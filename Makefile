@@ -1,5 +1,7 @@
 # make demo : set up (first time only) and run the default scene into out/drop-on-square
-# make test : set up (first time only) and run the test suite, less the tests marked slow
+# make test : set up (first time only) and run the test suite, less the tests marked slow, on
+#             every core, each test file whole on one worker, the longest files first
+#             (tests/conftest.py LONGEST_FIRST)
 #             (.venv/bin/python -m pytest -q -m slow runs those; CI runs both)
 # make bench: run the benchmarks (heavy measurements, not part of the tests)
 # make docs : build the documentation site into docs/_build/html (runs every gallery lesson;
@@ -16,7 +18,7 @@ demo: setup
 
 test: setup
 	$(VENV)/bin/ruff check clothsim tests benchmarks examples scripts
-	$(PY) -m pytest -q -m "not slow" -n auto
+	$(PY) -m pytest -q -m "not slow" -n auto --dist loadfile --no-loadscope-reorder
 
 bench: setup
 	$(PY) -m benchmarks

@@ -103,9 +103,14 @@ def assert_truthful(out: Path) -> int:
 
 
 CASES = [(m, s) for m in ("local-global", "chebyshev", "newton") for s in ("SIGINT", "SIGTERM")]
+# make test runs each method and each signal once (local-global and chebyshev with SIGINT,
+# newton with SIGTERM); the other three pairs are variants (-m slow)
+FAST = {("local-global", "SIGINT"), ("chebyshev", "SIGINT"), ("newton", "SIGTERM")}
 
 
-@pytest.mark.parametrize("method, signame", CASES, ids=[f"{m}-{s}" for m, s in CASES])
+@pytest.mark.parametrize("method, signame", [
+    pytest.param(m, s, id=f"{m}-{s}", marks=[] if (m, s) in FAST else [pytest.mark.slow])
+    for m, s in CASES])
 def test_signal_at_random_frame_then_resume_bit_for_bit(tmp_path, method, signame):
     rng = random.Random(f"{method}{signame}")
     frame = rng.randint(1, FRAMES - 4)

@@ -9,6 +9,8 @@ their declared Anderson 30 pass; a planted fault still fails, on the replayed st
 
 from __future__ import annotations
 
+import functools
+
 import numpy as np
 import pytest
 
@@ -26,11 +28,21 @@ FRAMES = 20
 _g = np.vectorize(lambda c: float(f"{c:g}"))   # printed with %g and read back
 
 
+@functools.cache
+def right_port(name: str):
+    """A contact scene with its declared solver and clothsim's own port of it (FRAMES
+    frames): (scene, X, V, rows), run once per module (the tests only read it)."""
+    scene = builtin(name)
+    X, V, rows = run_port(scene, "none", FRAMES)
+    for a in (X, V, rows):
+        a.flags.writeable = False
+    return scene, X, V, rows
+
+
 @pytest.fixture(scope="module", params=["drape-sphere", "drop-on-square"])
 def contact_port(request, tmp_path_factory):
     """A contact scene with its declared solver and clothsim's own frames printed with %g."""
-    scene = builtin(request.param)
-    X, V, rows = run_port(scene, "none", FRAMES)
+    scene, X, V, rows = right_port(request.param)
     folder = tmp_path_factory.mktemp(request.param)
     write_port(folder, X, V, rows, fmt="%g")
     return scene, read_trajectory(folder), read_velocities(folder), folder
@@ -66,13 +78,18 @@ def test_a_right_g_port_with_the_declared_anderson_solver_passes(contact_port, w
 
 
 def test_the_sphere_printed_with_17_digits_passes_every_step(tmp_path):
-    sphere = builtin("drape-sphere")
-    X, V, rows = run_port(sphere, "none", FRAMES)
+    sphere, X, V, rows = right_port("drape-sphere")
     write_port(tmp_path, X, V, rows, fmt="%.17g")
     report = check_steps(sphere, read_trajectory(tmp_path), read_velocities(tmp_path))
     assert report.passed and max(s.error for s in report.steps) < 1e-9, report.summary()
 
 
+# the sphere's fault is a variant in make test (about 40 % of this file's time, most of it
+# the cause search on its failing step): the fast run keeps drop-on-square's, and faults on
+# a step the check replays in test_a_1mm_fault_in_the_branching_step_still_fails and at
+# one it solves both ways on the sphere in test_a_1mm_fault_where_a_release_is_solved_...
+@pytest.mark.parametrize("contact_port", [pytest.param("drape-sphere", marks=pytest.mark.slow),
+                                          "drop-on-square"], indirect=True)
 def test_a_planted_1mm_fault_still_fails_under_anderson(contact_port):
     scene, X, V, _ = contact_port
     X = X.copy()

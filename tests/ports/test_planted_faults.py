@@ -198,6 +198,9 @@ def test_bending_left_out_on_the_box_is_named_through_the_contact_steps(tmp_path
     assert {s.status for s in report.steps if not s.passed} == {"model differs"}, summary
 
 
+@pytest.mark.slow   # a variant on the seed's box (falling freely at step 0): the fast run
+# names h by replay at 10 iterations on the curtain (test_each_fault_of_a_ten_iteration_
+# port_is_named_by_replay[scene.fps=15-...]), printed with %g and from x_n too
 def test_a_doubled_time_step_on_the_box_is_named(tmp_path):
     report, summary = verdict(drop_on_square(tmp_path, 4), "scene.fps=15")
     assert summary.startswith("FAIL at step 0 -> 1: model differs"), summary
