@@ -308,8 +308,9 @@ def page(runs: list[dict]) -> str:
     order = {s: i for i, s in enumerate(SCENES)}
     runs = sorted(runs, key=lambda r: (order.get(r["scene"], 9), r["resolution"],
                                        MODES.index(r["contact"])))
-    out = ["Printed by `.venv/bin/python -m benchmarks contact` (sizes run separately with "
-           "`--sizes`; each row names the commit it was measured at).", "",
+    out = ["Printed by `.venv/bin/python -m benchmarks contact` (the default sizes; others "
+           "run separately, e.g. `.venv/bin/python -m benchmarks.contact --sizes 257 --scenes "
+           "drape-sphere --modes hold`; each row names the commit it was measured at).", "",
            f"At rest means every vertex slower than {REST_SPEED} m/s over the last second. "
            "\"hold\" runs the scene as it is (its own frames: " + _lengths() + ", "
            "declared solver and damping); "

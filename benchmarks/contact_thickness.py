@@ -48,7 +48,8 @@ def page(runs: list[dict]) -> str:
     runs = sorted(runs, key=lambda r: (order.get(r["scene"], 9), r["resolution"],
                                        CHOICES.index(r["choice"])))
     out = ["Printed by `.venv/bin/python -m benchmarks contact_thickness` (sizes run "
-           "separately with `--sizes`; each row names the commit it was measured at).", "",
+           "separately with `.venv/bin/python -m benchmarks.contact_thickness --sizes N`; "
+           "each row names the commit it was measured at).", "",
            "| scene | n² | thickness | δ [m] | through cloth [m] | through cloth / ℓ | "
            "max stretch | max depth inside [m] | commit |",
            "|---|---|---|---|---|---|---|---|---|"]

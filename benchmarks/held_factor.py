@@ -156,7 +156,8 @@ def page(rows: list[dict]) -> str:
     """The Markdown tables of ``rows``."""
     rows = sorted(rows, key=lambda r: (SCENES.index(r["scene"]), r["resolution"]))
     out = ["Printed by `.venv/bin/python -m benchmarks held_factor` (sizes run separately "
-           "with `--sizes`); thread CPU seconds, each row at the commit it names.", "",
+           "with `.venv/bin/python -m benchmarks.held_factor --sizes N`); thread CPU seconds, "
+           "each row at the commit it names.", "",
            f"One held step of frame {FRAME}: the 3n system P A P + α D (its numeric "
            "factorization in the fixed pattern) against the tangent coordinates (assembly "
            "with analysis and factorization), one solve of each, and the unconstrained "

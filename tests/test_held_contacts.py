@@ -316,7 +316,7 @@ def test_the_contact_scenes_declare_their_damping_and_the_seed_runs_without_it(n
     coefficient set to 0 and the seed's solver and frames (the documented --set) the run
     is the seed's scene without the damping effect, bit for bit."""
     doc = parse_toml(builtin_scene_text(name), f"{name}.toml")
-    c, k, frames = {"drop-on-square": (0.1, 30, 120), "drape-sphere": (0.2, 50, 150)}[name]
+    c, k, frames = {"drop-on-square": (0.1, 30, 120), "drape-sphere": (0.2, 50, 210)}[name]
     assert doc["effects"][3] == {"kind": "damping", "model": "rigid", "coefficient": c}
     assert doc["solver"] == {"method": "anderson", "iterations": k}
     assert doc["scene"]["frames"] == frames

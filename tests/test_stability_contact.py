@@ -52,7 +52,7 @@ def test_contact_keeps_the_cloth_whole(contact_strain, scene):
     second, no vertex inside an obstacle, none held on the sphere below its equator, and
     the cloth at rest: every vertex slower than REST_SPEED = 0.02 m/s over the last second
     (docs/data/contact.md's 25² "hold" rows: drop-on-square with Anderson 30 over 4 s,
-    drape-sphere with Anderson 50 and rigid damping 0.2 over 5 s; docs/data/contact-rest.md:
+    drape-sphere with Anderson 50 and rigid damping 0.2 over 7 s; docs/data/contact-rest.md:
     0.038 and 0.040 with the 3 s of 10 local/global iterations they had before, which
     fails). The seed's projection after the solve (its scenes: no damping, 10 local/global
     iterations, 90 frames) tears the cloth over the box edge (2.74×) and the sphere
@@ -63,7 +63,7 @@ def test_contact_keeps_the_cloth_whole(contact_strain, scene):
     assert held["below_equator"] == 0
     assert held["max_speed"] < REST_SPEED and held["at_rest"]     # the cloth at rest
     assert seed["frames"] == 90
-    assert held["frames"] == {"drop-on-square": 120, "drape-sphere": 150}[scene]
+    assert held["frames"] == {"drop-on-square": 120, "drape-sphere": 210}[scene]
     assert seed["max_stretch"] > 2.0
     if scene == "drape-sphere":
         assert seed["below_equator"] > 100
