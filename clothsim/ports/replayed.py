@@ -29,6 +29,7 @@ from .cause_words import describe, lumpings, masses_text
 from .force_field import force_field_cause
 from .hypotheses import ADDING, REPLACING, StepData, applicable, fit
 from .replays import refine, replay
+from .topology import topology_cause
 
 log = logging.getLogger(__name__)
 
@@ -123,8 +124,10 @@ def _first_reproducing(steps):
             best = (score, hyp, theta, d)
         if score <= 1:                 # within the tolerance: no nearer hypothesis needed
             break
-    if best is None:   # a force that differs on some vertices, or beside gravity?
-        field = force_field_cause(steps[:JOINT + MAX_REPLAYS], _reproduces, len(fitted))
+    if best is None:   # springs missing or doubled, a force on some vertices, or beside
+        field = (topology_cause(steps[:JOINT + MAX_REPLAYS], _reproduces, len(fitted))
+                 or force_field_cause(steps[:JOINT + MAX_REPLAYS], _reproduces,
+                                      len(fitted)))   # gravity?
         if field is None:
             return None
         what, hyp, d = field
