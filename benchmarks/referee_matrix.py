@@ -127,6 +127,39 @@ def rest_lengths(scale, family=None):
     return port
 
 
+def springs_changed(select):
+    """A port whose springs are the scene's ``select(springs) -> indices`` (a spring left
+    out where its index is missing, counted twice where it repeats)."""
+    def port(path):
+        scene = cs.load_scene(path)
+        model = scene.build_model()
+        s = model.springs
+        i = np.asarray(select(s))
+        springs = cs.Springs(s.spring_vertices[i], s.spring_stiffness[i],
+                             s.spring_rest_length[i], s.spring_family[i], s.vertex_count,
+                             None if s.spring_damping is None else s.spring_damping[i])
+        return run(scene, cs.Model(model.mesh, springs, model.vertex_mass))
+    return port
+
+
+def one_diagonal(springs):
+    """The springs but one shear diagonal of each quad (the grid's (1, −1) direction)."""
+    v = springs.spring_vertices
+    shear = springs.spring_family == FAMILIES.index("shear")
+    step = v[:, 1] - v[:, 0]
+    return np.flatnonzero(~(shear & (step == step[shear].min())))
+
+
+def twice(*which):
+    """The springs with those counted twice."""
+    return lambda springs: np.concatenate([np.arange(springs.spring_count), which])
+
+
+def without(*which):
+    """The springs without those."""
+    return lambda springs: np.setdiff1d(np.arange(springs.spring_count), which)
+
+
 def edited(edit):
     """A port whose right output is changed by ``edit(xs, vs, scene) -> (xs, vs)``."""
     def port(path):

@@ -23,6 +23,7 @@ from ..solvers.local_global import LocalGlobalSolver
 from .causes import FITTED, StepData, name_cause
 from .compare import EPS32
 from .contact_planes import PortPlanes
+from .damping_fit import damping_model_cause
 from .effect_causes import damping_cause, obstacle_cause
 from .frame_order import (
     not_finite,
@@ -276,7 +277,8 @@ def check_steps(simulation, positions, velocities=None, *, precision: str = "flo
                     dampings.append(k)
                     why = velocity_cause(xs, vs, k, h, x_cs, v_cs, 10 * tol / h) or (
                         "" if held or len(dampings) > MAX_EFFECT else
-                        damping_cause(sim, state, vs[k + 1], 10 * tol / h))
+                        damping_cause(sim, state, vs[k + 1], 10 * tol / h)) or \
+                        damping_model_cause(sim, x_cs, v_cs, vs[k + 1], 10 * tol / h)
                     step.note += f"; {why}" if why else ""
         else:
             step = judge(sim, model, problem, k, x_cs, x_port, err, tol, optimality, precision,

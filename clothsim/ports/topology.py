@@ -29,6 +29,7 @@ to :data:`ROUNDS` rounds refit the force difference left after the springs found
 from __future__ import annotations
 
 import dataclasses
+from functools import partial
 
 import numpy as np
 import scipy.sparse as sp
@@ -46,6 +47,11 @@ MOST = 40
 WHOLE = 0.25
 #: A group of springs sharing a family and a direction holds at least this many springs.
 GROUP = 4
+#: Most groups whose removal or doubling is replayed one by one.
+MOST_GROUPS = 12
+#: A topology that reproduces a step within this share of its tolerance is not refined
+#: further (a coarse printing's tolerance would take a spring beside the right one).
+NEAR = 0.1
 #: Rounds of fit and replay (each one replay per fitted step).
 ROUNDS = 6
 #: Springs beside the chosen ones whose doubling or removal is replayed.
@@ -142,19 +148,33 @@ def _whole(theta):
     return np.where(np.abs(theta - r) <= WHOLE, r, np.nan)
 
 
-def _by_groups(B, df, groups):
-    """The spring scales of the one group whose fitted scale is a whole −1 or +1 (or
-    more) while the others' are 0; None otherwise."""
-    if not groups:
+def _by_groups(step, x0, B, df, groups, replayed: bool):
+    """Spring scales of whole groups: each group's scale fitted to the force difference
+    (``replayed``: to the port's answer on one replay per group, the group removed or
+    doubled as its force fit's sign says), rounded as :func:`_rounded`; None unless
+    some group comes out whole and not 0."""
+    if not groups or (replayed and len(groups) > MOST_GROUPS):
         return None
     G = np.stack([np.asarray(B[:, w].sum(axis=1)).ravel() for _, w in groups], axis=1)
     theta = np.linalg.lstsq(G, df, rcond=None)[0]
+    if replayed:
+        signs = np.where(theta < 0, -1.0, 1.0)
+        cols = []
+        for (_, w), sign in zip(groups, signs):
+            e = np.zeros(B.shape[1])
+            e[w] = sign
+            x = _solve(step, e)
+            if x is None:
+                return None
+            cols.append((x - x0).ravel())
+        theta = signs * np.linalg.lstsq(np.stack(cols, axis=1), (step.x_port - x0).ravel(),
+                                        rcond=None)[0]
     whole = _whole(theta)
     if np.isnan(whole).any() or not np.any(whole):
         return None
     scale = np.zeros(B.shape[1])
     for (_, w), t in zip(groups, whole):
-        scale[w] = t
+        scale[w] = max(t, -1.0)
     return scale
 
 
@@ -204,7 +224,7 @@ def _rounded(scale, added: dict):
         return None
     out = scale.copy()
     out[list(added)] += np.nan_to_num(whole)
-    return out
+    return np.maximum(out, -1.0)
 
 
 def _by_replays(step, x0, pool: dict, columns: dict):
@@ -259,33 +279,43 @@ def topology_cause(steps, reproduces, fitted: int = 2):
         return None
     pool: dict = {}
     columns: dict = {}
-    tried = []
+    tried, named = [], None
     for round_ in range(ROUNDS):   # the difference the springs found so far leave:
         df = _difference(first, x, free)   # springs added to them
         if not np.any(df):
-            return None
+            break
         forces, more = _pursuit(B, D, df)
         pool.update({j: t + scale[j] for j, t in (more | forces).items()})
+        fits = [] if round_ else [   # whole groups (on the forces, on replays), the
+            partial(_by_groups, first, x0, B, df, groups, False),   # springs' forces'
+            partial(_by_groups, first, x0, B, df, groups, True)]    # scales, the replays'
+        fits += [partial(_rounded, scale, forces),
+                 partial(_by_replays, first, x0, pool, columns)]
         best = None
-        for fit in ((lambda: _by_groups(B, df, groups)) if round_ == 0 else (lambda: None),
-                    lambda: _rounded(scale, forces),
-                    lambda: _by_replays(first, x0, pool, columns)):   # the forces' scales,
-            found = fit()                                             # else the replays'
+        for fit in fits:
+            found = fit()
             if found is None or any(np.array_equal(found, t) for t in tried):
                 continue
             tried.append(found)
             xf = _solve(first, found)
             d = _distance(first, xf)
-            if reproduces(first, d):
-                named = _reproduced(steps, fitted, reproduces, found)
-                return None if named is None else (_words(first, found, groups), "topology",
-                                                   named)
             if best is None or d < best[0]:
                 best = (d, found, xf)
+            if reproduces(first, d) and d <= NEAR * first.tolerance:
+                break
         if best is None:
-            return None
-        _, scale, x = best
-    return None
+            break
+        d, scale, x = best
+        if reproduces(first, d):   # and a round more while it is not well within the tolerance
+            better = named is None or d <= 0.5 * named[0]
+            if named is None or d < named[0]:
+                named = (d, scale)
+            if d <= NEAR * first.tolerance or not better:
+                break
+    if named is None:
+        return None
+    found = _reproduced(steps, fitted, reproduces, named[1])
+    return None if found is None else (_words(first, named[1], groups), "topology", found)
 
 
 def _reproduced(steps, fitted, reproduces, scale):
