@@ -185,7 +185,7 @@ def shadow(held, change: Change, window) -> list[np.ndarray]:
     return out
 
 
-def changes(held, x_port, tol) -> list[Change]:
+def changes(held, x_port, tol, later=()) -> list[Change]:
     """The changes worth replaying for a failing step (module docstring).
 
     Parameters
@@ -195,6 +195,9 @@ def changes(held, x_port, tol) -> list[Change]:
         The port's x_{k+1} [m].
     tol : float
         The step's tolerance [m].
+    later : sequence of (int, ndarray)
+        The port's later frames (frame index, positions): an obstacle the port's answer
+        has not touched yet (a smaller sphere the cloth falls past) is read off them.
 
     Returns
     -------
@@ -211,7 +214,13 @@ def changes(held, x_port, tol) -> list[Change]:
         if gap.min() > NEAR * scale and not len(e._holding.vertices):
             continue                       # the port's answer is nowhere near it
         index = effects.index(e)
-        out += [Change(e, *found) for found in geometry(e, x_port, index, tol)]
+        read = [Change(e, *found) for found in geometry(e, x_port, index, tol)]
+        for frame, x in later if not read else ():   # touched in a later frame?
+            read = [Change(e, f"{words[:-1]} in frame {frame})" if words.endswith(")")
+                           else words, *rest) for words, *rest in geometry(e, x, index, tol)]
+            if read:
+                break
+        out += read
         if e.friction > 0:
             out.append(Change(e, f"the {e.kind}'s friction coefficient 0 instead of "
                                  f"{e.friction:g}", f"effects[{index}].friction (the {e.kind})",
@@ -233,7 +242,7 @@ def _distance(x, x_port) -> float:
     return float(np.linalg.norm(x - x_port, axis=1).max()) if x is not None else np.inf
 
 
-def explain(held, x_port, x_cs, err, tol):
+def explain(held, x_port, x_cs, err, tol, later=()):
     """The single change whose held steps are the port's at its failing step, in words.
 
     Parameters
@@ -245,6 +254,8 @@ def explain(held, x_port, x_cs, err, tol):
     err : ndarray, shape (n,)
         |x_clothsim − x_port| of the step [m].
     tol : float
+    later : sequence of (int, ndarray)
+        The port's later frames (:func:`changes`).
 
     Returns
     -------
@@ -254,7 +265,7 @@ def explain(held, x_port, x_cs, err, tol):
         (inf: none named).
     """
     window = held.window
-    found = changes(held, x_port, tol)
+    found = changes(held, x_port, tol, later)
     if not found or not window:
         return None, "", np.inf
     scene = float(err.max())

@@ -127,8 +127,10 @@ def geometry(e, x, index: int, tol: float):
     scale = max(float(np.abs(x).max()), 1.0)
     key = f"effects[{index}]"
     if e.kind == "sphere":
-        surface = e.radius + e.margin
-        shell = shared(np.linalg.norm(x - e.center, axis=1), scale)
+        surface = e.radius + e.margin   # the nearest distances, near the surface: a
+        d = np.linalg.norm(x - e.center, axis=1)   # flat cloth's symmetric rings share one
+        nearest = d <= d.min() + max(tol, 1e-9 * scale)   # too, with vertices inside
+        shell = shared(d[nearest & (np.abs(d - surface) <= NEAR * scale)], scale)
         if shell is not None and abs(shell - surface) > max(tol, 1e-9 * scale):
             yield _sphere_change(e, key, e.center, shell, f"its vertices in contact lie "
                                                           f"{_fmt(shell)} from its centre")

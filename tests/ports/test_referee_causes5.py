@@ -134,3 +134,49 @@ def test_velocities_the_damping_does_not_explain_name_no_damping(tmp_path):
     report, summary = checked(scene(tmp_path, damping=True), faster)
     assert "velocities differ" in summary, summary
     assert "damping" not in summary.split("velocities differ", 1)[1], summary
+
+
+# ---- a sphere of another size or place (hold mode) -------------------------------------
+
+
+def _draped(tmp_path, frames=4):
+    """drape-sphere 13² (hold mode, Anderson 50), 5 cm above the sphere's top."""
+    return _builtin(tmp_path, "drape-sphere", frames, **{
+        r"resolution = \[25, 25\]": "resolution = [13, 13]",
+        r"center = \[0.0, 1.0, 0.0\]": "center = [0.0, 0.85, 0.0]"})
+
+
+def test_a_sphere_of_radius_0_31_is_read_off_its_contact_not_a_symmetric_ring(tmp_path):
+    """The 12 vertices of a flat cloth's symmetric ring 0.34 m from the centre share
+    their distance as exactly as the ones in contact: the radius 0.3339 m was read, and
+    the step was 'no single obstacle or contact setting'."""
+    report, summary = checked(_draped(tmp_path), keys("effects[1].radius=0.31"))
+    assert summary.startswith("FAIL at step 2 -> 3: model differs"), summary
+    assert "a sphere of radius 0.31 m instead of 0.3 m (its vertices in contact lie 0.3167 m" \
+        in summary, summary
+
+
+def test_a_sphere_of_radius_0_29_is_named_not_a_force(tmp_path):
+    """Was 'an external force that differs on 13 of 169 vertices only'."""
+    report, summary = checked(_draped(tmp_path), keys("effects[1].radius=0.29"))
+    assert summary.startswith("FAIL at step 2 -> 3: model differs"), summary
+    assert "a sphere of radius 0.29 m instead of 0.3 m" in summary, summary
+    assert "external force" not in summary, summary
+
+
+def test_a_smaller_sphere_the_cloth_falls_past_is_read_off_a_later_frame(tmp_path):
+    """Radius 0.25 m: at the scene's landing step the port's cloth touches nothing yet."""
+    report, summary = checked(_draped(tmp_path), keys("effects[1].radius=0.25"))
+    assert summary.startswith("FAIL at step 2 -> 3: model differs"), summary
+    assert ("a sphere of radius 0.25 m instead of 0.3 m (its vertices in contact lie 0.2583 m "
+            "from its centre in frame 4)") in summary, summary
+
+
+def test_a_sphere_centre_1_cm_off_is_named(tmp_path):
+    report, summary = checked(_draped(tmp_path), keys("effects[1].center=[0.01, 0.5, 0.0]"))
+    assert "a sphere of centre (0.01, 0.5, 0) m instead of (0, 0.5, 0) m" in summary, summary
+
+
+def test_the_right_draped_port_printed_with_17_digits_still_passes(tmp_path):
+    report, summary = checked(_draped(tmp_path), keys(), printed("%.17g"))
+    assert report.passed, summary
