@@ -305,7 +305,8 @@ def check_steps(simulation, positions, velocities=None, *, precision: str = "flo
                     float(err[worst]), tol, _replayer(sim, state),
                     step.status == "not converged",
                     fixed_settings(sim), gravity=gravity, derived=velocities is None,
-                    blind=optimality < step.gradient_clothsim <= opt))
+                    blind=optimality < step.gradient_clothsim <= opt,
+                    effects=tuple(sim.effects), time=state.time))
             if step.status in ("start-dependent", "not a minimizer") and not step.settings \
                     and (noise := noise_note(model, problem, x_cs, x_port, tol)):
                 noisy[k] = noise   # unless a model fitted after the loop explains the step

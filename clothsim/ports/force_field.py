@@ -106,7 +106,7 @@ def _linear(step, basis, reproduces):
     return None
 
 
-def force_field_cause(steps, reproduces, fitted: int = 2):
+def force_field_cause(steps, reproduces, fitted: int = 2, parts=("others", "vertices")):
     """A force difference on some vertices, or of the scene's non-gravity forces, whose
     replays reproduce the fitted steps.
 
@@ -120,6 +120,9 @@ def force_field_cause(steps, reproduces, fitted: int = 2):
         reproduces it.
     fitted : int, default 2
         The steps the force must reproduce.
+    parts : sequence of {"others", "vertices"}
+        The forms tried: the scene's non-gravity forces × a factor (a few replays), a
+        force fitted per vertex (tens).
 
     Returns
     -------
@@ -129,7 +132,7 @@ def force_field_cause(steps, reproduces, fitted: int = 2):
     """
     first = steps[0]
     others = _others(first)
-    if others is not None and np.any(others):   # the impulse, the wind, … × a factor
+    if "others" in parts and others is not None and np.any(others):   # the impulse, … × c
         fit = _linear(first, [others], reproduces)
         if fit is not None:
             c = float(fit[0][0])
@@ -137,7 +140,7 @@ def force_field_cause(steps, reproduces, fitted: int = 2):
             if d is not None:
                 return (f"the scene's external forces other than gravity × {1 + c:.3f}",
                         "other forces", d)
-    df = _fitted(first)
+    df = _fitted(first) if "vertices" in parts else None
     if df is None or not np.any(df):
         return None
     size = np.linalg.norm(df, axis=1)

@@ -77,6 +77,11 @@ class StepData:
         The optimality (raised to the printing's rounding of ∇g) takes clothsim's own
         answer for a minimizer although the stated criterion does not (a fixed iteration
         count stopped short): no answer is then said to minimize a fitted g.
+    effects : tuple
+        The scene's effects (an impulse's disk is fitted by
+        :mod:`clothsim.ports.impulse_fit`).
+    time : float
+        The time at the step's start [s].
     """
 
     k: int
@@ -95,6 +100,8 @@ class StepData:
     gravity: object = None
     derived: bool = False
     blind: bool = False
+    effects: tuple = ()
+    time: float = 0.0
 
 
 

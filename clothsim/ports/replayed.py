@@ -28,6 +28,7 @@ import numpy as np
 from .cause_words import describe, lumpings, masses_text
 from .force_field import force_field_cause
 from .hypotheses import ADDING, REPLACING, StepData, applicable, fit
+from .impulse_fit import impulse_cause
 from .replays import refine, replay
 from .topology import topology_cause
 
@@ -125,9 +126,11 @@ def _first_reproducing(steps):
         if score <= 1:                 # within the tolerance: no nearer hypothesis needed
             break
     if best is None:   # springs missing or doubled, a force on some vertices, or beside
-        field = (topology_cause(steps[:JOINT + MAX_REPLAYS], _reproduces, len(fitted))
-                 or force_field_cause(steps[:JOINT + MAX_REPLAYS], _reproduces,
-                                      len(fitted)))   # gravity?
+        later = steps[:JOINT + MAX_REPLAYS]   # an impulse on another disk? gravity?
+        field = (force_field_cause(later, _reproduces, len(fitted), ("others",))
+                 or impulse_cause(later, _reproduces, len(fitted))
+                 or topology_cause(later, _reproduces, len(fitted))
+                 or force_field_cause(later, _reproduces, len(fitted), ("vertices",)))
         if field is None:
             return None
         what, hyp, d = field

@@ -180,3 +180,30 @@ def test_a_sphere_centre_1_cm_off_is_named(tmp_path):
 def test_the_right_draped_port_printed_with_17_digits_still_passes(tmp_path):
     report, summary = checked(_draped(tmp_path), keys(), printed("%.17g"))
     assert report.passed, summary
+
+
+# ---- an impulse on another disk ----------------------------------------------------------
+
+
+def _impulse(tmp_path, n=13):
+    return _builtin(tmp_path, "impulse", 6,
+                    **{r"resolution = \[25, 25\]": f"resolution = [{n}, {n}]"})
+
+
+def test_an_impulse_disk_of_radius_0_2_is_named_not_undecided(tmp_path):
+    """Was UNDECIDED 'start-dependent': the per-vertex force fit does not converge."""
+    report, summary = checked(_impulse(tmp_path), keys("effects[1].radius=0.2"))
+    assert summary.startswith("FAIL at step 3 -> 4: model differs"), summary
+    assert ("an impulse (effects[1]) on a disk of radius between 0.1863 and 0.2357 m instead "
+            "of 0.15 m (21 vertices pushed, not 9; look at effects[1].radius)") in summary, \
+        summary
+    assert "3 of 6 steps fail: 3 model differs" in summary, summary
+
+
+def test_a_smaller_impulse_disk_on_another_grid_printed_with_g(tmp_path):
+    report, summary = checked(_impulse(tmp_path, 17), keys("effects[1].radius=0.1"),
+                              printed("%g"))
+    assert summary.startswith("FAIL at step 3 -> 4: model differs"), summary
+    assert ("on a disk of radius between 0.08839 and 0.125 m instead of 0.15 m (9 vertices "
+            "pushed, not 21") in summary, \
+        summary
