@@ -265,9 +265,9 @@ def explain(held, x_port, x_cs, err, tol, later=()):
         (inf: none named).
     """
     window = held.window
-    found = changes(held, x_port, tol, later)
-    if not found or not window:
+    if not window:
         return None, "", np.inf
+    found = changes(held, x_port, tol, later)
     scene = float(err.max())
     start = window[0][0].step
     tried, best = [], None
@@ -298,6 +298,9 @@ def explain(held, x_port, x_cs, err, tol, later=()):
         if best is not None and best[1] <= tol:                # range's middle not this
             break                                              # step's shift
         shift_in_range(change, x_port, test, tol)
+    if best is None or best[1] > tol:   # gravity, the iteration count, on held steps
+        from .held_model import model_changes
+        model_changes(held, x_port, x_cs, test, tol)
     if best is None:
         kinds = sorted({c.setting.split(" (")[0] for c in tried})
         return None, (f"no single obstacle or contact setting reproduces the port's step "

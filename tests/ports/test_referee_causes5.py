@@ -207,3 +207,38 @@ def test_a_smaller_impulse_disk_on_another_grid_printed_with_g(tmp_path):
     assert ("on a disk of radius between 0.08839 and 0.125 m instead of 0.15 m (9 vertices "
             "pushed, not 21") in summary, \
         summary
+
+
+# ---- gravity, the iteration count and a wider box on held steps ---------------------------
+
+
+def test_held_steps_with_twice_the_gravity_name_it(tmp_path):
+    """Was UNDECIDED 'start-dependent': the fixed-contact replays catch no vertex."""
+    report, summary = checked(_dropped(tmp_path),
+                              keys("effects[0].acceleration=[0.0, -19.62, 0.0]"))
+    assert summary.startswith("FAIL at step 0 -> 1: model differs"), summary
+    assert ("clothsim's held steps with gravity (0, -19.62, 0) m/s² instead of (0, -9.81, 0) "
+            "m/s²") in summary, summary
+
+
+def test_held_steps_of_one_iteration_fewer_name_the_count(tmp_path):
+    report, summary = checked(_dropped(tmp_path), keys("solver.iterations=29"))
+    assert "clothsim's held steps with 29 anderson iterations instead of 30" in summary, \
+        summary
+    assert not report.passed, summary
+
+
+def test_a_box_2_cm_wider_on_each_side_is_named(tmp_path):
+    report, summary = checked(_dropped(tmp_path), keys("effects[1].min=[-0.27, 0.0, -0.27]",
+                                                       "effects[1].max=[0.27, 0.5, 0.27]"))
+    assert summary.startswith("FAIL at step 0 -> 1: model differs"), summary
+    assert "a box 2 cm wider on each side (min (-0.27, 0, -0.27), max (0.27, 0.5, 0.27) m" \
+        in summary, summary
+
+
+def test_held_gravity_on_the_sphere_printed_with_17_digits(tmp_path):
+    """Another scene (drape-sphere, Anderson 50) and another factor (1.5)."""
+    report, summary = checked(_draped(tmp_path),
+                              keys("effects[0].acceleration=[0.0, -14.715, 0.0]"),
+                              printed("%.17g"))
+    assert "gravity (0, -14.71, 0) m/s² instead of (0, -9.81, 0) m/s²" in summary, summary
