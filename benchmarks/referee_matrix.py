@@ -160,6 +160,13 @@ def without(*which):
     return lambda springs: np.setdiff1d(np.arange(springs.spring_count), which)
 
 
+def _damped(path):
+    """A port of the scene with the rigid damping 0.1 it has not."""
+    damped = Path(path).with_name("port-damped.toml")
+    damped.write_text(Path(path).read_text(encoding="utf-8") + DAMPING, encoding="utf-8")
+    return run(cs.load_scene(damped))
+
+
 def edited(edit):
     """A port whose right output is changed by ``edit(xs, vs, scene) -> (xs, vs)``."""
     def port(path):
@@ -371,6 +378,22 @@ def _rows():
         Row("hanging 12²", "%.17g", "noise 3e-10 m", edited(_noise(3e-10, pins=False)), True),
         Row("hanging 12² damped", "%.17g", "damping left out",
             keys("effects[2].coefficient=0"), False, ("left out",), scene_kw={"damping": True}),
+        Row("hanging 12² damped", "%.17g", "velocity damping for rigid",
+            keys('effects[2].model="velocity"'), False,
+            ('another damping model: "velocity" with coefficient 0.1',),
+            scene_kw={"damping": True}),
+        Row("hanging 12²", "%.17g", "rigid damping 0.1 the scene has not", _damped, False,
+            ('a damping the scene has not: model "rigid", coefficient 0.1',)),
+        Row("hanging 12²", "%.17g", "one shear diagonal left out",
+            springs_changed(one_diagonal), False,
+            ("the shear springs along (0.707, -0.707, 0) missing",)),
+        Row("hanging 12²", "%g", "one shear diagonal left out", springs_changed(one_diagonal),
+            False, ("the shear springs along (0.707, -0.707, 0) missing",)),
+        Row("hanging 12²", "%.17g", "5 springs counted twice",
+            springs_changed(twice(26, 351, 380, 561, 708)), False,
+            ("5 springs counted twice: springs 26, 351, 380, 561, 708",)),
+        Row("hanging 12²", "%.17g", "3 springs missing", springs_changed(without(81, 194, 623)),
+            False, ("3 springs missing: springs 81, 194, 623",)),
     ]
     yield from base
     gsign = keys("effects[0].acceleration=[0.0, 9.81, 0.0]")
@@ -422,6 +445,10 @@ def _rows():
         Row("impulse 13²", "%.17g", "impulse force × 2", keys(
             "effects[1].force=[0.0, 12.0, 0.0]"), False,
             ("external forces other than gravity × 2.000",), scene_kw=impulse),
+        Row("impulse 13²", "%.17g", "impulse radius 0.2 m, not 0.15", keys(
+            "effects[1].radius=0.2"), False,
+            ("on a disk of radius between 0.1863 and 0.2357 m instead of 0.15 m",),
+            scene_kw=impulse),
     ]
     net = {"coursework": "net", "frames": 3}
     yield from [
