@@ -42,7 +42,7 @@ SUPPORT = 0.05
 #: Largest share of the free vertices a force confined to some vertices may act on.
 SHARE = 0.25
 
-__all__ = ["force_field_cause"]
+__all__ = ["force_field_cause", "reproduced"]
 
 
 def _others(step) -> np.ndarray | None:
@@ -168,9 +168,32 @@ def force_field_cause(steps, reproduces, fitted: int = 2, parts=("others", "vert
 def _reproduced(steps, fitted, reproduces, field):
     """Step k → the replay's distance with ``field(step)`` added, for the steps it
     reproduces; None unless it reproduces the first ``fitted``."""
+    return reproduced(steps, fitted, reproduces,
+                      lambda s: replay(s, "force field", field(s)))
+
+
+def reproduced(steps, fitted, reproduces, distance):
+    """Step k → ``distance(step)`` (a replay's distance from the port's answer [m]) for
+    the steps it reproduces.
+
+    Parameters
+    ----------
+    steps : list of StepData
+    fitted : int
+        The first steps that must be reproduced.
+    reproduces : callable
+        ``reproduces(step, distance) -> bool``.
+    distance : callable
+        ``distance(step) -> float``.
+
+    Returns
+    -------
+    dict or None
+        None unless the first ``fitted`` steps are reproduced.
+    """
     d = {}
     for i, s in enumerate(steps):
-        dk = replay(s, "force field", field(s))
+        dk = distance(s)
         if reproduces(s, dk):
             d[s.k] = dk
         elif i < fitted:

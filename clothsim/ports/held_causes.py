@@ -55,6 +55,7 @@ class Change:
     Attributes
     ----------
     obstacle : Obstacle
+        Or another effect (gravity), or the solver: :mod:`clothsim.ports.held_model`.
     words : str
         The change as the verdict says it: "a box of max (0.26, 0.51, 0.26) m instead of …".
     setting : str
@@ -94,19 +95,22 @@ class Change:
         contextmanager
             Yields None while the obstacle carries the change.
         """
-        e = self.obstacle
+        e = self.obstacle      # (or another effect, or the solver: held_model's changes)
+        margin = getattr(e, "set_margin", None)
         saved = {name: getattr(e, name) for name in self.values}
         try:
             for name, value in self.values.items():
                 setattr(e, name, value)
-            e.set_margin(e.margin)                  # the contact surface follows the size
+            if margin:
+                margin(e.margin)                  # the contact surface follows the size
             if self.rule == "clinging":
                 e.correct_positions = _clinging(e)
             yield
         finally:
             for name, value in saved.items():
                 setattr(e, name, value)
-            e.set_margin(e.margin)
+            if margin:
+                margin(e.margin)
             e.__dict__.pop("correct_positions", None)
 
     def before_step(self, x) -> None:

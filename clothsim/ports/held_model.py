@@ -23,44 +23,16 @@ the step's tolerance.
 
 from __future__ import annotations
 
-from contextlib import contextmanager
-from dataclasses import dataclass
-
 import numpy as np
 
 from .held_causes import Change
 
-__all__ = ["ModelChange", "model_changes"]
+__all__ = ["model_changes"]
 
 #: Secant refinements of the gravity factor.
 REFINE = 2
 #: A box this much wider (or narrower) on each side is replayed [m], nearest first.
 WIDER = (0.01, -0.01, 0.02, -0.02, 0.04, -0.04)
-
-
-@dataclass
-class ModelChange(Change):
-    """A change of an attribute of an effect that is no obstacle, or of the solver
-    (:attr:`obstacle` is that object)."""
-
-    @contextmanager
-    def applied(self):
-        """The object with the change; restored afterwards.
-
-        Returns
-        -------
-        contextmanager
-            Yields None while the object carries the change.
-        """
-        target = self.obstacle
-        saved = {name: getattr(target, name) for name in self.values}
-        try:
-            for name, value in self.values.items():
-                setattr(target, name, value)
-            yield
-        finally:
-            for name, value in saved.items():
-                setattr(target, name, value)
 
 
 def _off(x, x_port) -> float:
@@ -92,7 +64,7 @@ def model_changes(held, x_port, x_cs, test, tol: float) -> None:
     n = getattr(solver, "iterations", 0)
     if not (getattr(sim, "_damped", False) or n < 2 or getattr(solver, "tolerance", None)):
         for m in (n - 1, n + 1):   # (a damped step's solver is made anew; a converged one
-            change = ModelChange(solver, f"{m} {solver.name} iterations instead of {n}",
+            change = Change(solver, f"{m} {solver.name} iterations instead of {n}",
                                  "[solver] iterations", {"iterations": m})   # stops)
             if m >= 1 and _off(test(change), x_port) <= tol:
                 return
@@ -107,7 +79,7 @@ def _gravity(e, index, x_port, x_cs, test, tol) -> bool:
     a0, f0 = e.acceleration.copy(), e._force.copy()
 
     def at(s):
-        return ModelChange(e, f"gravity {_vec(s * a0)} m/s² instead of {_vec(a0)} m/s²",
+        return Change(e, f"gravity {_vec(s * a0)} m/s² instead of {_vec(a0)} m/s²",
                            f"effects[{index}].acceleration (gravity)",
                            {"acceleration": s * a0, "_force": s * f0})
 

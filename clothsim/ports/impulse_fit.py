@@ -19,6 +19,7 @@ from __future__ import annotations
 
 import numpy as np
 
+from .force_field import reproduced
 from .replays import replay
 
 __all__ = ["impulse_cause"]
@@ -81,16 +82,10 @@ def impulse_cause(steps, reproduces, fitted: int = 2):
             change = _share(e, first.model, which) - scene
             if not reproduces(first, replay(first, "force field", change)):
                 continue
-            d = {}
-            for i, s in enumerate(steps):
-                dk = (replay(s, "force field", _share(e, s.model, which)
-                             - _share(e, s.model, e.vertices))
-                      if e.active(s.time) else np.inf)
-                if reproduces(s, dk):
-                    d[s.k] = dk
-                elif i < fitted:
-                    break
-            else:
+            d = reproduced(steps, fitted, reproduces, lambda s, which=which, e=e: replay(
+                s, "force field", _share(e, s.model, which) - _share(e, s.model, e.vertices))
+                if e.active(s.time) else np.inf)
+            if d is not None:
                 bound = (f"between {low:.4g} and {high:.4g} m" if np.isfinite(high)
                          else f"of at least {low:.4g} m")
                 return (f"an impulse (effects[{index}]) on a disk of radius {bound} instead "

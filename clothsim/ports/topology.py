@@ -37,6 +37,7 @@ import scipy.sparse as sp
 from ..errors import ClothsimError
 from ..model import Model
 from ..springs import FAMILIES, Springs
+from .force_field import reproduced
 from .hypotheses import residual
 
 __all__ = ["topology_cause"]
@@ -314,19 +315,9 @@ def topology_cause(steps, reproduces, fitted: int = 2):
                 break
     if named is None:
         return None
-    found = _reproduced(steps, fitted, reproduces, named[1])
+    found = reproduced(steps, fitted, reproduces,
+                       lambda s: _distance(s, _solve(s, named[1])))
     return None if found is None else (_words(first, named[1], groups), "topology", found)
-
-
-def _reproduced(steps, fitted, reproduces, scale):
-    d = {}
-    for i, s in enumerate(steps):
-        dk = _distance(s, _solve(s, scale))
-        if reproduces(s, dk):
-            d[s.k] = dk
-        elif i < fitted:
-            return None
-    return d
 
 
 def _words(step, scale, groups) -> str:
