@@ -45,7 +45,7 @@ from .hypotheses import (
     fit_vertex_scale,
     relative,
 )
-from .replayed import replay_cause
+from .replayed import replay_cause, topology_replayed
 from .replays import approach, refine, replay
 
 log = logging.getLogger(__name__)
@@ -331,6 +331,13 @@ def name_cause(checks: dict, steps: list[StepData], others=()) -> Cause | None:
         return None                 # a fixed-iteration port: its replays name the cause
     if cause is None and steps and steps[0] is not every[0]:
         cause = infer_cause(steps)
+    if cause is None and steps and (found := topology_replayed(steps)) is not None:
+        for k, d in found[1].items():   # springs missing or doubled: no parameter
+            checks[k].status = "model differs"
+            checks[k].note = found[0] if k == min(found[1]) else (
+                f"the topology fitted at step {min(found[1])} -> {min(found[1]) + 1} "
+                f"explains it (its replay is {d:.1e} m off the port's answer)")
+        return None
     if cause is None:
         if steps and checks[steps[0].k].status in ("not a minimizer", "model differs"):
             near = closest(steps[0])

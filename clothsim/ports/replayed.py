@@ -34,7 +34,7 @@ from .topology import topology_cause
 
 log = logging.getLogger(__name__)
 
-__all__ = ["REPLAY", "replay_cause"]
+__all__ = ["REPLAY", "replay_cause", "topology_replayed"]
 
 #: A replay explains a step within the tolerance, or this share of the scene's distance.
 REPLAY = 0.01
@@ -141,6 +141,30 @@ def _first_reproducing(steps):
         if _reproduces(s, dk):
             d[s.k] = dk
     return _text(fitted, hyp, theta, d), d
+
+
+def topology_replayed(steps: list[StepData]):
+    """A spring topology that differs (:mod:`clothsim.ports.topology`) whose replays at
+    the scene's settings reproduce the steps: for a converged port, which no parameter
+    fit explains.
+
+    Parameters
+    ----------
+    steps : list of StepData
+
+    Returns
+    -------
+    (str, dict) or None
+        As :func:`replay_cause`.
+    """
+    if not steps or steps[0].solve is None:
+        return None
+    fitted = steps[:JOINT]
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        found = topology_cause(steps[:JOINT + MAX_REPLAYS], _reproduces, len(fitted))
+    return None if found is None else (_text(fitted, found[1], found[0], found[2]),
+                                       found[2])
 
 
 def _text(fitted, hyp, theta, d) -> str:

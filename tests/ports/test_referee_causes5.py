@@ -242,3 +242,15 @@ def test_held_gravity_on_the_sphere_printed_with_17_digits(tmp_path):
                               keys("effects[0].acceleration=[0.0, -14.715, 0.0]"),
                               printed("%.17g"))
     assert "gravity (0, -14.71, 0) m/s² instead of (0, -9.81, 0) m/s²" in summary, summary
+
+
+def test_springs_counted_twice_in_a_converged_port_are_named(tmp_path):
+    """A converged port (Newton to 1e-9): no parameter fit explains it either; was 'no
+    single model parameter explains the port's answer'."""
+    path = scene(tmp_path, nx=9, ny=9, frames=2)
+    path.write_text(path.read_text().replace(
+        'method = "local-global"\niterations = 10',
+        'method = "newton"\niterations = 50\ntolerance = 1e-9'))
+    report, summary = checked(path, springs_changed(twice(20, 150, 300)))
+    assert summary.startswith("FAIL at step 0 -> 1: model differs"), summary
+    assert "3 springs counted twice: springs 20, 150, 300" in summary, summary
