@@ -269,9 +269,9 @@ def explain(held, x_port, x_cs, err, tol, later=()):
         (inf: none named).
     """
     window = held.window
-    if not window:
-        return None, "", np.inf
     found = changes(held, x_port, tol, later)
+    if not found or not window:   # no obstacle near: the model's fits and replays decide
+        return None, "", np.inf
     scene = float(err.max())
     start = window[0][0].step
     tried, best = [], None
