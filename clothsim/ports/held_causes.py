@@ -38,6 +38,7 @@ import numpy as np
 
 from ..effects.holding import Holding
 from ..simulation import State
+from .held_model import model_changes
 from .held_readings import NEAR, geometry, shift_in_range
 from .held_steps import _copy
 from .held_verdicts import NEARER
@@ -303,8 +304,7 @@ def explain(held, x_port, x_cs, err, tol, later=()):
             break                                              # step's shift
         shift_in_range(change, x_port, test, tol)
     if best is None or best[1] > tol:   # gravity, the iteration count, on held steps
-        from .held_model import model_changes
-        model_changes(held, x_port, x_cs, test, tol)
+        model_changes(held, x_port, x_cs, test, tol, Change)
     if best is None:
         kinds = sorted({c.setting.split(" (")[0] for c in tried})
         return None, (f"no single obstacle or contact setting reproduces the port's step "

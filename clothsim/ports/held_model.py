@@ -25,8 +25,6 @@ from __future__ import annotations
 
 import numpy as np
 
-from .held_causes import Change
-
 __all__ = ["model_changes"]
 
 #: Secant refinements of the gravity factor.
@@ -39,7 +37,7 @@ def _off(x, x_port) -> float:
     return float(np.linalg.norm(x - x_port, axis=1).max()) if x is not None else np.inf
 
 
-def model_changes(held, x_port, x_cs, test, tol: float) -> None:
+def model_changes(held, x_port, x_cs, test, tol: float, change) -> None:
     """Replay gravity × a fitted factor and other iteration counts (module docstring).
 
     Parameters
@@ -52,45 +50,53 @@ def model_changes(held, x_port, x_cs, test, tol: float) -> None:
         (:func:`clothsim.ports.held_causes.explain` keeps the nearest).
     tol : float
         The step's tolerance [m].
+    change : type
+        :class:`clothsim.ports.held_causes.Change` (made here for each setting).
+
+    Returns
+    -------
+    None
+        What each replay found is what ``test`` recorded.
     """
     sim = held.sim
     effects = list(sim.effects)
     gravity = next((e for e in effects if e.kind == "gravity"
                     and hasattr(e, "_force")), None)
-    if gravity is not None and _gravity(gravity, effects.index(gravity), x_port, x_cs, test,
-                                        tol):
+    if gravity is not None and _gravity(change, gravity, effects.index(gravity), x_port, x_cs,
+                                        test, tol):
         return
     solver = sim.solver
     n = getattr(solver, "iterations", 0)
     if not (getattr(sim, "_damped", False) or n < 2 or getattr(solver, "tolerance", None)):
         for m in (n - 1, n + 1):   # (a damped step's solver is made anew; a converged one
-            change = Change(solver, f"{m} {solver.name} iterations instead of {n}",
-                                 "[solver] iterations", {"iterations": m})   # stops)
-            if m >= 1 and _off(test(change), x_port) <= tol:
+            fewer = change(solver, f"{m} {solver.name} iterations instead of {n}",
+                           "[solver] iterations", {"iterations": m})   # stops)
+            if m >= 1 and _off(test(fewer), x_port) <= tol:
                 return
     for e in (e for e in effects if e.kind == "box" and e in held.obstacles):
         for d in (WIDER if gravity is not None else ()):
-            if _off(test(_wider(e, effects.index(e), d, gravity.acceleration)), x_port) <= tol:
+            if _off(test(_wider(change, e, effects.index(e), d, gravity.acceleration)),
+                    x_port) <= tol:
                 return
 
 
-def _gravity(e, index, x_port, x_cs, test, tol) -> bool:
+def _gravity(change, e, index, x_port, x_cs, test, tol) -> bool:
     """Gravity × a factor fitted on held replays; True when one is within ``tol``."""
     a0, f0 = e.acceleration.copy(), e._force.copy()
 
     def at(s):
-        return Change(e, f"gravity {_vec(s * a0)} m/s² instead of {_vec(a0)} m/s²",
+        return change(e, f"gravity {_vec(s * a0)} m/s² instead of {_vec(a0)} m/s²",
                            f"effects[{index}].acceleration (gravity)",
                            {"acceleration": s * a0, "_force": s * f0})
 
     return _secant(at, (1.0, x_cs), (0.5, 2.0), x_port, test, tol, (0.0, 10.0))
 
 
-def _wider(e, index, d, g):
+def _wider(change, e, index, d, g):
     """The box ``d`` [m] wider on each side across gravity (its height kept)."""
     across = np.abs(np.asarray(g, float)) < 1e-12 * max(float(np.abs(g).max()), 1e-300)
     grow = d * across
-    return Change(e, f"a box {100 * d:.3g} cm {'wider' if d > 0 else 'narrower'} on each "
+    return change(e, f"a box {100 * d:.3g} cm {'wider' if d > 0 else 'narrower'} on each "
                      f"side (min {_vec(e.min - grow)}, max {_vec(e.max + grow)} m instead "
                      f"of {_vec(e.min)}, {_vec(e.max)} m)", f"effects[{index}].min and .max "
                   "(the box)", {"min": e.min - grow, "max": e.max + grow})
