@@ -231,7 +231,7 @@ def check_steps(simulation, positions, velocities=None, *, precision: str = "flo
                 and len(held_causes) < MAX_EFFECT):   # a setting of the port's?
             held_causes.append(k)
             change, why_held, nearer = explain(held, x_port, x_cs, err, tol, [
-                (j, xs[j]) for j in range(k + 2, min(k + 4, len(xs)))])
+                (j, xs[j]) for j in range(k + 2, min(k + 4, len(xs)))], models=True)
             if change is not None and nearer < off:
                 variant = None          # the setting reproduces the step better
                 named = (change, k) if nearer <= tol else None

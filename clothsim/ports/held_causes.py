@@ -247,7 +247,7 @@ def _distance(x, x_port) -> float:
     return float(np.linalg.norm(x - x_port, axis=1).max()) if x is not None else np.inf
 
 
-def explain(held, x_port, x_cs, err, tol, later=()):
+def explain(held, x_port, x_cs, err, tol, later=(), models=False):
     """The single change whose held steps are the port's at its failing step, in words.
 
     Parameters
@@ -260,7 +260,11 @@ def explain(held, x_port, x_cs, err, tol, later=()):
         |x_clothsim − x_port| of the step [m].
     tol : float
     later : sequence of (int, ndarray)
-        The port's later frames (:func:`changes`).
+        The port's later frames (:func:`clothsim.ports.held_causes.changes`).
+    models : bool, default False
+        Also gravity, the iteration count and a wider box (:mod:`clothsim.ports.held_model`)
+        when no obstacle setting is within the tolerance: on a first failing step, not on
+        one read again after a named setting (each costs a replay of the whole window).
 
     Returns
     -------
@@ -303,7 +307,7 @@ def explain(held, x_port, x_cs, err, tol, later=()):
         if best is not None and best[1] <= tol:                # range's middle not this
             break                                              # step's shift
         shift_in_range(change, x_port, test, tol)
-    if best is None or best[1] > tol:   # gravity, the iteration count, on held steps
+    if models and (best is None or best[1] > tol):   # gravity, the iteration count, …
         model_changes(held, x_port, x_cs, test, tol, Change)
     if best is None:
         kinds = sorted({c.setting.split(" (")[0] for c in tried})

@@ -23,7 +23,8 @@ Each scale is rounded to a whole number of copies (−1 missing, +1 twice), and 
 step is replayed with those springs removed or doubled; the topology is named only when
 that replay reproduces the port's answer on the fitted steps (as any replayed cause). Up
 to :data:`ROUNDS` rounds refit the force difference left after the springs found so far
-(each one replay, and one per spring new to the pool).
+(each one replay, and one per spring new to the pool), while each comes at least twice as
+near the port's answer as the one before.
 """
 
 from __future__ import annotations
@@ -280,7 +281,7 @@ def topology_cause(steps, reproduces, fitted: int = 2):
         return None
     pool: dict = {}
     columns: dict = {}
-    tried, named = [], None
+    tried, named, previous = [], None, None
     for round_ in range(ROUNDS):   # the difference the springs found so far leave:
         df = _difference(first, x, free)   # springs added to them
         if not np.any(df):
@@ -313,6 +314,9 @@ def topology_cause(steps, reproduces, fitted: int = 2):
                 named = (d, scale)
             if d <= NEAR * first.tolerance or not better:
                 break
+        elif previous is not None and d > 0.5 * previous:
+            break       # a round that comes no nearer: the springs do not explain it
+        previous = d
     if named is None:
         return None
     found = reproduced(steps, fitted, reproduces,
