@@ -54,7 +54,8 @@ def wrap(owner, name, label):
 
 for owner, name, label in [
         (Scene, "build_model", "model build"), (Scene, "build_simulation", "simulation build"),
-        (runner, "scene_hash", "scene hash"), (runner, "input_hashes", "input hashes"),
+        (runner, "_digest_model", "scene hash (a thread, beside the simulation build)"),
+        (runner, "input_hashes", "input hashes"),
         (runfolder.RunFolder, "begin", "folder begin"),
         (simulation.Simulation, "prepare", "first factorization (before frame 0)"),
         (local_global, "factor_system", "assembly + factorization"),

@@ -52,6 +52,7 @@ from .display import pinned_mask, write_obstacles
 from .effects.base import effect_states
 from .errors import InputError, NonFiniteStateError
 from .interrupts import SignalInterrupt, handle_signals, signals_deferred
+from .io.background import BackgroundJob
 from .io.effectstate import restore_state, state_path
 from .io.frames import OBSTACLES_NAME, PVD_NAME
 from .io.runfiles import package_versions, write_json, write_trajectory
@@ -107,15 +108,26 @@ def scene_hash(scene: Scene, model) -> str:
     str
         16 hexadecimal digits.
     """
+    digest = _scene_digest(scene)
+    _digest_model(digest, model)
+    return digest.hexdigest()[:16]
+
+
+def _scene_digest(scene: Scene):
+    """:func:`scene_hash`'s SHA-256 object after the resolved scene's text."""
     doc = copy.deepcopy(scene.to_dict())
     doc.get("scene", {}).pop("frames", None)
     doc.pop("output", None)
-    digest = hashlib.sha256(json.dumps(doc, sort_keys=True, default=str).encode())
+    return hashlib.sha256(json.dumps(doc, sort_keys=True, default=str).encode())
+
+
+def _digest_model(digest, model) -> None:
+    """Feed the model's arrays to ``digest`` (their bytes, read in place: hashlib lets go of
+    Python's lock over them, so this runs on a second core beside the simulation's build)."""
     s = model.springs
     for a in (model.mesh.vertices, model.mesh.triangles, model.mesh.strands, s.spring_vertices,
               s.spring_stiffness, s.spring_rest_length, model.vertex_mass):
-        digest.update(np.ascontiguousarray(a).tobytes())
-    return digest.hexdigest()[:16]
+        digest.update(np.ascontiguousarray(a).reshape(-1).view(np.uint8))
 
 
 def run_scene(scene, out_dir, *, frames: int | None = None,
@@ -174,19 +186,24 @@ def run_scene(scene, out_dir, *, frames: int | None = None,
                          f"{frames!r}"[:200])
     frames = scene.frames if frames is None else int(frames)
     model = scene.build_model()
+    # the model's hash (100 MB of arrays at 513²) on a thread, beside the simulation's build
+    digest, hashing = _scene_digest(scene), BackgroundJob()
+    hashing.start(_digest_model, digest, model, name="clothsim scene hash")
     sim = scene.build_simulation(model)
+    hashing.wait()
+    shash = digest.hexdigest()[:16]
     # a large cloth's pictures are drawn by a second process (clothsim.pictures)
     with PictureProcess(model.vertex_count if preview else 0) as pictures, \
             RunFolder(out_dir, force=force, guard=signals_deferred) as folder:
-        return _run_in(folder, scene, model, sim, frames, progress, resume,
+        return _run_in(folder, scene, model, sim, shash, frames, progress, resume,
                        pictures if preview else None)
 
 
-def _run_in(folder: RunFolder, scene, model, sim, frames: int, progress, resume: bool,
-            pictures: PictureProcess | None) -> RunResult:
-    """The run, once ``folder`` is claimed and locked: frames computed here, written there."""
+def _run_in(folder: RunFolder, scene, model, sim, shash: str, frames: int, progress,
+            resume: bool, pictures: PictureProcess | None) -> RunResult:
+    """The run, once ``folder`` is claimed and locked: frames computed here, written there
+    (``shash``: :func:`scene_hash`)."""
     fps, substeps, n = scene.fps, scene.substeps, model.vertex_count
-    shash = scene_hash(scene, model)
     inputs = input_hashes(scene)  # every file the scene reads, by content
     start = (folder.resume_point(shash, frames, inputs, scene=scene.to_dict()) if resume
              else None)

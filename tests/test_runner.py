@@ -344,3 +344,28 @@ def test_memory_does_not_grow_with_the_number_of_frames(tmp_path):
         tracemalloc.stop()
     frame_bytes = 2 * 33 * 33 * 3 * 8
     assert peaks[1] - peaks[0] < 10 * frame_bytes, (peaks, frame_bytes)
+
+
+def test_scene_hash_is_the_recorded_one_and_keeps_its_bytes(tiny, tmp_path):
+    """run_scene hashes the model on a thread beside the simulation's build: run.json holds
+    scene_hash's value, which is still SHA-256 of the scene's text and the arrays' bytes (a
+    run.json written by an earlier clothsim resumes)."""
+    import copy
+    import hashlib
+
+    from clothsim.runner import scene_hash
+
+    scene = tiny
+    model = scene.build_model()
+    run_scene(scene, tmp_path / "out", frames=1, preview=False)
+    recorded = json.loads((tmp_path / "out" / "run.json").read_text())["scene_hash"]
+    doc = copy.deepcopy(scene.to_dict())
+    doc["scene"].pop("frames")
+    doc.pop("output", None)
+    digest = hashlib.sha256(json.dumps(doc, sort_keys=True, default=str).encode())
+    s = model.springs
+    for a in (model.mesh.vertices, model.mesh.triangles, model.mesh.strands, s.spring_vertices,
+              s.spring_stiffness, s.spring_rest_length, model.vertex_mass):
+        digest.update(np.ascontiguousarray(a).tobytes())
+    assert recorded == scene_hash(scene, model) == digest.hexdigest()[:16]
+    assert len(model.mesh.strands) == 0   # an empty array hashed too
