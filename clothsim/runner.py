@@ -269,7 +269,7 @@ def _run_in(folder: RunFolder, scene, model, sim, shash: str, frames: int, progr
         steps = _advance(sim, substeps, k)   # meanwhile frame k - 1 is written (background)
         x, v = sim.state.positions, sim.state.velocities
         if pictures is not None and k == first and k < frames:
-            pictures.start()   # it imports beside the next frames' solves (clothsim.pictures)
+            pictures.start(sim.model.mesh)   # it imports beside the next frames' solves
         record = _frame_record(k, fps, steps, sim.solver.tolerance)
         folder.wait()
         if progress is not None and k > first:
@@ -284,7 +284,7 @@ def _run_in(folder: RunFolder, scene, model, sim, shash: str, frames: int, progr
     # (the run is complete all the same)
     last = x if frames >= first else None
     drawing = pictures is not None and _request_previews(pictures, folder, scene, sim, fps,
-                                                         frames, last)
+                                                         frames)
     drawn = _draw_previews(folder, scene, sim, fps, frames, last) if (
         pictures is not None and not drawing) else None
     folder.wait_last()   # trajectory.npz built meanwhile, moved into place by end
@@ -355,12 +355,13 @@ def _draw_previews(folder: RunFolder, scene, sim, fps: float, frames: int, last)
 
 
 def _request_previews(pictures: PictureProcess, folder: RunFolder, scene, sim, fps: float,
-                      frames: int, last) -> bool:
-    """Hand :func:`_draw_previews`' frames to the picture process; False: draw them here."""
+                      frames: int) -> bool:
+    """Hand :func:`_draw_previews`' frames to the picture process; False: draw them here.
+    Every frame is in the store (the last one too: appended when it was handed over), so
+    only the store's name crosses, not the last frame's positions."""
     times = np.arange(frames + 1) / fps
-    return pictures.request(folder.store.paths["positions"], frames + 1 if last is None
-                            else frames, last, sim.model.mesh, times=times,
-                            effects=sim.effects, title=_title(scene, times))
+    return pictures.request(folder.store.paths["positions"], frames + 1, None, sim.model.mesh,
+                            times=times, effects=sim.effects, title=_title(scene, times))
 
 
 def _title(scene, times) -> str:
