@@ -272,11 +272,11 @@ class FrameWriter:
                 self._template = False
         if self._template:
             self._template.write(path, x, point_data, cell_data)
-            return
-        meshio = load_meshio()
-        meshio.write(path, meshio.Mesh(x, self._cells, point_data=point_data,
-                                       cell_data=cell_data), file_format="vtu",
-                     compression=None if self.compression == "none" else "zlib")
+        else:
+            meshio = load_meshio()
+            meshio.write(path, meshio.Mesh(x, self._cells, point_data=point_data,
+                                           cell_data=cell_data), file_format="vtu",
+                         compression=None if self.compression == "none" else "zlib")
 
     def add_static(self, name: str) -> None:
         """List the file ``name`` (in the output folder, e.g. ``obstacles.vtu``) beside every
