@@ -58,7 +58,7 @@ def wrap(owner, name, label):
 
 for owner, name, label in [
         (Scene, "build_model", "model build"), (Scene, "build_simulation", "simulation build"),
-        (runner, "_digest_model", "scene hash (a thread, beside the simulation build)"),
+        (runner, "digest_model", "scene hash (a thread, beside the simulation build)"),
         (runner, "input_hashes", "input hashes"),
         (runfolder.RunFolder, "begin", "folder begin"),
         (simulation.Simulation, "prepare", "first factorization (before frame 0)"),

@@ -37,10 +37,8 @@ from frame k (``resume=True``) repeats, bit for bit, what an uninterrupted run c
 
 from __future__ import annotations
 
-import copy
-import hashlib
-import json
 import logging
+import mmap
 from collections.abc import Callable
 from dataclasses import dataclass, field
 from datetime import UTC, datetime
@@ -60,6 +58,7 @@ from .io.runfolder import RESULT_FILES, STALE_FILES, RunFolder, completed_frames
 from .pictures import PictureProcess
 from .plotting import draw_run_pictures, write_run_pictures
 from .scene import Scene, load_scene
+from .scene.hashing import digest_model, scene_digest, scene_hash
 from .scene.inputs import input_hashes
 from .scene.schema import MAX_FRAMES
 from .simulation import State
@@ -89,45 +88,6 @@ class RunResult:
     last_frame: int
     frames: list[dict] = field(default_factory=list)
     files: list[Path] = field(default_factory=list)
-
-
-def scene_hash(scene: Scene, model) -> str:
-    """SHA-256 (hex, 16 digits) of the resolved scene (without ``scene.frames`` and the
-    ``[output]`` table, which change no state) and the model's arrays: what ``resume``
-    checks before continuing a run.
-
-    Parameters
-    ----------
-    scene : Scene
-        The resolved scene.
-    model : Model
-        Built from it: vertices [m], springs, stiffnesses [N/m], rest lengths [m], masses [kg].
-
-    Returns
-    -------
-    str
-        16 hexadecimal digits.
-    """
-    digest = _scene_digest(scene)
-    _digest_model(digest, model)
-    return digest.hexdigest()[:16]
-
-
-def _scene_digest(scene: Scene):
-    """:func:`scene_hash`'s SHA-256 object after the resolved scene's text."""
-    doc = copy.deepcopy(scene.to_dict())
-    doc.get("scene", {}).pop("frames", None)
-    doc.pop("output", None)
-    return hashlib.sha256(json.dumps(doc, sort_keys=True, default=str).encode())
-
-
-def _digest_model(digest, model) -> None:
-    """Feed the model's arrays to ``digest`` (their bytes, read in place: hashlib lets go of
-    Python's lock over them, so this runs on a second core beside the simulation's build)."""
-    s = model.springs
-    for a in (model.mesh.vertices, model.mesh.triangles, model.mesh.strands, s.spring_vertices,
-              s.spring_stiffness, s.spring_rest_length, model.vertex_mass):
-        digest.update(np.ascontiguousarray(a).reshape(-1).view(np.uint8))
 
 
 def run_scene(scene, out_dir, *, frames: int | None = None,
@@ -187,9 +147,10 @@ def run_scene(scene, out_dir, *, frames: int | None = None,
     frames = scene.frames if frames is None else int(frames)
     model = scene.build_model()
     # the model's hash (100 MB of arrays at 513²) on a thread, beside the simulation's build
-    digest, hashing = _scene_digest(scene), BackgroundJob()
-    hashing.start(_digest_model, digest, model, name="clothsim scene hash")
+    digest, hashing = scene_digest(scene), BackgroundJob()
+    hashing.start(digest_model, digest, model, name="clothsim scene hash")
     sim = scene.build_simulation(model)
+    touch_pages(sim.solver)   # its work arrays' first writes, before the factorization
     hashing.wait()
     shash = digest.hexdigest()[:16]
     # a large cloth's pictures are drawn by a second process (clothsim.pictures)
@@ -197,6 +158,36 @@ def run_scene(scene, out_dir, *, frames: int | None = None,
             RunFolder(out_dir, force=force, guard=signals_deferred) as folder:
         return _run_in(folder, scene, model, sim, shash, frames, progress, resume,
                        pictures if preview else None)
+
+
+#: Arrays of at least this many bytes are touched by :func:`touch_pages`.
+TOUCH_FROM = 1 << 22
+
+
+def touch_pages(owner) -> int:
+    """Write one byte of each memory page of ``owner``'s large arrays back unchanged (each
+    gets itself plus 0): a solver's work arrays, allocated unmapped when it is built, were
+    first written in the first step, after the factorization, where at 513² the faults took
+    0.3 s of system time (huge pages the kernel compacts memory for); right after the build
+    they take 0.02 s. Every step stays bit for bit the same.
+
+    Parameters
+    ----------
+    owner : object
+        Its attributes that are writable, C-contiguous ndarrays of :data:`TOUCH_FROM` bytes
+        or more are touched (nothing else may write them meanwhile).
+
+    Returns
+    -------
+    int
+        The arrays touched.
+    """
+    big = [a for a in list(vars(owner).values()) if isinstance(a, np.ndarray)
+           and a.nbytes >= TOUCH_FROM and a.flags.writeable and a.flags.c_contiguous]
+    for a in big:
+        page = a.reshape(-1).view(np.uint8)[::mmap.PAGESIZE]
+        page += 0
+    return len(big)
 
 
 def _run_in(folder: RunFolder, scene, model, sim, shash: str, frames: int, progress,
