@@ -4,13 +4,13 @@
 drawn on a thread beside the run it waits for the frame writer (and the writer for it), so
 after the last step a large run paid the pictures and the last frame's write one after the
 other. :class:`PictureProcess` starts a Python process once the run's first frame is
-computed (it imports clothsim, matplotlib and Pillow beside the next frames' solves, which
-hold the GIL on one core) and hands it the frames once the last one is computed: it draws
-while the main process writes the last frame,
-``trajectory.npz`` and ``run.json``. The pictures are the very bytes the runner would have
-drawn itself (the same function on the same positions: the earlier frames memory-mapped from
-the run's trajectory store, the last one sent along), and they are written by the runner,
-once the run is complete, as before.
+computed, with the mesh (it imports clothsim, matplotlib and Pillow beside the next frames'
+solves, which hold the GIL on one core) and hands it the frames once the last one is
+computed (the store's name: a few hundred bytes): it draws while the main process writes the
+last frame, ``trajectory.npz`` and ``run.json``. The pictures are the very bytes the runner
+would have drawn itself (the same function on the same positions: every frame memory-mapped
+from the run's trajectory store, which holds the last one since it was handed over), and
+they are written by the runner, once the run is complete, as before.
 
 It is used for cloths of more than :data:`PROCESS_FROM` vertices on a machine with two
 cores or more, when more than one frame is computed (smaller and shorter runs end before
