@@ -11,6 +11,10 @@ total. On a shared machine the wall time
 counts the other processes too: compare CPU seconds, or two variants interleaved
 (:func:`phases`, used by ``benchmarks.scale_ladder``).
 
+``python -m benchmarks.run_phases --beside 3`` asks whether the processes beside the steps
+slow them (:func:`beside`): interleaved runs with the frame files and pictures and without
+either, each step's thread CPU.
+
 ``python -m benchmarks.run_phases --step-parts [--size 513] [--write]`` splits one step of
 that run instead (:func:`step_parts`): the thread CPU of the step and of each part of its
 iteration (the CHOLMOD solve, the local step's passes, the right-hand side, the residual)
@@ -54,7 +58,8 @@ def wrap(owner, name, label):
 
 for owner, name, label in [
         (Scene, "build_model", "model build"), (Scene, "build_simulation", "simulation build"),
-        (runner, "scene_hash", "scene hash"), (runner, "input_hashes", "input hashes"),
+        (runner, "digest_model", "scene hash (a thread, beside the simulation build)"),
+        (runner, "input_hashes", "input hashes"),
         (runfolder.RunFolder, "begin", "folder begin"),
         (simulation.Simulation, "prepare", "first factorization (before frame 0)"),
         (local_global, "factor_system", "assembly + factorization"),
@@ -78,16 +83,30 @@ for owner, name, label in [
         (runfolder.RunFolder, "end", "final files (npz, run.json)")]:
     wrap(owner, name, label)
 runfolder.write_state = effectstate.write_state
+import resource
+steps_ru = []
+_step = simulation.Simulation.step
+
+def step_rusage(*args, **kwargs):   # the step's system time and page faults (its thread)
+    r0 = resource.getrusage(resource.RUSAGE_THREAD)
+    try:
+        return _step(*args, **kwargs)
+    finally:
+        r1 = resource.getrusage(resource.RUSAGE_THREAD)
+        steps_ru.append((r1.ru_stime - r0.ru_stime, r1.ru_minflt - r0.ru_minflt))
+simulation.Simulation.step = step_rusage
 n, nframes, extra = int(sys.argv[1]), sys.argv[2], json.loads(sys.argv[3])
-if sys.argv[4] == "off":   # frames written on the run's own thread (the A/B baseline)
+if sys.argv[4] in ("off", "bare"):   # frames written on the run's own thread (A/B baseline)
     frameproc.PROCESS_FROM = 10 ** 12
+if sys.argv[4] == "bare":            # ... and not written: an empty file for each
+    frames.FrameWriter.write_file = lambda self, path, x, v, mask: open(path, "wb").close()
 with tempfile.TemporaryDirectory() as tmp:
     W, C = time.perf_counter(), time.process_time()
     rc = clothsim.cli.main(["run", "hanging", "--set", f"cloth.resolution=[{n}, {n}]",
                             "--frames", nframes, "--out", tmp, *extra])
     run = (time.perf_counter() - W, time.process_time() - C)
 children = os.times()
-print(json.dumps({"rc": rc, "imports": imports, "run": run, "spans": spans,
+print(json.dumps({"rc": rc, "imports": imports, "run": run, "spans": spans, "steps_ru": steps_ru,
                   "total": (time.perf_counter() - T0, time.process_time()),
                   "children_cpu": children.children_user + children.children_system}))
 """
@@ -175,14 +194,49 @@ def parts_table(r: dict) -> list[str]:
 
 
 def phases(size: int = 513, frames: int = 5, extra: list[str] | None = None,
-           frame_process: bool = True) -> dict:
-    """One instrumented run in a fresh process: its JSON (see the module docstring);
+           frame_process: bool = True, bare: bool = False) -> dict:
+    """One instrumented run in a fresh process: its JSON (see the module docstring; with
+    ``steps_ru``, each step's system time [s] and minor page faults, of its thread);
     ``frame_process`` False writes the frames on the run's thread
-    (:mod:`clothsim.io.frameproc` off)."""
+    (:mod:`clothsim.io.frameproc` off); ``bare`` writes an empty file for each frame
+    instead (nothing beside the steps but the run's own thread; give ``--no-preview`` in
+    ``extra`` to leave out the pictures too)."""
+    mode = "bare" if bare else "on" if frame_process else "off"
     out = subprocess.run([sys.executable, "-c", CHILD, str(size), str(frames),
-                          json.dumps(list(extra or [])), "on" if frame_process else "off"],
+                          json.dumps(list(extra or [])), mode],
                          check=True, capture_output=True, text=True, cwd=ROOT)
     return json.loads(out.stdout.strip().splitlines()[-1])
+
+
+def beside_rows(pair: int, load: str, what: str, r: dict) -> str:
+    """One Markdown row of :func:`beside`: each step's thread CPU, the first step's system
+    time and page faults."""
+    steps = [s for s in r["spans"] if s[0] == "step"]
+    cpu = " ".join(f"{s[4]:.2f}" for s in steps)
+    sys_time, faults = r["steps_ru"][0] if r["steps_ru"] else (0.0, 0)
+    later = sum(f for _, f in r["steps_ru"][1:])
+    return (f"| {pair} | {load} | {what} | {cpu} | {sys_time:.2f} s, {faults} | {later} | "
+            f"{r['children_cpu']:.2f} s |")
+
+
+def beside(size: int = 513, frames: int = 5, pairs: int = 3) -> list[str]:
+    """Does what runs beside the steps slow them? ``pairs`` interleaved runs with the frame
+    files (second process) and the pictures (third) as a run writes them, and without
+    either (:func:`phases` with ``bare`` and ``--no-preview``): each step's thread CPU
+    (which memory or cache shared with those processes would raise; sharing cores would
+    not), the first step's system time and minor page faults, the later steps' faults, and
+    the child processes' CPU. Returns the Markdown lines."""
+    lines = ["| pair | load | beside the steps | each step's thread CPU [s] | step 1: system "
+             "time, page faults | later steps' page faults | children's CPU |",
+             "|---|---|---|---|---|---|---|"]
+    for i in range(pairs):
+        for full in (True, False) if i % 2 == 0 else (False, True):
+            load = Path("/proc/loadavg").read_text().split()[0]
+            r = phases(size, frames, [] if full else ["--no-preview"], bare=not full)
+            lines.append(beside_rows(i + 1, load, "frame files and pictures" if full
+                                     else "neither", r))
+            print(lines[-1], flush=True)
+    return lines
 
 
 def summary(r: dict) -> list[tuple[str, int, float, float]]:
@@ -219,6 +273,9 @@ def main(argv: list[str] | None = None) -> None:
                         help="instead, the thread CPU of one step's parts (best of 5)")
     parser.add_argument("--write", action="store_true",
                         help="with --step-parts: also write docs/data/step-parts.md")
+    parser.add_argument("--beside", type=int, default=0, metavar="PAIRS",
+                        help="instead, PAIRS interleaved runs with the frame files and "
+                             "pictures and without: each step's thread CPU")
     parser.add_argument("--ab", type=int, default=0, metavar="PAIRS",
                         help="instead, PAIRS interleaved runs with and without the frame "
                              "process: wall, this process's CPU, its children's CPU")
@@ -236,6 +293,9 @@ def main(argv: list[str] | None = None) -> None:
         print(text)
         if args.write:
             (ROOT / "docs" / "data" / "step-parts.md").write_text(text, encoding="utf-8")
+        return
+    if args.beside:
+        beside(args.size, args.frames, args.beside)
         return
     if args.ab:
         print("| pair | load | frames written by | wall | run's CPU | children's CPU | "

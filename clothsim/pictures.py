@@ -4,13 +4,13 @@
 drawn on a thread beside the run it waits for the frame writer (and the writer for it), so
 after the last step a large run paid the pictures and the last frame's write one after the
 other. :class:`PictureProcess` starts a Python process once the run's first frame is
-computed (it imports clothsim, matplotlib and Pillow beside the next frames' solves, which
-hold the GIL on one core) and hands it the frames once the last one is computed: it draws
-while the main process writes the last frame,
-``trajectory.npz`` and ``run.json``. The pictures are the very bytes the runner would have
-drawn itself (the same function on the same positions: the earlier frames memory-mapped from
-the run's trajectory store, the last one sent along), and they are written by the runner,
-once the run is complete, as before.
+computed, with the mesh (it imports clothsim, matplotlib and Pillow beside the next frames'
+solves, which hold the GIL on one core) and hands it the frames once the last one is
+computed (the store's name: a few hundred bytes): it draws while the main process writes the
+last frame, ``trajectory.npz`` and ``run.json``. The pictures are the very bytes the runner
+would have drawn itself (the same function on the same positions: every frame memory-mapped
+from the run's trajectory store, which holds the last one since it was handed over), and
+they are written by the runner, once the run is complete, as before.
 
 It is used for cloths of more than :data:`PROCESS_FROM` vertices on a machine with two
 cores or more, when more than one frame is computed (smaller and shorter runs end before
@@ -30,6 +30,7 @@ import numpy as np
 
 from .io.child import answer_stream, end_child, send_answer, start_child
 from .io.child import cores as _cores
+from .io.frameproc import pack, unpack
 from .plotting import draw_run_pictures
 
 log = logging.getLogger(__name__)
@@ -119,14 +120,23 @@ class PictureProcess:
 
     def __init__(self, vertex_count: int):
         self._proc = None
+        self._mesh = None    # the mesh the process was given at its start, if any
         self.wanted = vertex_count > PROCESS_FROM and _cores() >= 2 and bool(sys.executable)
 
-    def start(self) -> None:
+    def start(self, mesh=None) -> None:
         """Start the process, if the cloth is large enough and there is a second core.
 
         The runner starts it once the first frame is computed: its imports (about a second
         of the other core) then run beside CHOLMOD's single-threaded solves, not beside the
         factorization's second thread.
+
+        Parameters
+        ----------
+        mesh : Mesh, optional
+            The cloth's mesh, sent now (its arrays through a file without a name,
+            :func:`clothsim.io.frameproc.pack`), so that :meth:`request` hands over only
+            a few hundred bytes after the last step (at 513² the mesh is 19 MB: through the
+            pipe, 0.05-0.25 s of the run's thread after its last step).
 
         Returns
         -------
@@ -134,10 +144,25 @@ class PictureProcess:
         """
         if not self.wanted or self._proc is not None:
             return
+        init, file = {"mesh": None}, None
+        if mesh is not None:
+            try:
+                init["mesh"], file = pack(mesh)
+            except (OSError, pickle.PickleError) as exc:   # then it goes with the request
+                log.info("the mesh goes to the picture process with the frames (%s)", exc)
         try:
-            self._proc = start_child("clothsim.pictures")
+            self._proc = start_child("clothsim.pictures", () if file is None else (
+                file.fileno(),))
+            # a few hundred bytes: the pipe takes them while the process imports
+            pickle.dump(init, self._proc.stdin, protocol=pickle.HIGHEST_PROTOCOL)
+            self._proc.stdin.flush()
+            self._mesh = mesh if file is not None else None
         except OSError as exc:
             log.info("pictures drawn in this process (no second one: %s)", exc)
+            self.close()
+        finally:
+            if file is not None:   # the process has its own descriptor of it
+                file.close()
 
     @property
     def running(self) -> bool:
@@ -158,7 +183,8 @@ class PictureProcess:
         last : ndarray, shape (n, 3), or None
             The last frame's positions [m], when it is not in the store.
         mesh, times, effects, title
-            As for :func:`clothsim.plotting.draw_run_pictures`.
+            As for :func:`clothsim.plotting.draw_run_pictures` (the mesh given to
+            :meth:`start` is not sent again).
 
         Returns
         -------
@@ -170,7 +196,8 @@ class PictureProcess:
             return False
         request = dict(store=str(store_path), stored=int(stored), n=mesh.vertex_count,
                        last=None if last is None else np.asarray(last, np.float64),
-                       mesh=mesh, times=np.asarray(times), title=title)
+                       mesh=None if mesh is self._mesh else mesh, times=np.asarray(times),
+                       title=title)
         try:
             request["effects"] = shown_effects(effects, request["times"])
             pickle.dump(request, self._proc.stdin, protocol=pickle.HIGHEST_PROTOCOL)
@@ -207,7 +234,7 @@ class PictureProcess:
         -------
         None
         """
-        proc, self._proc = self._proc, None
+        proc, self._proc, self._mesh = self._proc, None, None
         end_child(proc)
 
     def __enter__(self) -> PictureProcess:
@@ -218,8 +245,9 @@ class PictureProcess:
 
 
 def serve() -> None:
-    """The process's side: import matplotlib, read one request from stdin, draw it, write
-    the pictures (or the error) to stdout as a pickle. Ends quietly when stdin closes first.
+    """The process's side: import matplotlib, read the mesh sent at the start (if any) and
+    one request from stdin, draw it, write the pictures (or the error) to stdout as a pickle.
+    Ends quietly when stdin closes first.
 
     Returns
     -------
@@ -231,9 +259,13 @@ def serve() -> None:
     from .plotting import _matplotlib
     _matplotlib()
     try:
+        init = pickle.load(sys.stdin.buffer)
+        mesh = None if init["mesh"] is None else unpack(init["mesh"])
         request = pickle.load(sys.stdin.buffer)
     except EOFError:           # the run ended without pictures
         return
+    if request["mesh"] is None:
+        request["mesh"] = mesh
     stored, n = request["stored"], request["n"]
     positions = list(np.memmap(request["store"], dtype="<f8", mode="r", shape=(stored, n, 3))
                      if stored else [])

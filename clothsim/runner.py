@@ -37,10 +37,8 @@ from frame k (``resume=True``) repeats, bit for bit, what an uninterrupted run c
 
 from __future__ import annotations
 
-import copy
-import hashlib
-import json
 import logging
+import mmap
 from collections.abc import Callable
 from dataclasses import dataclass, field
 from datetime import UTC, datetime
@@ -52,6 +50,7 @@ from .display import pinned_mask, write_obstacles
 from .effects.base import effect_states
 from .errors import InputError, NonFiniteStateError
 from .interrupts import SignalInterrupt, handle_signals, signals_deferred
+from .io.background import BackgroundJob
 from .io.effectstate import restore_state, state_path
 from .io.frames import OBSTACLES_NAME, PVD_NAME
 from .io.runfiles import package_versions, write_json, write_trajectory
@@ -59,6 +58,7 @@ from .io.runfolder import RESULT_FILES, STALE_FILES, RunFolder, completed_frames
 from .pictures import PictureProcess
 from .plotting import draw_run_pictures, write_run_pictures
 from .scene import Scene, load_scene
+from .scene.hashing import digest_model, scene_digest, scene_hash
 from .scene.inputs import input_hashes
 from .scene.schema import MAX_FRAMES
 from .simulation import State
@@ -88,34 +88,6 @@ class RunResult:
     last_frame: int
     frames: list[dict] = field(default_factory=list)
     files: list[Path] = field(default_factory=list)
-
-
-def scene_hash(scene: Scene, model) -> str:
-    """SHA-256 (hex, 16 digits) of the resolved scene (without ``scene.frames`` and the
-    ``[output]`` table, which change no state) and the model's arrays: what ``resume``
-    checks before continuing a run.
-
-    Parameters
-    ----------
-    scene : Scene
-        The resolved scene.
-    model : Model
-        Built from it: vertices [m], springs, stiffnesses [N/m], rest lengths [m], masses [kg].
-
-    Returns
-    -------
-    str
-        16 hexadecimal digits.
-    """
-    doc = copy.deepcopy(scene.to_dict())
-    doc.get("scene", {}).pop("frames", None)
-    doc.pop("output", None)
-    digest = hashlib.sha256(json.dumps(doc, sort_keys=True, default=str).encode())
-    s = model.springs
-    for a in (model.mesh.vertices, model.mesh.triangles, model.mesh.strands, s.spring_vertices,
-              s.spring_stiffness, s.spring_rest_length, model.vertex_mass):
-        digest.update(np.ascontiguousarray(a).tobytes())
-    return digest.hexdigest()[:16]
 
 
 def run_scene(scene, out_dir, *, frames: int | None = None,
@@ -174,19 +146,55 @@ def run_scene(scene, out_dir, *, frames: int | None = None,
                          f"{frames!r}"[:200])
     frames = scene.frames if frames is None else int(frames)
     model = scene.build_model()
+    # the model's hash (100 MB of arrays at 513²) on a thread, beside the simulation's build
+    digest, hashing = scene_digest(scene), BackgroundJob()
+    hashing.start(digest_model, digest, model, name="clothsim scene hash")
     sim = scene.build_simulation(model)
+    touch_pages(sim.solver)   # its work arrays' first writes, before the factorization
+    hashing.wait()
+    shash = digest.hexdigest()[:16]
     # a large cloth's pictures are drawn by a second process (clothsim.pictures)
     with PictureProcess(model.vertex_count if preview else 0) as pictures, \
             RunFolder(out_dir, force=force, guard=signals_deferred) as folder:
-        return _run_in(folder, scene, model, sim, frames, progress, resume,
+        return _run_in(folder, scene, model, sim, shash, frames, progress, resume,
                        pictures if preview else None)
 
 
-def _run_in(folder: RunFolder, scene, model, sim, frames: int, progress, resume: bool,
-            pictures: PictureProcess | None) -> RunResult:
-    """The run, once ``folder`` is claimed and locked: frames computed here, written there."""
+#: Arrays of at least this many bytes are touched by :func:`touch_pages`.
+TOUCH_FROM = 1 << 22
+
+
+def touch_pages(owner) -> int:
+    """Write one byte of each memory page of ``owner``'s large arrays back unchanged (each
+    gets itself plus 0): a solver's work arrays, allocated unmapped when it is built, were
+    first written in the first step, after the factorization, where at 513² the faults took
+    0.3 s of system time (huge pages the kernel compacts memory for); right after the build
+    they take 0.02 s. Every step stays bit for bit the same.
+
+    Parameters
+    ----------
+    owner : object
+        Its attributes that are writable, C-contiguous ndarrays of :data:`TOUCH_FROM` bytes
+        or more are touched (nothing else may write them meanwhile).
+
+    Returns
+    -------
+    int
+        The arrays touched.
+    """
+    big = [a for a in list(vars(owner).values()) if isinstance(a, np.ndarray)
+           and a.nbytes >= TOUCH_FROM and a.flags.writeable and a.flags.c_contiguous]
+    for a in big:
+        page = a.reshape(-1).view(np.uint8)[::mmap.PAGESIZE]
+        page += 0
+    return len(big)
+
+
+def _run_in(folder: RunFolder, scene, model, sim, shash: str, frames: int, progress,
+            resume: bool, pictures: PictureProcess | None) -> RunResult:
+    """The run, once ``folder`` is claimed and locked: frames computed here, written there
+    (``shash``: :func:`scene_hash`)."""
     fps, substeps, n = scene.fps, scene.substeps, model.vertex_count
-    shash = scene_hash(scene, model)
     inputs = input_hashes(scene)  # every file the scene reads, by content
     start = (folder.resume_point(shash, frames, inputs, scene=scene.to_dict()) if resume
              else None)
@@ -252,7 +260,7 @@ def _run_in(folder: RunFolder, scene, model, sim, frames: int, progress, resume:
         steps = _advance(sim, substeps, k)   # meanwhile frame k - 1 is written (background)
         x, v = sim.state.positions, sim.state.velocities
         if pictures is not None and k == first and k < frames:
-            pictures.start()   # it imports beside the next frames' solves (clothsim.pictures)
+            pictures.start(sim.model.mesh)   # it imports beside the next frames' solves
         record = _frame_record(k, fps, steps, sim.solver.tolerance)
         folder.wait()
         if progress is not None and k > first:
@@ -267,7 +275,7 @@ def _run_in(folder: RunFolder, scene, model, sim, frames: int, progress, resume:
     # (the run is complete all the same)
     last = x if frames >= first else None
     drawing = pictures is not None and _request_previews(pictures, folder, scene, sim, fps,
-                                                         frames, last)
+                                                         frames)
     drawn = _draw_previews(folder, scene, sim, fps, frames, last) if (
         pictures is not None and not drawing) else None
     folder.wait_last()   # trajectory.npz built meanwhile, moved into place by end
@@ -338,12 +346,13 @@ def _draw_previews(folder: RunFolder, scene, sim, fps: float, frames: int, last)
 
 
 def _request_previews(pictures: PictureProcess, folder: RunFolder, scene, sim, fps: float,
-                      frames: int, last) -> bool:
-    """Hand :func:`_draw_previews`' frames to the picture process; False: draw them here."""
+                      frames: int) -> bool:
+    """Hand :func:`_draw_previews`' frames to the picture process; False: draw them here.
+    Every frame is in the store (the last one too: appended when it was handed over), so
+    only the store's name crosses, not the last frame's positions."""
     times = np.arange(frames + 1) / fps
-    return pictures.request(folder.store.paths["positions"], frames + 1 if last is None
-                            else frames, last, sim.model.mesh, times=times,
-                            effects=sim.effects, title=_title(scene, times))
+    return pictures.request(folder.store.paths["positions"], frames + 1, None, sim.model.mesh,
+                            times=times, effects=sim.effects, title=_title(scene, times))
 
 
 def _title(scene, times) -> str:

@@ -157,14 +157,16 @@ class Springs:
         if len(counts) > 1:
             raise InputError(f"springs: the parts were built for meshes of different sizes "
                              f"({', '.join(map(str, sorted(counts)))} vertices)")
-        return Springs(
-            np.concatenate([p.spring_vertices for p in parts]),
-            np.concatenate([p.spring_stiffness for p in parts]),
-            np.concatenate([p.spring_rest_length for p in parts]),
-            np.concatenate([p.spring_family for p in parts]),
-            counts.pop() if counts else None,
-            np.concatenate([p.spring_damping for p in parts]),
-        )
+        # the parts were checked when they were made: their join is not checked again
+        # (at 513², 1.6 million springs, that took 0.1 s of the run's start-up)
+        joined = object.__new__(Springs)
+        object.__setattr__(joined, "vertex_count", counts.pop() if counts else None)
+        for name in ("spring_vertices", "spring_stiffness", "spring_rest_length",
+                     "spring_family", "spring_damping"):
+            a = np.concatenate([getattr(p, name) for p in parts])
+            a.flags.writeable = False
+            object.__setattr__(joined, name, a)
+        return joined
 
 
 def _vertex_pairs(value) -> np.ndarray:
@@ -182,8 +184,10 @@ def _vertex_pairs(value) -> np.ndarray:
     if arr.size % 2:
         raise InputError(f"spring_vertices: expected shape (s, 2), got {arr.shape}")
     idx = arr.astype(np.int64).reshape(-1, 2)
-    neg = np.flatnonzero(idx.min(axis=1) < 0) if len(idx) else idx[:0, 0]
-    if len(neg):
+    # the smallest index first: a minimum along each row is ten times slower (0.03 s at
+    # 513²), and needed only to name the first spring with a negative index
+    if idx.size and idx.min() < 0:
+        neg = np.flatnonzero(idx.min(axis=1) < 0)
         raise InputError(f"spring_vertices[{neg[0]}]: vertex index {int(idx[neg[0]].min())} "
                          f"is negative")
     return idx

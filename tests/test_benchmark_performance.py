@@ -116,6 +116,11 @@ def test_large_vs_table_takes_medians_and_ratios():
     assert lines[3] == "| 1025² first step | 40.0 s | 25.0 s | 0.62 | 20.0 s | 12.5 s | 0.62 |"
     assert lines[4] == ("| 513² clothsim run, 5 frames | 20.0 s | 15.0 s | 0.75 | 18.0 s | "
                         "17.0 s | 0.94 |")
+    # --runs-only: the 513² runs alone, and each pair's ratios with its loads
+    runs = {k: {"first": [], "run": [dict(r, load=1.5) for r in v["run"]]}
+            for k, v in res.items()}
+    assert large_vs.table(runs)[2:] == [lines[4]]
+    assert large_vs.pairs(runs)[2:] == ["| 1 | 1.5, 1.5 | 0.75 | 0.94 |"]
 
 
 def _result(sizes=(129, 257), ratios=(2.5, 2.0)):

@@ -41,3 +41,16 @@ def test_the_parts_of_one_step_add_up_to_it():
     # each part's per-step figure is its per-call figure times its calls
     solve = next(row for row in rows if row.startswith("| global step"))
     assert f"| {r['iterations']} |" in solve
+
+
+def test_runs_with_and_without_what_goes_beside_the_steps(tmp_path):
+    """--beside's bare run: every step counted with its page faults, empty frame files."""
+    substeps = cs.load_scene("hanging").substeps
+    r = run_phases.phases(9, 2, ["--no-preview"], bare=True)
+    assert r["rc"] == 0 and r["children_cpu"] == 0
+    assert len(r["steps_ru"]) == 2 * substeps
+    assert all(t >= 0 and f >= 0 for t, f in r["steps_ru"])
+    row = run_phases.beside_rows(1, "0.5", "neither", r)
+    cells = [c.strip() for c in row.strip("|").split("|")]
+    assert cells[:3] == ["1", "0.5", "neither"] and len(cells[3].split()) == 2 * substeps
+    assert cells[6] == "0.00 s"

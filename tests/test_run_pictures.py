@@ -85,8 +85,8 @@ def picture_process(monkeypatch):
     started = []
     real_start = pictures.PictureProcess.start
 
-    def start(self):
-        real_start(self)
+    def start(self, *args, **kwargs):
+        real_start(self, *args, **kwargs)
         started.append((self, self._proc))
 
     monkeypatch.setattr(pictures, "PROCESS_FROM", 0)
@@ -153,6 +153,43 @@ def test_the_picture_process_hands_its_error_over(tmp_path, monkeypatch):
         worker.start()
         assert not worker.running and not worker.request(tmp_path / "none", 0, x, None,
                                                          times=[0.0], effects=(), title="")
+
+
+def test_the_mesh_goes_to_the_picture_process_at_its_start(tmp_path, monkeypatch,
+                                                           picture_process):
+    """The runner sends the mesh when it starts the process (a file without a name): the
+    request after the last step carries neither it nor the last frame (every frame is in the
+    store); without that file (/dev/shm full) the mesh goes with the request. The same
+    pictures either way."""
+    import pickle
+
+    import clothsim.pictures as pictures
+
+    sent = []
+    real_dump = pickle.dump
+
+    def dump(obj, file, *args, **kwargs):
+        sent.append(obj)
+        return real_dump(obj, file, *args, **kwargs)
+
+    monkeypatch.setattr(pictures.pickle, "dump", dump)
+    scene = hanging(9)
+    run_scene(scene, tmp_path / "run", frames=2)
+    init, request = sent
+    assert set(init["mesh"]) == {"pickle", "sizes", "fd"}        # frameproc.pack's message
+    assert request["mesh"] is None and request["last"] is None and request["stored"] == 3
+    assert_pictures_of_trajectory(scene, tmp_path / "run", tmp_path / "after")
+
+    def no_file(obj):
+        raise OSError("No space left on device")
+
+    monkeypatch.setattr(pictures, "pack", no_file)
+    sent.clear()
+    run_scene(scene, tmp_path / "run2", frames=2)
+    init, request = sent
+    assert init["mesh"] is None and request["mesh"].vertex_count == 81
+    assert_pictures_of_trajectory(scene, tmp_path / "run2", tmp_path / "after2")
+    assert [worker.running for worker, _ in picture_process] == [False, False]
 
 
 def test_an_interrupted_run_ends_its_picture_process(tmp_path, picture_process):

@@ -344,3 +344,59 @@ def test_memory_does_not_grow_with_the_number_of_frames(tmp_path):
         tracemalloc.stop()
     frame_bytes = 2 * 33 * 33 * 3 * 8
     assert peaks[1] - peaks[0] < 10 * frame_bytes, (peaks, frame_bytes)
+
+
+def test_scene_hash_is_the_recorded_one_and_keeps_its_bytes(tiny, tmp_path):
+    """run_scene hashes the model on a thread beside the simulation's build: run.json holds
+    scene_hash's value, which is still SHA-256 of the scene's text and the arrays' bytes (a
+    run.json written by an earlier clothsim resumes)."""
+    import copy
+    import hashlib
+
+    from clothsim.runner import scene_hash
+
+    scene = tiny
+    model = scene.build_model()
+    run_scene(scene, tmp_path / "out", frames=1, preview=False)
+    recorded = json.loads((tmp_path / "out" / "run.json").read_text())["scene_hash"]
+    doc = copy.deepcopy(scene.to_dict())
+    doc["scene"].pop("frames")
+    doc.pop("output", None)
+    digest = hashlib.sha256(json.dumps(doc, sort_keys=True, default=str).encode())
+    s = model.springs
+    for a in (model.mesh.vertices, model.mesh.triangles, model.mesh.strands, s.spring_vertices,
+              s.spring_stiffness, s.spring_rest_length, model.vertex_mass):
+        digest.update(np.ascontiguousarray(a).tobytes())
+    assert recorded == scene_hash(scene, model) == digest.hexdigest()[:16]
+    assert len(model.mesh.strands) == 0   # an empty array hashed too
+
+
+def test_touch_pages_leaves_every_value_as_it_was(monkeypatch):
+    """run_scene touches the solver's large work arrays after the build (their first writes
+    out of the first step): each byte it writes is itself, small, read-only and strided
+    arrays are left alone, and a run's steps are those of a simulation never touched."""
+    from types import SimpleNamespace
+
+    import clothsim.runner as runner
+    from clothsim.runner import TOUCH_FROM, touch_pages
+
+    rng = np.random.default_rng(3)
+    big = rng.standard_normal(TOUCH_FROM // 8 + 100)
+    frozen = big.copy()
+    frozen.flags.writeable = False
+    owner = SimpleNamespace(big=big, ints=np.arange(TOUCH_FROM // 8, dtype=np.int64),
+                            small=np.ones(10), frozen=frozen,
+                            strided=np.zeros((2, TOUCH_FROM // 8))[:, ::2], text="x")
+    before = {k: v.copy() for k, v in vars(owner).items() if isinstance(v, np.ndarray)}
+    assert touch_pages(owner) == 2                        # big and ints
+    for k, v in before.items():
+        assert getattr(owner, k).tobytes() == v.tobytes(), k
+    monkeypatch.setattr(runner, "TOUCH_FROM", 1 << 12)   # a small cloth's arrays too
+    scene = load_scene("hanging", ["cloth.resolution=[41, 41]"])
+    plain, touched = scene.build_simulation(), scene.build_simulation()
+    assert touch_pages(touched.solver) >= 2               # its per-spring work arrays
+    for _ in range(2):
+        plain.step()
+        touched.step()
+    assert plain.state.positions.tobytes() == touched.state.positions.tobytes()
+    assert plain.state.velocities.tobytes() == touched.state.velocities.tobytes()

@@ -66,3 +66,31 @@ def test_whole_float_indices_are_accepted_and_shape_mismatch_named():
     assert s.spring_vertices.dtype == np.int64
     with pytest.raises(InputError, match="spring_stiffness: expected one value or 2"):
         cs.Springs([[0, 1], [1, 2]], [1.0, 2.0, 3.0], 1.0, 0)
+
+
+def test_a_negative_index_names_its_spring_after_good_ones():
+    with pytest.raises(InputError, match=r"spring_vertices\[2\]: vertex index -3 is negative"):
+        cs.Springs([[0, 1], [1, 2], [4, -3], [-1, 0]], 1.0, 1.0, 0)
+
+
+def test_joined_springs_equal_one_set_made_whole():
+    """Springs.concatenate joins checked parts without checking them again: the same arrays
+    (values, dtypes, read-only) as the whole set made and checked at once."""
+    mesh = cs.grid(7, 6, size=(1.0, 1.0), plane="xy")
+    a = cs.grid_springs(mesh, structural=10.0, shear=5.0)
+    b = cs.Springs(np.array([[0, 8], [3, 9]]), [2.0, 3.0], [0.1, 0.2], 2, mesh.vertex_count,
+                   spring_damping=[0.0, 0.5])
+    joined = cs.Springs.concatenate([a, b])
+    whole = cs.Springs(*(np.concatenate([getattr(a, n), getattr(b, n)]) for n in (
+        "spring_vertices", "spring_stiffness", "spring_rest_length", "spring_family")),
+        mesh.vertex_count, spring_damping=np.concatenate([a.spring_damping, b.spring_damping]))
+    for name in ("spring_vertices", "spring_stiffness", "spring_rest_length", "spring_family",
+                 "spring_damping"):
+        got, want = getattr(joined, name), getattr(whole, name)
+        assert got.dtype == want.dtype and not got.flags.writeable
+        np.testing.assert_array_equal(got, want)
+    assert joined.vertex_count == mesh.vertex_count == cs.Model.build(mesh, joined).vertex_count
+    assert cs.Springs.concatenate([a]).spring_count == a.spring_count
+    assert cs.Springs.concatenate([]).spring_count == 0
+    with pytest.raises(InputError, match="meshes of different sizes"):
+        cs.Springs.concatenate([a, cs.grid_springs(cs.grid(3, 3), structural=1.0)])

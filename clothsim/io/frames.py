@@ -15,6 +15,7 @@ from __future__ import annotations
 import logging
 import re
 import xml.etree.ElementTree as ET
+from importlib.metadata import PackageNotFoundError
 from pathlib import Path
 
 import numpy as np
@@ -24,6 +25,7 @@ from ..mesh import Mesh
 from .cells import FrameFields, cell_blocks
 from .common import atomic_path, load_meshio
 from .frame_reading import read_frame, read_pvd  # noqa: F401  (their home before)
+from .vtufile import VtuTemplate
 
 logger = logging.getLogger(__name__)
 
@@ -154,6 +156,7 @@ class FrameWriter:
         self._static: list[str] = []
         self._cells = cell_blocks(mesh, None if springs is None else springs.spring_vertices)
         self._fields_of = None   # FrameFields, prepared by the first write (its thread)
+        self._template = None    # its VtuTemplate (io.vtufile), likewise
         self.process = None      # a FrameProcess writing the files (io.frameproc), if any
 
     def filename(self, index: int) -> str:
@@ -248,7 +251,6 @@ class FrameWriter:
             Positions [m] and velocities [m/s].
         mask : ndarray of bool, shape (n,), or None
             The pinned vertices (None: no ``pinned`` field)."""
-        meshio = load_meshio()
         point_data, cell_data = {"velocity": v}, {}
         if mask is not None:
             point_data["pinned"] = mask.astype(np.uint8)
@@ -262,9 +264,19 @@ class FrameWriter:
                 if self.mesh.triangle_count:
                     cell_data["area_ratio"] = [a.astype(np.float32)
                                                for a in self._fields_of.area_ratio(x)]
-        meshio.write(path, meshio.Mesh(x, self._cells, point_data=point_data,
-                                       cell_data=cell_data), file_format="vtu",
-                     compression=None if self.compression == "none" else "zlib")
+        if self._template is None:
+            try:   # the cells encoded once (io.vtufile): the bytes meshio.write writes
+                self._template = VtuTemplate(self._cells, self.mesh.vertex_count,
+                                             self.compression)
+            except PackageNotFoundError:   # meshio without its metadata: meshio.write
+                self._template = False
+        if self._template:
+            self._template.write(path, x, point_data, cell_data)
+        else:
+            meshio = load_meshio()
+            meshio.write(path, meshio.Mesh(x, self._cells, point_data=point_data,
+                                           cell_data=cell_data), file_format="vtu",
+                         compression=None if self.compression == "none" else "zlib")
 
     def add_static(self, name: str) -> None:
         """List the file ``name`` (in the output folder, e.g. ``obstacles.vtu``) beside every

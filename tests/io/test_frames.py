@@ -56,16 +56,18 @@ def test_frame_writer_interrupted_mid_write_leaves_valid_files(tmp_path, monkeyp
     writer = io.FrameWriter(tmp_path, mesh)
     for k in range(2):
         writer.write(k, 0.1 * k, *frame_data(k, 9))
-    real_write = meshio.write
+    from clothsim.io.vtufile import VtuTemplate
 
-    def write_half_then_interrupt(path, *args, **kwargs):
+    real_write = VtuTemplate.write
+
+    def write_half_then_interrupt(self, path, *args, **kwargs):
         Path(path).write_text("<VTKFile")  # a truncated file under the temporary name
         raise KeyboardInterrupt
 
-    monkeypatch.setattr(meshio, "write", write_half_then_interrupt)
+    monkeypatch.setattr(VtuTemplate, "write", write_half_then_interrupt)
     with pytest.raises(KeyboardInterrupt):
         writer.write(2, 0.2, *frame_data(2, 9))
-    monkeypatch.setattr(meshio, "write", real_write)
+    monkeypatch.setattr(VtuTemplate, "write", real_write)
     assert sorted(p.name for p in tmp_path.iterdir()) == [
         "frame_000000.vtu", "frame_000001.vtu", "trajectory.pvd"]
     assert [f for _, f in pvd_entries(tmp_path / "trajectory.pvd")] == [
