@@ -4,18 +4,91 @@
 step's model and problem; :func:`replay` runs clothsim's step on it with the check's
 solver settings; :func:`approach` measures how far the port's answer went towards the
 changed model's minimizer (found by Newton's method) and towards the scene's.
+:class:`Factors` keeps the factors of M + h² L a check's replays share.
 """
 
 from __future__ import annotations
 
 import dataclasses
+import hashlib
+from collections import OrderedDict
 
 import numpy as np
 
 from ..errors import ClothsimError
 from ..model import Model
+from ..solvers.held import held_start
 from ..springs import FAMILIES, Springs
 from .hypotheses import ADDING, REPLACING, StepData
+
+#: Factors of M + h² L a check's replays keep (the least recently used is dropped first).
+SHARED = 4
+
+
+class Factors:
+    """The factors of M + h² L (and of a held step's constrained system) that a check's
+    replays share.
+
+    The matrices depend only on the masses, stiffnesses, springs, h, pins and held
+    contacts: a changed force (gravity, a force per vertex, a force field) or rest length,
+    and every step of the same h, pins and contacts, replay on the same ones, and a fitted
+    θ is replayed again on each fitted step. Each replay still runs a fresh solver (its
+    carried state, e.g. a spring's direction or Chebyshev's ρ, is its own); only the
+    factors its first solve would make are taken from an earlier replay of the same
+    matrices, so the replays are bit for bit those of unshared factors.
+
+    Parameters
+    ----------
+    size : int, default :data:`SHARED`
+        Factors kept.
+    """
+
+    def __init__(self, size: int = SHARED):
+        self.size = size
+        self._kept: OrderedDict = OrderedDict()
+
+    def solve(self, solver, model, problem):
+        """``solver.solve(problem)`` on the shared factors of ``model``'s matrices.
+
+        Parameters
+        ----------
+        solver : Solver
+            A fresh solver of ``model`` (one without ``adopt_system``, e.g. Newton's,
+            factors what it needs itself).
+        model : Model
+        problem : StepProblem
+
+        Returns
+        -------
+        StepResult
+        """
+        adopt = getattr(solver, "adopt_system", None)
+        if adopt is not None and self.size > 0:
+            key = _matrix_key(model, problem)
+            kept = self._kept.get(key)
+            if kept is None:   # the factors the solver's first solve makes, kept
+                self._kept[key] = (solver.system(problem), held_start(solver, problem)[0]
+                                   if problem.has_contacts else None)
+                while len(self._kept) > self.size:
+                    self._kept.popitem(last=False)
+            else:
+                adopt(problem, *kept)
+                self._kept.move_to_end(key)
+        return solver.solve(problem)
+
+
+def _matrix_key(model: Model, problem) -> bytes:
+    """A digest of what M + h² L over the free vertices and the held contacts' system are
+    made of."""
+    sp = model.springs
+    digest = hashlib.blake2b(digest_size=32)
+    for a in (model.vertex_mass, sp.spring_stiffness, sp.spring_vertices,
+              np.float64(problem.h), problem.fixed_vertices, problem.anchor_vertices,
+              problem.anchor_stiffness, problem.contact_vertices, problem.contact_normals):
+        a = np.ascontiguousarray(a)
+        digest.update(f"{a.dtype.str}{a.shape}".encode())
+        digest.update(a.tobytes())
+    return digest.digest()
 
 
 def variant(step: StepData, hypothesis: str, theta) -> tuple:
