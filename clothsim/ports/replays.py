@@ -219,7 +219,7 @@ def approach(step: StepData, hypothesis: str, theta) -> tuple[float, float]:
     return ratio(*variant(step, hypothesis, theta)), step.cache["scene"]
 
 
-def refine(fitted, hyp, theta, iterations: int):
+def refine(fitted, hyp, theta, iterations: int, *, distances: bool = False):
     """θ that brings clothsim's replayed steps nearest the port's answers (Gauss–Newton,
     finite differences): the least-squares θ of an unconverged port is biased.
 
@@ -231,11 +231,17 @@ def refine(fitted, hyp, theta, iterations: int):
         The start (the gradient's least-squares θ).
     iterations : int
         Gauss–Newton iterations at most (each costs 1 + len(θ) replays per step).
+    distances : bool, default False
+        Also return what :func:`replay` gives for each fitted step at the returned θ, from
+        the replays the refinement made there (no replay more).
 
     Returns
     -------
     ndarray
         θ; a scale of a hypothesis not in :data:`REPLACING` stays >= −1.
+    dict
+        With ``distances``: step k → max |x − x_port| at θ [m]; empty when a replay
+        there failed (:func:`replay` would give inf: replay it to know which).
     """
     theta = np.array(theta, dtype=np.float64)
 
@@ -254,7 +260,7 @@ def refine(fitted, hyp, theta, iterations: int):
             step_[j] += delta[j]
             rj = misfit(step_)
             if rj is None:
-                return theta
+                return (theta, _distances(fitted, r)) if distances else theta
             columns_.append((rj - r) / delta[j])
         change, *_ = np.linalg.lstsq(np.stack(columns_, 1), -r, rcond=None)
         if hyp not in REPLACING + ADDING:   # a scale stays >= 0 (the replay clamps it)
@@ -265,4 +271,17 @@ def refine(fitted, hyp, theta, iterations: int):
         theta, r = theta + change, trial
         if np.all(np.abs(change) <= 1e-9 * np.maximum(1.0, np.abs(theta))):
             break
-    return theta
+    return (theta, _distances(fitted, r)) if distances else theta
+
+
+def _distances(fitted, r) -> dict:
+    """Step k → :func:`replay`'s distance, from the misfit r of the fitted steps."""
+    if r is None:
+        return {}
+    out, start = {}, 0
+    for s in fitted:
+        x_minus_port = r[start:start + s.x_port.size].reshape(s.x_port.shape)
+        start += s.x_port.size
+        d = np.linalg.norm(x_minus_port, axis=1)
+        out[s.k] = float(np.max(np.where(np.isfinite(d), d, np.inf)))
+    return out

@@ -9,7 +9,8 @@ import numpy as np
 import pytest
 
 from clothsim.model import Model
-from clothsim.ports.replays import Factors
+from clothsim.ports.hypotheses import StepData
+from clothsim.ports.replays import Factors, refine, replay
 from clothsim.solvers import make_solver
 from clothsim.springs import Springs
 
@@ -82,3 +83,24 @@ def test_a_solver_without_a_shared_factor_solves_as_it_does():
         solver = make_solver("local-global", model, iterations=3)
         none.solve(solver, model, problem)
         assert solver.factor_count >= 1
+
+
+@pytest.mark.parametrize("hyp, theta0", [("stiffness", [0.3]), ("gravity", [0.0, -1.0, 0.0]),
+                                         ("rest lengths", [-3.0])])   # a scale below −1
+def test_refine_gives_the_distances_its_replays_measured(hyp, theta0):
+    """refine(..., distances=True): the distances :func:`replay` gives at the returned θ,
+    from the refinement's own replays, bit for bit (the cause search takes them instead
+    of replaying the fitted steps again)."""
+    model, problem, _, _ = held_problem(n=5)
+
+    def solve(m, p):
+        return make_solver("local-global", m, iterations=10).solve(p).x
+
+    port = dataclasses.replace(problem, f_ext=1.1 * problem.f_ext)   # gravity × 1.1
+    later = dataclasses.replace(problem, y=problem.y + 1e-3)
+    steps = [StepData(k, model, p, solve(model, dataclasses.replace(p, f_ext=port.f_ext)),
+                      1.0, 1e-9, 1.0, solve=solve) for k, p in ((0, problem), (1, later))]
+    theta, d = refine(steps, hyp, np.array(theta0), 3, distances=True)
+    np.testing.assert_array_equal(theta, refine(steps, hyp, np.array(theta0), 3))
+    assert d == {s.k: replay(s, hyp, theta) for s in steps}
+    assert (min(d.values()) < 1e-12) == (hyp == "gravity"), d   # the force reproduces
