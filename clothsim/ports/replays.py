@@ -21,8 +21,11 @@ from ..solvers.held import held_start
 from ..springs import FAMILIES, Springs
 from .hypotheses import ADDING, REPLACING, StepData
 
-#: Factors of M + h² L a check's replays keep (the least recently used is dropped first).
+#: Factors of M + h² L a check's replays keep (the least recently used is dropped first) ...
 SHARED = 4
+#: ... and their vertices in all, at most (one is kept whatever the cloth's size: a 513²
+#: cloth's factor is hundreds of MB).
+SHARED_VERTICES = 200_000
 
 
 class Factors:
@@ -40,7 +43,7 @@ class Factors:
     Parameters
     ----------
     size : int, default :data:`SHARED`
-        Factors kept.
+        Factors kept, at most :data:`SHARED_VERTICES` vertices' worth (at least one).
     """
 
     def __init__(self, size: int = SHARED):
@@ -69,7 +72,8 @@ class Factors:
             if kept is None:   # the factors the solver's first solve makes, kept
                 self._kept[key] = (solver.system(problem), held_start(solver, problem)[0]
                                    if problem.has_contacts else None)
-                while len(self._kept) > self.size:
+                keep = max(1, min(self.size, SHARED_VERTICES // max(model.vertex_count, 1)))
+                while len(self._kept) > keep:
                     self._kept.popitem(last=False)
             else:
                 adopt(problem, *kept)

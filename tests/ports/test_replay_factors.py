@@ -71,6 +71,22 @@ def test_the_least_recently_used_factor_is_dropped():
     assert [c > 0 for c in counts] == [True, True, True, True, False], counts
 
 
+def test_a_large_cloth_keeps_one_factor(monkeypatch):
+    """SHARED_VERTICES bounds the vertices of the factors kept: a cloth of more than half
+    of them keeps one (the last), at least."""
+    import clothsim.ports.replays as replays
+
+    model, problem, _, _ = held_problem(n=4)
+    monkeypatch.setattr(replays, "SHARED_VERTICES", 2 * model.vertex_count - 1)
+    factors, counts = Factors(), []
+    for s in [1.0, 2.0, 2.0, 1.0]:
+        m = changed(model, stiffness=s)
+        solver = make_solver("local-global", m, iterations=3)
+        factors.solve(solver, m, problem)
+        counts.append(solver.factor_count)
+    assert [c > 0 for c in counts] == [True, True, False, True], counts
+
+
 def test_a_solver_without_a_shared_factor_solves_as_it_does():
     # Newton factors its own Hessians: passed through; size 0 shares nothing
     model, problem, _, _ = held_problem(n=4)
