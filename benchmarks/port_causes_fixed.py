@@ -106,8 +106,8 @@ class _Counter:
         self._replayer, self._replay_step = check_module._replayer, effect_causes._replay_step
 
     def __enter__(self):
-        def replayer(sim, state):
-            solve = self._replayer(sim, state)
+        def replayer(sim, state, *shared):
+            solve = self._replayer(sim, state, *shared)
 
             def counted(model, problem):
                 self.count += 1

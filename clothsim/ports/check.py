@@ -48,6 +48,7 @@ from .judge import CONVERGING, gradient_scale, judge, pin_role, pinned_moved
 from .noise import noise_note
 from .postsolve_margins import PortDecisions
 from .precision import Printed
+from .replays import Factors
 from .rounding import float32_tolerance
 from .solver_branches import SolverBranches
 from .step_setup import (
@@ -120,6 +121,7 @@ def check_steps(simulation, positions, velocities=None, *, precision: str = "flo
     if printed is not None and printed.note:
         notes.append(printed.note)
     post = PortDecisions(sim)   # post-solve obstacles: their decisions too close to call
+    factors = Factors()   # M + h² L of the cause search's replays, shared
     if velocities is None and post:   # the seed's velocity correction at the port's contacts
         notes[0] += ("; then the scene's velocity corrections (post-solve contact at the "
                      "vertices the port's x_k has on an obstacle, damping)")
@@ -302,7 +304,7 @@ def check_steps(simulation, positions, velocities=None, *, precision: str = "flo
                                          printed and printed.unit)
                 (unexplained if step.status in FITTED else others).append(StepData(
                     k, model, problem, x_port, g0, opt, step.gradient_clothsim,
-                    float(err[worst]), tol, _replayer(sim, state),
+                    float(err[worst]), tol, _replayer(sim, state, factors),
                     step.status == "not converged",
                     fixed_settings(sim), gravity=gravity, derived=velocities is None,
                     blind=optimality < step.gradient_clothsim <= opt,
@@ -364,16 +366,17 @@ def _carried(sim, estimations, model, problem, precision, unit) -> dict:
     return sim.solver.get_state()
 
 
-def _replayer(sim, state):
+def _replayer(sim, state, factors):
     """``solve(model, problem) -> x``: clothsim's step of another model from ``state`` with
-    the scene's solver settings, its position corrections (post-solve contact) applied;
-    a hold-mode obstacle's is not (it would change the contacts the check holds)."""
+    the scene's solver settings (on the check's shared ``factors``), its position
+    corrections (post-solve contact) applied; a hold-mode obstacle's is not (it would change
+    the contacts the check holds)."""
     hooks = [e for e in sim.effects if overrides(e, "correct_positions")
              and getattr(e, "contact", None) != "hold"]
 
     def solve(model, problem):
-        x = make_solver(sim.solver.name, model, iterations=sim.solver.iterations,
-                        tolerance=sim.solver.tolerance).solve(problem).x
+        x = factors.solve(make_solver(sim.solver.name, model, iterations=sim.solver.iterations,
+                                      tolerance=sim.solver.tolerance), model, problem).x
         for e in hooks:
             x = e.correct_positions(state.time + sim.h, state, x)
         return x

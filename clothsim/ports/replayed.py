@@ -104,19 +104,20 @@ def _first_reproducing(steps):
            <= s.tolerance for s in fitted):
         return None                     # a port that does not move: judge says so
     best = None
+    first = fitted[0]
     for hyp, theta0 in _candidates(fitted):
-        theta = theta0 if hyp == "vertex mass" else refine(fitted[:1], hyp, theta0, REFINE)
-        if hyp not in REPLACING + ADDING:   # a scale below −1 is replayed as 0 (clamped)
-            theta = np.maximum(theta, -1.0)
-        d = {s.k: replay(s, hyp, theta) for s in fitted}
+        theta, d = ((np.maximum(theta0, -1.0), {}) if hyp == "vertex mass"
+                    else _refined(fitted[:1], hyp, theta0))
+        d[first.k] = d[first.k] if first.k in d else replay(first, hyp, theta)
+        if d[first.k] > NEARLY * max(first.tolerance, REPLAY * first.error):
+            log.debug("replayed %s, θ = %s: %s", hyp, theta, d)
+            continue   # reproduces no step, and too far to be fitted jointly
+        d.update({s.k: replay(s, hyp, theta) for s in fitted[1:]})
         if hyp != "vertex mass" and len(fitted) > 1 and not all(
-                _reproduces(s, d[s.k]) for s in fitted) and d[fitted[0].k] <= NEARLY * max(
-                fitted[0].tolerance, REPLAY * fitted[0].error):   # the first step alone
-            theta = refine(fitted, hyp, theta, REFINE)   # does not place θ: a stiff cloth
-            # at rest hardly sees h there; fitted on the steps jointly
-            if hyp not in REPLACING + ADDING:
-                theta = np.maximum(theta, -1.0)
-            d = {s.k: replay(s, hyp, theta) for s in fitted}
+                _reproduces(s, d[s.k]) for s in fitted):   # the first step alone does
+            theta, d = _refined(fitted, hyp, theta)   # not place θ: a stiff cloth at rest
+            # hardly sees h there; fitted on the steps jointly
+            d.update({s.k: replay(s, hyp, theta) for s in fitted if s.k not in d})
         log.debug("replayed %s, θ = %s: %s", hyp, theta, d)
         if not all(_reproduces(s, d[s.k]) for s in fitted):
             continue
@@ -165,6 +166,15 @@ def topology_replayed(steps: list[StepData]):
         found = topology_cause(steps[:JOINT + MAX_REPLAYS], _reproduces, len(fitted))
     return None if found is None else (_text(fitted, found[1], found[0], found[2]),
                                        found[2])
+
+
+def _refined(fitted, hyp, theta):
+    """:func:`~clothsim.ports.replays.refine`'s θ, a scale below −1 clamped (it is replayed
+    as 0), and its replays' distances at that θ (empty when clamped or unknown)."""
+    theta, d = refine(fitted, hyp, theta, REFINE, distances=True)
+    if hyp not in REPLACING + ADDING and np.any(theta < -1.0):
+        return np.maximum(theta, -1.0), {}
+    return theta, d
 
 
 def _text(fitted, hyp, theta, d) -> str:

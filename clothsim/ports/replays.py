@@ -4,18 +4,95 @@
 step's model and problem; :func:`replay` runs clothsim's step on it with the check's
 solver settings; :func:`approach` measures how far the port's answer went towards the
 changed model's minimizer (found by Newton's method) and towards the scene's.
+:class:`Factors` keeps the factors of M + h² L a check's replays share.
 """
 
 from __future__ import annotations
 
 import dataclasses
+import hashlib
+from collections import OrderedDict
 
 import numpy as np
 
 from ..errors import ClothsimError
 from ..model import Model
+from ..solvers.held import held_start
 from ..springs import FAMILIES, Springs
 from .hypotheses import ADDING, REPLACING, StepData
+
+#: Factors of M + h² L a check's replays keep (the least recently used is dropped first) ...
+SHARED = 4
+#: ... and their vertices in all, at most (one is kept whatever the cloth's size: a 513²
+#: cloth's factor is hundreds of MB).
+SHARED_VERTICES = 200_000
+
+
+class Factors:
+    """The factors of M + h² L (and of a held step's constrained system) that a check's
+    replays share.
+
+    The matrices depend only on the masses, stiffnesses, springs, h, pins and held
+    contacts: a changed force (gravity, a force per vertex, a force field) or rest length,
+    and every step of the same h, pins and contacts, replay on the same ones, and a fitted
+    θ is replayed again on each fitted step. Each replay still runs a fresh solver (its
+    carried state, e.g. a spring's direction or Chebyshev's ρ, is its own); only the
+    factors its first solve would make are taken from an earlier replay of the same
+    matrices, so the replays are bit for bit those of unshared factors.
+
+    Parameters
+    ----------
+    size : int, default :data:`SHARED`
+        Factors kept, at most :data:`SHARED_VERTICES` vertices' worth (at least one).
+    """
+
+    def __init__(self, size: int = SHARED):
+        self.size = size
+        self._kept: OrderedDict = OrderedDict()
+
+    def solve(self, solver, model, problem):
+        """``solver.solve(problem)`` on the shared factors of ``model``'s matrices.
+
+        Parameters
+        ----------
+        solver : Solver
+            A fresh solver of ``model`` (one without ``adopt_system``, e.g. Newton's,
+            factors what it needs itself).
+        model : Model
+        problem : StepProblem
+
+        Returns
+        -------
+        StepResult
+        """
+        adopt = getattr(solver, "adopt_system", None)
+        if adopt is not None and self.size > 0:
+            key = _matrix_key(model, problem)
+            kept = self._kept.get(key)
+            if kept is None:   # the factors the solver's first solve makes, kept
+                self._kept[key] = (solver.system(problem), held_start(solver, problem)[0]
+                                   if problem.has_contacts else None)
+                keep = max(1, min(self.size, SHARED_VERTICES // max(model.vertex_count, 1)))
+                while len(self._kept) > keep:
+                    self._kept.popitem(last=False)
+            else:
+                adopt(problem, *kept)
+                self._kept.move_to_end(key)
+        return solver.solve(problem)
+
+
+def _matrix_key(model: Model, problem) -> bytes:
+    """A digest of what M + h² L over the free vertices and the held contacts' system are
+    made of."""
+    sp = model.springs
+    digest = hashlib.blake2b(digest_size=32)
+    for a in (model.vertex_mass, sp.spring_stiffness, sp.spring_vertices,
+              np.float64(problem.h), problem.fixed_vertices, problem.anchor_vertices,
+              problem.anchor_stiffness, problem.contact_vertices, problem.contact_normals):
+        a = np.ascontiguousarray(a)
+        digest.update(f"{a.dtype.str}{a.shape}".encode())
+        digest.update(a.tobytes())
+    return digest.digest()
 
 
 def variant(step: StepData, hypothesis: str, theta) -> tuple:
@@ -146,7 +223,7 @@ def approach(step: StepData, hypothesis: str, theta) -> tuple[float, float]:
     return ratio(*variant(step, hypothesis, theta)), step.cache["scene"]
 
 
-def refine(fitted, hyp, theta, iterations: int):
+def refine(fitted, hyp, theta, iterations: int, *, distances: bool = False):
     """θ that brings clothsim's replayed steps nearest the port's answers (Gauss–Newton,
     finite differences): the least-squares θ of an unconverged port is biased.
 
@@ -158,11 +235,17 @@ def refine(fitted, hyp, theta, iterations: int):
         The start (the gradient's least-squares θ).
     iterations : int
         Gauss–Newton iterations at most (each costs 1 + len(θ) replays per step).
+    distances : bool, default False
+        Also return what :func:`replay` gives for each fitted step at the returned θ, from
+        the replays the refinement made there (no replay more).
 
     Returns
     -------
     ndarray
         θ; a scale of a hypothesis not in :data:`REPLACING` stays >= −1.
+    dict
+        With ``distances``: step k → max |x − x_port| at θ [m]; empty when a replay
+        there failed (:func:`replay` would give inf: replay it to know which).
     """
     theta = np.array(theta, dtype=np.float64)
 
@@ -181,7 +264,7 @@ def refine(fitted, hyp, theta, iterations: int):
             step_[j] += delta[j]
             rj = misfit(step_)
             if rj is None:
-                return theta
+                return (theta, _distances(fitted, r)) if distances else theta
             columns_.append((rj - r) / delta[j])
         change, *_ = np.linalg.lstsq(np.stack(columns_, 1), -r, rcond=None)
         if hyp not in REPLACING + ADDING:   # a scale stays >= 0 (the replay clamps it)
@@ -192,4 +275,17 @@ def refine(fitted, hyp, theta, iterations: int):
         theta, r = theta + change, trial
         if np.all(np.abs(change) <= 1e-9 * np.maximum(1.0, np.abs(theta))):
             break
-    return theta
+    return (theta, _distances(fitted, r)) if distances else theta
+
+
+def _distances(fitted, r) -> dict:
+    """Step k → :func:`replay`'s distance, from the misfit r of the fitted steps."""
+    if r is None:
+        return {}
+    out, start = {}, 0
+    for s in fitted:
+        x_minus_port = r[start:start + s.x_port.size].reshape(s.x_port.shape)
+        start += s.x_port.size
+        d = np.linalg.norm(x_minus_port, axis=1)
+        out[s.k] = float(np.max(np.where(np.isfinite(d), d, np.inf)))
+    return out

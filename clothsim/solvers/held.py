@@ -268,9 +268,7 @@ def held_start(solver, problem, x0: np.ndarray | None = None):
     x : ndarray, shape (n, 3)
         The start [m], a new array, on the pins and contact planes.
     """
-    key = (problem.h, problem.fixed_vertices.tobytes(), problem.anchor_vertices.tobytes(),
-           problem.anchor_stiffness.tobytes(), problem.contact_vertices.tobytes(),
-           problem.contact_normals.tobytes())
+    key = held_key(problem)
     if key != solver._held_key:
         solver._held = HeldSystem(solver, problem, previous=solver._held)
         solver._held_key = key
@@ -279,3 +277,20 @@ def held_start(solver, problem, x0: np.ndarray | None = None):
     x = (problem.initial_guess() if x0 is None
          else feasible(problem, np.array(x0, dtype=np.float64)))
     return held, x
+
+
+def held_key(problem) -> tuple:
+    """What of a problem the :class:`HeldSystem` depends on.
+
+    Parameters
+    ----------
+    problem : StepProblem
+
+    Returns
+    -------
+    tuple
+        h, the pins and the held contacts (their vertices and normals), as bytes.
+    """
+    return (problem.h, problem.fixed_vertices.tobytes(), problem.anchor_vertices.tobytes(),
+            problem.anchor_stiffness.tobytes(), problem.contact_vertices.tobytes(),
+            problem.contact_normals.tobytes())

@@ -43,6 +43,7 @@ from ..factorization import single_threaded
 from ..model import Model
 from .base import Iterate, Solver, StepProblem, StepResult
 from .directions import SpringDirections
+from .held import held_key
 from .held_accel import fused_step
 from .system import SystemFactor, factor_system
 
@@ -145,12 +146,26 @@ class LocalGlobalSolver(Solver):
         SystemFactor
             The factorization of M + h² L over the free vertices, with its buffers.
         """
-        key = (problem.h, problem.fixed_vertices.tobytes(), problem.anchor_vertices.tobytes(),
-               problem.anchor_stiffness.tobytes())
+        key = _system_key(problem)
         if key != self._cache_key:
             self._cache = self._factor(problem)
             self._cache_key = key
         return self._cache
+
+    def adopt_system(self, problem: StepProblem, system: SystemFactor, held=None) -> None:
+        """Take a fresh solver's first factors of the same matrices (:meth:`system` and
+        :func:`.held.held_start`'s) instead of factoring: every solve is bit for bit the one
+        this solver's own would give (the port checker's replays share them).
+
+        Parameters
+        ----------
+        problem : StepProblem
+        system : SystemFactor
+        held : HeldSystem, optional
+        """
+        self._cache, self._cache_key = system, _system_key(problem)
+        if held is not None:
+            self._held, self._held_key = held, held_key(problem)
 
     def _factor(self, problem: StepProblem) -> SystemFactor:
         with single_threaded():   # CHOLMOD's OpenMP threads: gain nothing here (see solve)
@@ -368,3 +383,9 @@ class LocalGlobalSolver(Solver):
             k += 1
             yield Iterate(k, step.x, step.gradient_norm(step.rhs_previous),
                           d=step.current_directions())
+
+
+def _system_key(problem: StepProblem) -> tuple:
+    """What of a problem the factor of M + h² L depends on: h and the pins."""
+    return (problem.h, problem.fixed_vertices.tobytes(), problem.anchor_vertices.tobytes(),
+            problem.anchor_stiffness.tobytes())
