@@ -24,6 +24,8 @@ import tempfile
 import time
 from pathlib import Path
 
+from benchmarks.scale_ladder import commit
+
 ROOT = Path(__file__).resolve().parents[1]
 
 FIRST_STEP = r"""
@@ -74,6 +76,9 @@ def main(argv: list[str] | None = None) -> None:
     parser.add_argument("--repeats", type=int, default=2)
     parser.add_argument("--runs-only", action="store_true",
                         help="only the 513² clothsim run (not the 1025² first step)")
+    parser.add_argument("--write", type=Path, metavar="PAGE",
+                        help="also write the tables, with the command and both commits, to "
+                             "PAGE (docs/data/large-vs.md)")
     args = parser.parse_args(sys.argv[1:] if argv is None else argv)
     trees = {"old": args.old.resolve(), "new": ROOT}
     res = {k: {"first": [], "run": []} for k in trees}
@@ -89,6 +94,17 @@ def main(argv: list[str] | None = None) -> None:
 
     print(f"\n{args.repeats} interleaved repeats; load average {load} at the start\n")
     print("\n".join(table(res) + [""] + pairs(res)))
+    if args.write is not None:
+        end = Path("/proc/loadavg").read_text().split()[0]
+        command = " ".join(["python -m benchmarks.large_vs OLD_TREE", f"--repeats {args.repeats}"]
+                           + (["--runs-only"] if args.runs_only else [])
+                           + [f"--write {args.write}"])
+        head = (f"Measured by `{command}` at commit {commit()} with OLD_TREE at commit "
+                f"{commit(trees['old'])}: {args.repeats} interleaved repeats, each run in a "
+                f"fresh process, load average {load} at the start and {end} at the end "
+                f"(2 cores, shared).")
+        args.write.write_text("\n".join([head, ""] + table(res) + [""] + pairs(res)) + "\n")
+        print(f"written to {args.write}")
 
 
 def table(res: dict) -> list[str]:

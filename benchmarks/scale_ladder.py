@@ -209,10 +209,11 @@ def cli(n: int, frames: int = 5) -> dict:
     return times
 
 
-def commit() -> str:
+def commit(tree: Path = ROOT) -> str:
+    """The short commit the source tree ``tree`` has checked out ("unknown" outside git)."""
     try:
         return subprocess.run(["git", "rev-parse", "--short", "HEAD"], capture_output=True,
-                              text=True, cwd=ROOT, check=True).stdout.strip()
+                              text=True, cwd=tree, check=True).stdout.strip()
     except (OSError, subprocess.CalledProcessError):
         return "unknown"
 

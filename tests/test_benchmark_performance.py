@@ -210,3 +210,22 @@ def test_from_csv_names_a_missing_file_in_one_line(tmp_path):
 
     with pytest.raises(SystemExit, match=r"benchmarks.performance: .*nothing.csv: cannot read"):
         performance.main(["--from-csv", str(tmp_path / "nothing.csv")])
+
+
+def test_large_vs_writes_its_page_with_both_commits(tmp_path, monkeypatch):
+    """``--write PAGE``: the tables a comparison printed, under the command that makes them
+    and the commits of both trees (the runs made up; each takes seconds)."""
+    from benchmarks import large_vs
+
+    walls = iter([20.0, 15.0, 14.0, 21.0])   # old, new, then new, old
+    monkeypatch.setattr(large_vs, "cli_run",
+                        lambda tree, n: {"wall": next(walls), "cpu": 10.0})
+    monkeypatch.setattr(large_vs, "commit", lambda tree=None: "old1234" if tree else "new5678")
+    page = tmp_path / "large-vs.md"
+    large_vs.main([str(tmp_path), "--repeats", "2", "--runs-only", "--write", str(page)])
+    text = page.read_text()
+    assert text.startswith("Measured by `python -m benchmarks.large_vs OLD_TREE --repeats 2 "
+                           f"--runs-only --write {page}` at commit new5678 with OLD_TREE at "
+                           "commit old1234: 2 interleaved repeats")
+    assert "| 513² clothsim run, 5 frames | 20.5 s | 14.5 s | 0.71 |" in text
+    assert "| 2 |" in text and "| 0.67 |" in text   # the second pair: 14 / 21
