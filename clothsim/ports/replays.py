@@ -178,9 +178,12 @@ def replay(step: StepData, hypothesis: str, theta, *, positions: bool = False):
             x = None                          # a model that cannot be solved reproduces nothing
     if positions:
         return x
-    if x is None:
-        return float("inf")
-    d = np.linalg.norm(x - step.x_port, axis=1)
+    return float("inf") if x is None else _distance(x - step.x_port)
+
+
+def _distance(x_minus_port: np.ndarray) -> float:
+    """max |x − x_port| over the vertices [m], inf where a replay went non-finite."""
+    d = np.linalg.norm(x_minus_port, axis=1)
     return float(np.max(np.where(np.isfinite(d), d, np.inf)))
 
 
@@ -284,8 +287,6 @@ def _distances(fitted, r) -> dict:
         return {}
     out, start = {}, 0
     for s in fitted:
-        x_minus_port = r[start:start + s.x_port.size].reshape(s.x_port.shape)
+        out[s.k] = _distance(r[start:start + s.x_port.size].reshape(s.x_port.shape))
         start += s.x_port.size
-        d = np.linalg.norm(x_minus_port, axis=1)
-        out[s.k] = float(np.max(np.where(np.isfinite(d), d, np.inf)))
     return out

@@ -33,6 +33,7 @@ import scipy.sparse as sp
 from .. import contacts
 from ..factorization import Factor
 from . import tangent_system
+from .system import system_key
 
 log = logging.getLogger(__name__)
 
@@ -289,8 +290,8 @@ def held_key(problem) -> tuple:
     Returns
     -------
     tuple
-        h, the pins and the held contacts (their vertices and normals), as bytes.
+        :func:`.system.system_key` (h, the pins) and the held contacts (their vertices and
+        normals), as bytes.
     """
-    return (problem.h, problem.fixed_vertices.tobytes(), problem.anchor_vertices.tobytes(),
-            problem.anchor_stiffness.tobytes(), problem.contact_vertices.tobytes(),
-            problem.contact_normals.tobytes())
+    return system_key(problem) + (problem.contact_vertices.tobytes(),
+                                  problem.contact_normals.tobytes())

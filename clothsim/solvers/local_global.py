@@ -45,7 +45,7 @@ from .base import Iterate, Solver, StepProblem, StepResult
 from .directions import SpringDirections
 from .held import held_key
 from .held_accel import fused_step
-from .system import SystemFactor, factor_system
+from .system import SystemFactor, factor_system, system_key
 
 log = logging.getLogger(__name__)
 
@@ -146,7 +146,7 @@ class LocalGlobalSolver(Solver):
         SystemFactor
             The factorization of M + h² L over the free vertices, with its buffers.
         """
-        key = _system_key(problem)
+        key = system_key(problem)
         if key != self._cache_key:
             self._cache = self._factor(problem)
             self._cache_key = key
@@ -163,7 +163,7 @@ class LocalGlobalSolver(Solver):
         system : SystemFactor
         held : HeldSystem, optional
         """
-        self._cache, self._cache_key = system, _system_key(problem)
+        self._cache, self._cache_key = system, system_key(problem)
         if held is not None:
             self._held, self._held_key = held, held_key(problem)
 
@@ -383,9 +383,3 @@ class LocalGlobalSolver(Solver):
             k += 1
             yield Iterate(k, step.x, step.gradient_norm(step.rhs_previous),
                           d=step.current_directions())
-
-
-def _system_key(problem: StepProblem) -> tuple:
-    """What of a problem the factor of M + h² L depends on: h and the pins."""
-    return (problem.h, problem.fixed_vertices.tobytes(), problem.anchor_vertices.tobytes(),
-            problem.anchor_stiffness.tobytes())

@@ -160,3 +160,20 @@ def factor_system(model: Model, problem: StepProblem, Js: sp.csr_matrix, a: np.n
                         np.empty((3, 3, len(free))),
                         mode if factor.backend == "cholmod" else None,
                         (coupled, A_FP[coupled]))
+
+
+def system_key(problem: StepProblem) -> tuple:
+    """What of a problem the factor of M + h² L over the free vertices depends on: h and
+    the pins.
+
+    Parameters
+    ----------
+    problem : StepProblem
+
+    Returns
+    -------
+    tuple
+        h and the pins (fixed vertices, anchors and their stiffness), as bytes.
+    """
+    return (problem.h, problem.fixed_vertices.tobytes(), problem.anchor_vertices.tobytes(),
+            problem.anchor_stiffness.tobytes())
